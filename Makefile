@@ -1,0 +1,149 @@
+# The whole project in one non-recursive Makefile.
+#
+#   make demo        install missing Debian packages, build, render every chapter
+#   make test        build and run every cmocka suite
+#   make chNN        build and run chapter NN          (make ch01)
+#   make test-chNN   build and run chapter NN's tests  (make test-ch01)
+#   make sanitize    the test suites under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make help        everything else
+#
+# Everything generated goes under build/.
+
+BUILD ?= build
+CC ?= cc
+OPT ?= -O2
+# -ffp-contract=off: no fused multiply-add unless we write one. Contraction
+# changes rounding differently in different places, which breaks the
+# guarantees the robust geometry tests check (watertight triangles, ray
+# offsets), and makes results differ between compilers. Never -ffast-math:
+# it assumes NaN and Inf never happen, so the NaN guards would be removed.
+CFLAGS ?= $(OPT) -g
+ALL_CFLAGS = -std=c11 -D_DEFAULT_SOURCE -Wall -Wextra -Wpedantic -ffp-contract=off -fopenmp \
+             -MMD -MP $(SANITIZE_FLAGS) $(CFLAGS)
+CPPFLAGS += -Icommon -Ichapters -I/usr/include/OpenEXR
+LDFLAGS += -fopenmp $(SANITIZE_FLAGS)
+LDLIBS += -lOpenEXRCore -lstb -lm
+TEST_LDLIBS = -lcmocka
+
+# Debian packages the build, the tests and the plots need (by name).
+DEBIAN_PACKAGES := gcc make libcmocka-dev libopenexr-dev libstb-dev gnuplot-nox
+
+.DEFAULT_GOAL := all
+.PHONY: all demo test sanitize deps help clean bench plots docs
+.DELETE_ON_ERROR:
+
+# ---------------------------------------------------------------- sources --
+COMMON_SRC := $(sort $(wildcard common/*.c))
+CHAPTERS := $(sort $(notdir $(wildcard chapters/[0-9][0-9]-*)))
+chapter_number = $(firstword $(subst -, ,$(1)))
+
+obj = $(patsubst %.c,$(BUILD)/obj/%.o,$(1))
+COMMON_LIB := $(BUILD)/lib/libcommon.a
+
+$(BUILD)/obj/%.o: %.c | deps
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(CPPFLAGS) -c $< -o $@
+
+$(COMMON_LIB): $(call obj,$(COMMON_SRC))
+	@mkdir -p $(dir $@)
+	@rm -f $@
+	ar rcs $@ $^
+
+# One chapter: a static library of what it introduces (every .c but main.c)
+# and one program. It may use common/ and earlier chapters only, so it links
+# against its own library and those of the chapters before it.
+define CHAPTER_RULES
+$(1)_NUM := $(call chapter_number,$(1))
+$(1)_SRC := $$(filter-out chapters/$(1)/main.c,$$(sort $$(wildcard chapters/$(1)/*.c)))
+$(1)_LIB := $(BUILD)/lib/libch$$($(1)_NUM).a
+# Libraries to link, latest chapter first (static libraries resolve left to right).
+$(1)_LIBS := $$($(1)_LIB) $$(LINK_SO_FAR) $(COMMON_LIB)
+LINK_SO_FAR := $$($(1)_LIB) $$(LINK_SO_FAR)
+
+$$($(1)_LIB): $$(call obj,$$($(1)_SRC))
+	@mkdir -p $$(dir $$@)
+	@rm -f $$@
+	ar rcs $$@ $$^
+
+$(BUILD)/bin/$(1): $$(call obj,chapters/$(1)/main.c) $$($(1)_LIBS)
+	@mkdir -p $$(dir $$@)
+	$$(CC) $$(LDFLAGS) $$^ $$(LDLIBS) -o $$@
+
+$(BUILD)/tests/test_ch$$($(1)_NUM): $$(call obj,tests/test_ch$$($(1)_NUM).c) $$($(1)_LIBS)
+	@mkdir -p $$(dir $$@)
+	$$(CC) $$(LDFLAGS) $$^ $$(LDLIBS) $$(TEST_LDLIBS) -o $$@
+
+.PHONY: ch$$($(1)_NUM) test-ch$$($(1)_NUM)
+ch$$($(1)_NUM): $(BUILD)/bin/$(1)
+	@mkdir -p $(BUILD)/out
+	$(BUILD)/bin/$(1) --out $(BUILD)/out/ch$$($(1)_NUM).exr $$(ARGS)
+
+test-ch$$($(1)_NUM): $(BUILD)/tests/test_ch$$($(1)_NUM)
+	@$(BUILD)/tests/test_ch$$($(1)_NUM)
+
+PROGRAMS += $(BUILD)/bin/$(1)
+DEMOS += ch$$($(1)_NUM)
+endef
+LINK_SO_FAR :=
+$(foreach c,$(CHAPTERS),$(eval $(call CHAPTER_RULES,$(c))))
+
+# Suites of common/ (every tests/test_*.c that is not a chapter's) link common/ only.
+COMMON_TEST_SRC := $(filter-out tests/test_ch%,$(sort $(wildcard tests/test_*.c)))
+COMMON_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(COMMON_TEST_SRC))
+$(COMMON_TESTS): $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(COMMON_LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) $(TEST_LDLIBS) -o $@
+
+CHAPTER_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(sort $(wildcard tests/test_ch[0-9][0-9].c)))
+TESTS := $(COMMON_TESTS) $(CHAPTER_TESTS)
+
+# ---------------------------------------------------------------- targets --
+all: $(PROGRAMS) $(TESTS)
+
+demo: $(PROGRAMS)
+	@$(MAKE) --no-print-directory $(DEMOS)
+	@echo "Images are in $(BUILD)/out/: open the .png previews, or the .exr files in an EXR viewer."
+
+# Runs every suite even when one fails, then prints one summary line.
+test: $(TESTS)
+	@passed=0; failed=0; bad=""; \
+	for t in $(TESTS); do \
+	  echo "== $$t"; \
+	  $$t > $$t.log 2>&1; status=$$?; cat $$t.log; \
+	  p=$$(sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' $$t.log | tail -1); \
+	  f=$$(sed -n 's/^\[  FAILED  \] \([0-9]*\) test.*/\1/p' $$t.log | tail -1); \
+	  passed=$$((passed + $${p:-0})); failed=$$((failed + $${f:-0})); \
+	  if [ $$status -ne 0 ]; then bad="$$bad $$t"; [ -n "$$f" ] || failed=$$((failed + 1)); fi; \
+	done; \
+	echo; echo "$$passed passed, $$failed failed"; \
+	if [ -n "$$bad" ]; then echo "failing suites:$$bad"; exit 1; fi
+
+# The same suites built with AddressSanitizer and UndefinedBehaviorSanitizer,
+# in a build directory of their own. Any report fails the run.
+sanitize:
+	@$(MAKE) --no-print-directory test BUILD=$(BUILD)/sanitize OPT=-O1 \
+	  SANITIZE_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
+
+# Installs what is missing, by Debian package name, and says what it installed.
+deps:
+	@if ! command -v dpkg-query >/dev/null 2>&1; then \
+	  echo "note: not a Debian system; make sure these are installed: $(DEBIAN_PACKAGES)"; exit 0; fi; \
+	missing=""; \
+	for p in $(DEBIAN_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}\n' $$p 2>/dev/null | grep -q ' installed$$' || missing="$$missing $$p"; \
+	done; \
+	[ -z "$$missing" ] && exit 0; \
+	sudo=""; [ "$$(id -u)" = 0 ] || sudo=sudo; \
+	echo "installing Debian packages:$$missing"; \
+	$$sudo apt-get update -qq && \
+	DEBIAN_FRONTEND=noninteractive $$sudo apt-get install -y -qq --no-install-recommends $$missing >/dev/null && \
+	echo "installed:$$missing"
+
+help:
+	@sed -n '2,11p' Makefile | sed 's/^# \{0,1\}//'
+	@echo "chapters: $(CHAPTERS)"
+
+clean:
+	rm -rf $(BUILD)
+
+-include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)

@@ -1,0 +1,224 @@
+/* shapes.c -- lecture 13: the ray r(t) = o + t d meets a surface. */
+#include "shapes.h"
+
+/* Fill the parts of a hit record every shape fills the same way: orient the
+ * geometric normal towards the ray, and remember which side was hit. */
+static void hit_set_normal(hit_record *hit, ray r, vec3 outward_normal)
+{
+    hit->front_face = vec3_dot(r.direction, outward_normal) < 0.0f;
+    hit->normal_geometric = hit->front_face ? outward_normal : vec3_neg(outward_normal);
+    hit->normal_shading = hit->normal_geometric;
+}
+
+/* ---- Ray-sphere: solve |o + t d - c|^2 - R^2 = 0 --------------------------
+ * The lecture's quadratic a t^2 + b t + c = 0 with a = d.d, b = 2 (o-c).d,
+ * c = (o-c).(o-c) - R^2, solved as the lecture writes it. */
+bool sphere_intersect_naive(const sphere *s, ray r, hit_record *hit)
+{
+    vec3 oc = vec3_sub(r.origin, s->center);
+    float a = vec3_dot(r.direction, r.direction);
+    float b = 2.0f * vec3_dot(oc, r.direction);
+    float c = vec3_dot(oc, oc) - s->radius * s->radius;
+    float discriminant = b * b - 4.0f * a * c;
+    if (discriminant < 0.0f)
+        return false;
+    float root = sqrtf(discriminant);
+    float t = (-b - root) / (2.0f * a);
+    if (!(t > r.t_min && t < r.t_max))
+        t = (-b + root) / (2.0f * a);
+    if (!(t > r.t_min && t < r.t_max))
+        return false;
+    hit->t = t;
+    hit->point = ray_at(r, t);
+    hit_set_normal(hit, r, vec3_scale(vec3_sub(hit->point, s->center), 1.0f / s->radius));
+    hit->u = hit->v = 0.0f;
+    return true;
+}
+
+/* Why not the formula above: for a sphere of radius 1 at distance 1e4, b^2 and
+ * 4ac are both 4e8, and a float near 4e8 is only accurate to 32. Their
+ * difference, which should be 4, comes out as 0 or 32: the ray misses, or hits
+ * at the wrong place. Two changes fix it (Haines et al., "Precision
+ * Improvements for Ray/Sphere Intersection", Ray Tracing Gems, 2019):
+ *  1. the discriminant as R^2 - |f - (f.d) d|^2 (f = o - c, d unit): the
+ *     squared distance from the centre to the ray's closest point, which has
+ *     no cancellation of large terms;
+ *  2. the near root via q = b' + sign(b') sqrt(disc), t0 = c/q, t1 = q/a, so
+ *     -b and the square root are never subtracted when they are nearly equal.
+ * Hit points are then re-projected onto the sphere, so their error is a few
+ * ulps of the sphere's size, which the ray offsets in ray.c rely on. */
+/* Both roots t0 <= t1 of the ray-sphere quadratic, in the ray's own t units;
+ * false if the ray's line misses the sphere. */
+static bool sphere_roots(vec3 center, float radius, ray r, float *t0, float *t1)
+{
+    float length = vec3_length(r.direction);
+    vec3 d = vec3_scale(r.direction, 1.0f / length);
+    vec3 f = vec3_sub(r.origin, center);
+    float b_half = -vec3_dot(f, d); /* -b/2 for a unit direction */
+    vec3 perpendicular = vec3_add(f, vec3_scale(d, b_half));
+    float radius2 = radius * radius;
+    float discriminant = radius2 - vec3_dot(perpendicular, perpendicular);
+    if (discriminant < 0.0f)
+        return false;
+    float c = vec3_dot(f, f) - radius2;
+    float q = b_half + copysignf(sqrtf(discriminant), b_half);
+    /* q == 0 only for a ray starting at the centre of a sphere of radius 0. */
+    float near = q != 0.0f ? c / q : 0.0f, far = q;
+    *t0 = fminf(near, far) / length;
+    *t1 = fmaxf(near, far) / length;
+    return true;
+}
+
+bool sphere_intersect(const sphere *s, ray r, hit_record *hit)
+{
+    float t0, t1;
+    if (!sphere_roots(s->center, s->radius, r, &t0, &t1))
+        return false;
+    float t = t0;
+    if (!(t > r.t_min && t < r.t_max))
+        t = t1;
+    if (!(t > r.t_min && t < r.t_max))
+        return false;
+    hit->t = t;
+    vec3 outward = vec3_normalize(vec3_sub(ray_at(r, t), s->center));
+    hit->point = vec3_add(s->center, vec3_scale(outward, s->radius)); /* re-projected */
+    hit_set_normal(hit, r, outward);
+    hit->u = hit->v = 0.0f;
+    return true;
+}
+
+/* ---- Ray-plane: (o + t d - p') . N = 0  =>  t = (p' - o) . N / (d . N) ---- */
+bool plane_intersect(const plane *p, ray r, hit_record *hit)
+{
+    float denominator = vec3_dot(r.direction, p->normal);
+    if (denominator == 0.0f) /* parallel: no hit (or the whole ray lies in it) */
+        return false;
+    float t = vec3_dot(vec3_sub(p->point, r.origin), p->normal) / denominator;
+    if (!(t > r.t_min && t < r.t_max))
+        return false;
+    hit->t = t;
+    hit->point = ray_at(r, t);
+    /* Snap the hit point exactly onto an axis-aligned plane, where that is
+     * representable, so offsets start from the surface itself. */
+    if (p->normal.x == 0.0f && p->normal.z == 0.0f)
+        hit->point.y = p->point.y;
+    hit_set_normal(hit, r, p->normal);
+    hit->u = hit->v = 0.0f;
+    return true;
+}
+
+/* ---- Ray-triangle: Moller-Trumbore --------------------------------------
+ * Solve o + t d = (1 - b1 - b2) P0 + b1 P1 + b2 P2 for (t, b1, b2) by
+ * Cramer's rule:
+ *   E1 = P1 - P0, E2 = P2 - P0, S = O - P0, S1 = D x E2, S2 = S x E1
+ *   [t, b1, b2] = 1 / (S1 . E1) * [S2 . E2, S1 . S, S2 . D]
+ * Cost: 1 division, 27 multiplications, 17 additions. The hit is inside the
+ * triangle iff b1 >= 0, b2 >= 0, b1 + b2 <= 1. */
+bool triangle_intersect(const triangle *tri, ray r, hit_record *hit)
+{
+    vec3 e1 = vec3_sub(tri->p1, tri->p0);
+    vec3 e2 = vec3_sub(tri->p2, tri->p0);
+    vec3 s = vec3_sub(r.origin, tri->p0);
+    vec3 s1 = vec3_cross(r.direction, e2);
+    vec3 s2 = vec3_cross(s, e1);
+    float determinant = vec3_dot(s1, e1);
+    /* Only an exactly zero determinant (the ray lies parallel to the plane)
+     * is refused. The usual "|det| < 1e-8" cut-off would also refuse every
+     * triangle smaller than about 1e-4 on a side, whatever the ray. A tiny
+     * non-zero determinant can give t = inf or NaN; the comparisons below are
+     * all false for NaN, so such a ray simply misses. */
+    if (determinant == 0.0f)
+        return false;
+    float inverse = 1.0f / determinant;
+    float t = vec3_dot(s2, e2) * inverse;
+    float b1 = vec3_dot(s1, s) * inverse;
+    float b2 = vec3_dot(s2, r.direction) * inverse;
+    if (!(b1 >= 0.0f && b2 >= 0.0f && b1 + b2 <= 1.0f))
+        return false;
+    if (!(t > r.t_min && t < r.t_max))
+        return false;
+    hit->t = t;
+    hit->u = b1;
+    hit->v = b2;
+    /* The point from the barycentrics, not o + t d: its error is a few ulps
+     * of the vertices, whatever the distance travelled (see ray.c). */
+    hit->point = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - b1 - b2), vec3_scale(tri->p1, b1)),
+                          vec3_scale(tri->p2, b2));
+    hit_set_normal(hit, r, vec3_normalize(vec3_cross(e1, e2)));
+    return true;
+}
+
+/* ---- Implicit surface f(p) = 0: sphere tracing --------------------------
+ * For a general implicit surface there is no formula for t: we walk along the
+ * ray looking for where f(o + t d) reaches 0. A fixed step is the obvious root
+ * finder and the wrong one: any part of the surface thinner than the step is
+ * stepped over. Sphere tracing (Hart, 1996) takes each step from f itself: if
+ * f is Lipschitz with constant L (|f(a) - f(b)| <= L |a - b|), the surface is
+ * at least |f(p)| / L away from p, so a step of that length cannot cross it,
+ * however thin it is. Our torus's f is an exact distance (L = 1). The walk
+ * stops when |f| falls below a tolerance, and the point is then projected
+ * onto the surface along the gradient (p - f grad f), so that hit points are
+ * as exact as the sphere's and ray offsets (ray.c) work the same. */
+
+/* Stop when the surface is closer than this fraction of the torus's size:
+ * ~20 float ulps of the coordinates, far below a pixel, and above the float
+ * noise in f (a few ulps), which would otherwise stop the walk at random. */
+static const float IMPLICIT_HIT_TOLERANCE = 1e-6f;
+/* Grazing rays approach the surface slowly; this many steps reach 1e-6 of
+ * the size at grazing angles down to about 0.1 degree. */
+static const int IMPLICIT_MAX_STEPS = 1024;
+/* A ray that starts this close to the surface is leaving it (a shadow or
+ * reflected ray): its first hit only counts once it has got farther away,
+ * or it would find the surface it starts on. 40x the tolerance is well above
+ * the ray offset of ray.c (256 ulps, ~1.5e-5 relative). */
+static const float IMPLICIT_LEAVING_DISTANCE = 40.0f * 1e-6f;
+
+float implicit_torus_value(const implicit_torus *torus, vec3 p)
+{
+    vec3 q = vec3_sub(p, torus->center);
+    float ring = sqrtf(q.x * q.x + q.z * q.z) - torus->major;
+    return sqrtf(ring * ring + q.y * q.y) - torus->minor;
+}
+
+static vec3 implicit_torus_gradient(const implicit_torus *torus, vec3 p)
+{
+    /* Analytic gradient: the direction from the nearest point of the core
+     * circle to p (any point of the circle if p is on the axis). */
+    vec3 q = vec3_sub(p, torus->center);
+    float rho = sqrtf(q.x * q.x + q.z * q.z);
+    vec3 core = rho > 0.0f ? vec3_make(q.x * torus->major / rho, 0.0f, q.z * torus->major / rho)
+                           : vec3_make(torus->major, 0.0f, 0.0f);
+    return vec3_normalize(vec3_sub(q, core));
+}
+
+bool implicit_intersect(const implicit_torus *torus, ray r, hit_record *hit)
+{
+    float length = vec3_length(r.direction);
+    float size = torus->major + torus->minor;
+    float tolerance = IMPLICIT_HIT_TOLERANCE * size;
+    /* March only inside the torus's bounding sphere: from far away, sphere
+     * tracing would spend many steps crossing empty space. */
+    float t_enter, t_exit;
+    if (!sphere_roots(torus->center, size * 1.001f, r, &t_enter, &t_exit))
+        return false;
+    float t = fmaxf(r.t_min, t_enter);
+    float t_end = fminf(r.t_max, t_exit);
+    bool leaving = fabsf(implicit_torus_value(torus, ray_at(r, t))) < IMPLICIT_LEAVING_DISTANCE * size;
+    for (int step = 0; step < IMPLICIT_MAX_STEPS && t < t_end; step++) {
+        vec3 p = ray_at(r, t);
+        float distance = fabsf(implicit_torus_value(torus, p)); /* inside the tube too */
+        if (leaving) {
+            leaving = distance < IMPLICIT_LEAVING_DISTANCE * size;
+        } else if (distance < tolerance && t > r.t_min) {
+            vec3 gradient = implicit_torus_gradient(torus, p);
+            hit->t = t;
+            hit->point = vec3_sub(p, vec3_scale(gradient, implicit_torus_value(torus, p)));
+            hit_set_normal(hit, r, gradient);
+            hit->u = hit->v = 0.0f;
+            return true;
+        }
+        /* The surface is at least `distance` away (L = 1): a safe step. */
+        t += fmaxf(distance, tolerance) / length;
+    }
+    return false;
+}

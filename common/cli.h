@@ -1,0 +1,65 @@
+/* cli.h -- the command line every chapter program shares.
+ *
+ *   --width N --height N --spp N --seed N --threads N --out FILE
+ *   --exposure STOPS --quiet --help
+ *
+ * plus flags of a chapter's own, described in a small table so that --help
+ * lists them and parsing checks them the same way.
+ *
+ * Usage:
+ *   cli_options opts = cli_defaults("build/out/ch01.exr", 640, 360, 1);
+ *   cli_flag extras[] = { {"--max-depth", CLI_INT, &max_depth, "N", "recursion limit"} };
+ *   cli_spec spec = {"01-ray-casting", "Ray casting (lecture 13) ...", extras, 1};
+ *   cli_parse_or_exit(argc, argv, &spec, &opts);
+ *
+ * A bad flag or value prints one line naming it and exits with status 2.
+ */
+#ifndef CLI_H
+#define CLI_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct {
+    int width, height;
+    int spp;            /* samples per pixel */
+    uint64_t seed;
+    int threads;        /* 0: as many as OpenMP offers */
+    const char *out;    /* .exr (plus a .png preview beside it) or .png */
+    float exposure;     /* preview brightness in stops */
+    bool quiet;
+} cli_options;
+
+typedef enum { CLI_INT, CLI_FLOAT, CLI_STRING, CLI_BOOL } cli_kind;
+
+typedef struct {
+    const char *name;   /* "--max-depth" */
+    cli_kind kind;
+    void *value;        /* int *, float *, const char **, bool * */
+    const char *metavar;/* "N" in the help text; NULL for CLI_BOOL */
+    const char *help;
+    double min, max;    /* accepted range for numbers (inclusive); both 0: any */
+} cli_flag;
+
+typedef struct {
+    const char *program;
+    const char *summary; /* what the program shows, for --help */
+    const cli_flag *extras;
+    int extra_count;
+} cli_spec;
+
+typedef enum { CLI_OK, CLI_HELP, CLI_ERROR } cli_status;
+
+cli_options cli_defaults(const char *out, int width, int height, int spp);
+
+/* Parse argv into opts and the extras' values. On CLI_ERROR, err holds one
+ * line naming the flag and what was wrong. Also checks that the output file
+ * can be created (its directory exists and is writable). */
+cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *opts, char *err, size_t err_size);
+/* cli_parse, then: --help prints usage and exits 0; an error prints
+ * "program: message" and "try --help", and exits 2. */
+void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options *opts);
+void cli_print_help(const cli_spec *spec, const cli_options *defaults);
+
+#endif

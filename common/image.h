@@ -1,0 +1,69 @@
+/* image.h -- a float RGB image, written as OpenEXR (the data) with an sRGB
+ * PNG beside it (a preview to look at), and the error between two images.
+ *
+ * Usage:
+ *   image img = image_make(w, h);          pixels start black
+ *   image_set(&img, x, y, colour);
+ *   char err[IMAGE_ERROR_SIZE];
+ *   if (!image_write(&img, "build/out/ch01.exr", 0.0f, err, sizeof err)) ...
+ *   image_free(&img);
+ *
+ * Values are linear radiance, row 0 at the top. EXR keeps them exactly as
+ * 32-bit floats; the PNG is a preview only: scaled by 2^exposure, clamped and
+ * sRGB-encoded (gamma applied once, here, and nowhere else).
+ *
+ * Writes never leave a half-written file: each file is written under a
+ * temporary name in the same directory and renamed into place at the end.
+ */
+#ifndef IMAGE_H
+#define IMAGE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include "vec3.h"
+
+enum { IMAGE_ERROR_SIZE = 512 };
+
+typedef struct {
+    int width, height;
+    float *rgb; /* width * height * 3 floats, row-major, top row first */
+} image;
+
+/* A black image; rgb is NULL if memory ran out (or the size is not positive). */
+image image_make(int width, int height);
+void image_free(image *img);
+
+static inline vec3 image_get(const image *img, int x, int y)
+{
+    const float *p = img->rgb + 3 * ((size_t)y * (size_t)img->width + (size_t)x);
+    return vec3_make(p[0], p[1], p[2]);
+}
+
+static inline void image_set(image *img, int x, int y, vec3 c)
+{
+    float *p = img->rgb + 3 * ((size_t)y * (size_t)img->width + (size_t)x);
+    p[0] = c.x;
+    p[1] = c.y;
+    p[2] = c.z;
+}
+
+/* Each returns true on success; on failure false, with one line naming the
+ * file and the reason in err, and no file left behind. */
+bool image_write_exr(const image *img, const char *path, char *err, size_t err_size);
+bool image_read_exr(image *out, const char *path, char *err, size_t err_size);
+/* exposure_stops: the preview shows radiance * 2^exposure_stops. */
+bool image_write_png(const image *img, const char *path, float exposure_stops, char *err, size_t err_size);
+/* By the path's ending: "x.exr" writes x.exr and the preview x.png beside it;
+ * "x.png" writes only the preview. */
+bool image_write(const image *img, const char *path, float exposure_stops, char *err, size_t err_size);
+
+/* Mean squared error over all pixels and channels. */
+double image_mse(const image *a, const image *reference);
+/* Relative MSE: mean of (a - ref)^2 / (ref^2 + IMAGE_RELMSE_EPSILON), which
+ * weighs errors in dark regions as much as in bright ones. */
+double image_relmse(const image *a, const image *reference);
+
+/* The linear -> sRGB transfer function (IEC 61966-2-1), for one channel in [0,1]. */
+float image_srgb_encode(float linear);
+
+#endif

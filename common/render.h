@@ -1,0 +1,59 @@
+/* render.h -- the loop every chapter renders with: for each pixel, spp camera
+ * rays, each traced by the chapter's radiance function, averaged in double.
+ *
+ * Usage:
+ *   render_job job = {.cam = &cam, .spp = 1, .seed = 1, .threads = 2,
+ *                     .radiance = ray_cast_radiance, .scene = &scene};
+ *   image img = image_make(cam.width, cam.height);
+ *   render_stats stats;
+ *   render_image(&job, &img, &stats);
+ *
+ * The integrator shape is one function: radiance(scene, ray, rng, counters)
+ * -> RGB, so ray casting, Whitted and path tracing render the same scene and
+ * can be compared on one plot.
+ *
+ * Same seed, same image, bit for bit, for any thread count: each pixel has its
+ * own random stream (rng.h) and its own sum, and rows are handed to threads
+ * dynamically but each pixel is computed by exactly one of them.
+ *
+ * With spp = 1 the ray goes through the pixel centre (lecture 13); with more,
+ * each sample is placed uniformly at random inside the pixel (lecture 16).
+ * Samples that are NaN or Inf are dropped before they are added, and counted.
+ */
+#ifndef RENDER_H
+#define RENDER_H
+
+#include <stdbool.h>
+
+#include "camera.h"
+#include "counters.h"
+#include "image.h"
+#include "rng.h"
+
+typedef vec3 (*radiance_fn)(const void *scene, ray r, pcg32 *rng, ray_counters *counters);
+
+typedef struct {
+    const camera *cam;   /* image size comes from cam->width, cam->height */
+    int spp;
+    uint64_t seed;
+    int threads;         /* 0: all OpenMP threads */
+    bool quiet;          /* no progress line */
+    const char *label;   /* for the progress line */
+    radiance_fn radiance;
+    const void *scene;
+    image *standard_error; /* optional: per-pixel standard error of the mean, per channel */
+} render_job;
+
+typedef struct {
+    double seconds;
+    ray_counters counters;
+} render_stats;
+
+/* Renders into out (already made at the camera's size). */
+void render_image(const render_job *job, image *out, render_stats *stats);
+
+/* One pixel, exactly as render_image computes it (for tests and for
+ * explaining a pixel). std_error may be NULL. */
+vec3 render_pixel(const render_job *job, int x, int y, ray_counters *counters, vec3 *std_error);
+
+#endif

@@ -1,0 +1,419 @@
+/* test_common.c -- the shared core: RNG, statistics, camera, ray offsets,
+ * the render loop and the command line. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "camera.h"
+#include "cli.h"
+#include "counters.h"
+#include "image.h"
+#include "ray.h"
+#include "render.h"
+#include "rng.h"
+#include "stats.h"
+#include "test_support.h"
+
+/* ---- PCG32 ---------------------------------------------------------------- */
+
+/* The reference implementation (pcg-c-basic's pcg32-demo) seeded with
+ * initstate 42, initseq 54 prints these six numbers first. */
+static void test_pcg32_matches_reference_output(void **state)
+{
+    (void)state;
+    pcg32 rng;
+    pcg32_seed(&rng, 42u, 54u);
+    assert_int_equal(rng.state, 1753877967969059832ULL);
+    assert_int_equal(rng.increment, 109u);
+    const uint32_t expected[6] = {0xa15c02b7u, 0x7b47f409u, 0xba1d3330u, 0x83d2f293u, 0xbfa4784bu, 0xcbed606eu};
+    for (int i = 0; i < 6; i++)
+        assert_int_equal(pcg32_next(&rng), expected[i]);
+}
+
+static void test_pcg32_float_is_in_unit_interval_and_uniform(void **state)
+{
+    (void)state;
+    pcg32 rng = pcg32_for_pixel(7, 0);
+    enum { N = 100000, BINS = 10 };
+    int count[BINS] = {0};
+    for (int i = 0; i < N; i++) {
+        float u = pcg32_float(&rng);
+        assert_true(u >= 0.0f && u < 1.0f);
+        count[(int)(u * BINS)]++;
+    }
+    /* Pearson chi-square with 9 degrees of freedom: P(chi2 > 33.7) ~ 1e-4. */
+    double chi2 = 0;
+    for (int b = 0; b < BINS; b++) {
+        double expected = (double)N / BINS;
+        chi2 += (count[b] - expected) * (count[b] - expected) / expected;
+    }
+    assert_true(chi2 < 33.7);
+}
+
+static void test_pcg32_pixel_streams_differ(void **state)
+{
+    (void)state;
+    /* Neighbouring pixels must not see the same numbers, or noise would be
+     * correlated across the image. */
+    pcg32 a = pcg32_for_pixel(1, 100), b = pcg32_for_pixel(1, 101), c = pcg32_for_pixel(2, 100);
+    int same_ab = 0, same_ac = 0;
+    for (int i = 0; i < 64; i++) {
+        uint32_t x = pcg32_next(&a), y = pcg32_next(&b), z = pcg32_next(&c);
+        same_ab += x == y;
+        same_ac += x == z;
+    }
+    assert_int_equal(same_ab, 0);
+    assert_int_equal(same_ac, 0);
+    /* ... and the same (seed, pixel) gives the same stream. */
+    pcg32 d = pcg32_for_pixel(1, 100), e = pcg32_for_pixel(1, 100);
+    for (int i = 0; i < 16; i++)
+        assert_int_equal(pcg32_next(&d), pcg32_next(&e));
+}
+
+static void test_pcg32_bounded_stays_in_range(void **state)
+{
+    (void)state;
+    pcg32 rng = pcg32_for_pixel(3, 3);
+    int seen[7] = {0};
+    for (int i = 0; i < 7000; i++) {
+        uint32_t k = pcg32_bounded(&rng, 7);
+        assert_true(k < 7);
+        seen[k]++;
+    }
+    for (int k = 0; k < 7; k++)
+        assert_true(seen[k] > 800 && seen[k] < 1200); /* 1000 +- 6.4 sigma */
+}
+
+/* ---- statistics ----------------------------------------------------------- */
+
+static void test_welford_matches_two_pass_formula(void **state)
+{
+    (void)state;
+    const double data[] = {2, 4, 4, 4, 5, 5, 7, 9};
+    welford w = {0};
+    for (int i = 0; i < 8; i++)
+        welford_add(&w, data[i]);
+    assert_close(welford_mean(&w), 5.0, 1e-12);
+    /* sum of squared deviations 32, over n - 1 = 7 */
+    assert_close(welford_variance(&w), 32.0 / 7.0, 1e-12);
+    assert_close(welford_standard_error(&w), sqrt(32.0 / 7.0 / 8.0), 1e-12);
+}
+
+static void test_welford_is_stable_with_a_large_offset(void **state)
+{
+    (void)state;
+    /* The textbook E[x^2] - E[x]^2 loses every digit here: x^2 ~ 1e18 while
+     * the variance is 1. */
+    welford w = {0};
+    for (int i = 0; i < 1000; i++)
+        welford_add(&w, 1e9 + (i % 2 ? 1.0 : -1.0));
+    assert_close(welford_variance(&w), 1000.0 / 999.0, 1e-6);
+}
+
+static void test_welford_merge_equals_one_pass(void **state)
+{
+    (void)state;
+    welford all = {0}, a = {0}, b = {0};
+    pcg32 rng = pcg32_for_pixel(5, 5);
+    for (int i = 0; i < 1000; i++) {
+        double x = pcg32_double(&rng) * 10.0;
+        welford_add(&all, x);
+        welford_add(i < 300 ? &a : &b, x);
+    }
+    welford_merge(&a, &b);
+    assert_int_equal(a.count, all.count);
+    assert_close(a.mean, all.mean, 1e-12);
+    assert_close(welford_variance(&a), welford_variance(&all), 1e-10);
+}
+
+static void test_loglog_slope_recovers_power_law(void **state)
+{
+    (void)state;
+    double x[6], y[6];
+    for (int i = 0; i < 6; i++) {
+        x[i] = pow(2.0, i);
+        y[i] = 3.0 / x[i];
+    }
+    assert_close(stats_loglog_slope(x, y, 6), -1.0, 1e-12);
+    for (int i = 0; i < 6; i++)
+        y[i] = 0.5 * pow(x[i], -0.5);
+    assert_close(stats_loglog_slope(x, y, 6), -0.5, 1e-12);
+}
+
+/* ---- camera --------------------------------------------------------------- */
+
+static void test_camera_centre_ray_looks_at_target(void **state)
+{
+    (void)state;
+    camera cam = camera_look_at(vec3_make(1, 2, 3), vec3_make(1, 2, -7), vec3_make(0, 1, 0), 60.0f, 200, 100);
+    ray r = camera_ray(&cam, 100.0f, 50.0f);
+    assert_float_equal(r.direction.x, 0.0f, 1e-6);
+    assert_float_equal(r.direction.y, 0.0f, 1e-6);
+    assert_float_equal(r.direction.z, -1.0f, 1e-6);
+    assert_float_equal(r.origin.y, 2.0f, 0.0f);
+}
+
+static void test_camera_edges_span_the_field_of_view(void **state)
+{
+    (void)state;
+    const float fov = 60.0f;
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), fov, 200, 100);
+    /* Top edge, centre column: the ray is fov/2 above the axis, and up is +y. */
+    ray top = camera_ray(&cam, 100.0f, 0.0f);
+    float angle = atan2f(top.direction.y, -top.direction.z) * 180.0f / (float)PI;
+    assert_float_equal(angle, fov / 2, 1e-4);
+    /* Right edge: tan of the horizontal half-angle is aspect * tan(fov/2). */
+    ray right = camera_ray(&cam, 200.0f, 50.0f);
+    assert_float_equal(right.direction.x / -right.direction.z, 2.0f * tanf(fov / 2 * (float)PI / 180.0f), 1e-5);
+    assert_float_equal(vec3_length(right.direction), 1.0f, 1e-6);
+}
+
+/* ---- leaving a surface ---------------------------------------------------- */
+
+static void test_offset_origin_moves_to_the_normal_side_at_every_scale(void **state)
+{
+    (void)state;
+    const float scales[] = {1e-3f, 1.0f, 1e2f, 1e4f, 1e6f};
+    pcg32 rng = pcg32_for_pixel(11, 0);
+    for (int s = 0; s < 5; s++) {
+        for (int i = 0; i < 1000; i++) {
+            vec3 p = vec3_scale(vec3_make(pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1,
+                                          pcg32_float(&rng) * 2 - 1), scales[s]);
+            vec3 n = vec3_normalize(vec3_make(pcg32_float(&rng) - 0.5f, pcg32_float(&rng) - 0.5f,
+                                              pcg32_float(&rng) - 0.5f));
+            vec3 q = ray_offset_origin(p, n);
+            /* Strictly on the side n points to, by more than float rounding
+             * of p could ever explain (a few ulps), at every scale. */
+            float moved = vec3_dot(vec3_sub(q, p), n);
+            float ulp = nextafterf(vec3_max_component(vec3_abs(p)), INFINITY) - vec3_max_component(vec3_abs(p));
+            assert_true(moved > 0.0f);
+            assert_true(moved > 4.0f * ulp || vec3_max_component(vec3_abs(p)) < 1.0f / 32);
+            /* ... and by little: 1e-3 relative to the scale at most. */
+            assert_true(vec3_length(vec3_sub(q, p)) < 1e-3f * fmaxf(scales[s], 1.0f / 32));
+        }
+    }
+}
+
+static void test_spawn_offsets_towards_the_direction(void **state)
+{
+    (void)state;
+    vec3 p = vec3_make(3.0f, 0.0f, 0.0f), n = vec3_make(1, 0, 0);
+    ray out = ray_spawn(p, n, vec3_make(1, 1, 0));
+    ray in = ray_spawn(p, n, vec3_make(-1, 1, 0));
+    assert_true(out.origin.x > 3.0f);
+    assert_true(in.origin.x < 3.0f);
+    ray to = ray_spawn_to(p, n, vec3_make(10, 0, 0), vec3_splat(0.0f));
+    assert_float_equal(to.t_max, 1.0f, 0.0f);
+    vec3 end = ray_at(to, 1.0f);
+    assert_float_equal(end.x, 10.0f, 1e-5);
+}
+
+/* ---- render loop ---------------------------------------------------------- */
+
+/* A radiance function that uses the random stream and the ray: if pixels
+ * shared a generator, or a sample depended on thread order, images would
+ * differ between runs. */
+static vec3 noisy_radiance(const void *scene, ray r, pcg32 *rng, ray_counters *counters)
+{
+    (void)scene;
+    counters->shadow_rays++;
+    float u = pcg32_float(rng);
+    return vec3_make(u, fabsf(r.direction.x) + u * u, fabsf(r.direction.y));
+}
+
+static image render_noisy(int threads, int spp, ray_counters *counters)
+{
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 50.0f, 37, 23);
+    render_job job = {.cam = &cam, .spp = spp, .seed = 99, .threads = threads, .quiet = true,
+                      .radiance = noisy_radiance};
+    image img = image_make(37, 23);
+    render_stats stats;
+    render_image(&job, &img, &stats);
+    if (counters)
+        *counters = stats.counters;
+    return img;
+}
+
+static void test_render_is_bit_identical_for_any_thread_count(void **state)
+{
+    (void)state;
+    image one = render_noisy(1, 4, NULL), two = render_noisy(2, 4, NULL), three = render_noisy(3, 4, NULL);
+    size_t bytes = 37 * 23 * 3 * sizeof(float);
+    assert_memory_equal(one.rgb, two.rgb, bytes);
+    assert_memory_equal(one.rgb, three.rgb, bytes);
+    image_free(&one);
+    image_free(&two);
+    image_free(&three);
+}
+
+static void test_render_counts_every_camera_ray(void **state)
+{
+    (void)state;
+    ray_counters c;
+    image img = render_noisy(2, 3, &c);
+    assert_int_equal(c.camera_rays, 37 * 23 * 3);
+    assert_int_equal(c.shadow_rays, 37 * 23 * 3); /* per-thread counters were all added */
+    image_free(&img);
+}
+
+static vec3 sometimes_nan_radiance(const void *scene, ray r, pcg32 *rng, ray_counters *counters)
+{
+    (void)scene;
+    (void)r;
+    (void)counters;
+    return pcg32_float(rng) < 0.25f ? vec3_make(NAN, 0, INFINITY) : vec3_splat(2.0f);
+}
+
+static void test_render_drops_and_counts_nan_samples(void **state)
+{
+    (void)state;
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 50.0f, 8, 8);
+    render_job job = {.cam = &cam, .spp = 16, .seed = 1, .threads = 2, .quiet = true,
+                      .radiance = sometimes_nan_radiance};
+    image img = image_make(8, 8);
+    render_stats stats;
+    render_image(&job, &img, &stats);
+    assert_true(stats.counters.nonfinite_samples > 0);
+    for (int i = 0; i < 8 * 8 * 3; i++)
+        assert_float_equal(img.rgb[i], 2.0f, 0.0f); /* the mean of the finite samples */
+    image_free(&img);
+}
+
+static vec3 direction_radiance(const void *scene, ray r, pcg32 *rng, ray_counters *counters)
+{
+    (void)scene;
+    (void)rng;
+    (void)counters;
+    return r.direction;
+}
+
+static void test_one_sample_goes_through_the_pixel_centre(void **state)
+{
+    (void)state;
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 50.0f, 10, 6);
+    render_job job = {.cam = &cam, .spp = 1, .seed = 1, .threads = 1, .quiet = true,
+                      .radiance = direction_radiance};
+    ray_counters c = {0};
+    vec3 d = render_pixel(&job, 3, 4, &c, NULL);
+    vec3 expected = camera_ray(&cam, 3.5f, 4.5f).direction;
+    assert_float_equal(d.x, expected.x, 0.0f);
+    assert_float_equal(d.y, expected.y, 0.0f);
+}
+
+/* ---- command line --------------------------------------------------------- */
+
+static cli_status parse(int argc, char **argv, cli_options *opts, char *err)
+{
+    static int max_depth = 5;
+    static const cli_flag extras[] = {{"--max-depth", CLI_INT, &max_depth, "N", "recursion limit", 0, 64}};
+    cli_spec spec = {"test", "a test", extras, 1};
+    *opts = cli_defaults("/tmp/out.exr", 64, 32, 1);
+    return cli_parse(argc, argv, &spec, opts, err, 512);
+}
+
+static void test_cli_reads_every_shared_flag(void **state)
+{
+    (void)state;
+    char err[512];
+    cli_options o;
+    char *argv[] = {"p", "--width", "320", "--height=200", "--spp", "16", "--seed", "12345", "--threads", "2",
+                    "--out", "/tmp/x.png", "--exposure", "-1.5", "--quiet", NULL};
+    assert_int_equal(parse(15, argv, &o, err), CLI_OK);
+    assert_int_equal(o.width, 320);
+    assert_int_equal(o.height, 200);
+    assert_int_equal(o.spp, 16);
+    assert_int_equal(o.seed, 12345);
+    assert_int_equal(o.threads, 2);
+    assert_string_equal(o.out, "/tmp/x.png");
+    assert_float_equal(o.exposure, -1.5f, 0.0f);
+    assert_true(o.quiet);
+}
+
+static void expect_error(int argc, char **argv, const char *fragment)
+{
+    char err[512] = "";
+    cli_options o;
+    assert_int_equal(parse(argc, argv, &o, err), CLI_ERROR);
+    if (strstr(err, fragment) == NULL)
+        fail_msg("error '%s' does not mention '%s'", err, fragment);
+}
+
+static void test_cli_rejects_bad_flags_with_a_clear_message(void **state)
+{
+    (void)state;
+    char *unknown[] = {"p", "--widht", "3"};
+    expect_error(3, unknown, "unknown flag '--widht'");
+    char *zero[] = {"p", "--width", "0"};
+    expect_error(3, zero, "--width");
+    char *negative[] = {"p", "--height", "-5"};
+    expect_error(3, negative, "'-5'");
+    char *junk[] = {"p", "--spp", "12abc"};
+    expect_error(3, junk, "'12abc'");
+    char *missing[] = {"p", "--spp"};
+    expect_error(2, missing, "--spp needs a value");
+    char *range[] = {"p", "--max-depth", "65"};
+    expect_error(3, range, "--max-depth");
+    char *no_dir[] = {"p", "--out", "/nonexistent-dir/x.exr"};
+    expect_error(3, no_dir, "does not exist");
+    char *suffix[] = {"p", "--out", "/tmp/x.jpg"};
+    expect_error(3, suffix, ".exr or .png");
+    char *file_as_dir[] = {"p", "--out", "/etc/passwd/x.exr"};
+    expect_error(3, file_as_dir, "is not a directory");
+    char *seed[] = {"p", "--seed", "-1"};
+    expect_error(3, seed, "--seed");
+}
+
+static void test_cli_rejects_an_unwritable_directory(void **state)
+{
+    (void)state;
+    if (geteuid() == 0)
+        skip(); /* root may write anywhere */
+    char *argv[] = {"p", "--out", "/proc/x.exr"};
+    expect_error(3, argv, "not writable");
+}
+
+static void test_cli_help_and_extras(void **state)
+{
+    (void)state;
+    char err[512];
+    cli_options o;
+    char *help[] = {"p", "--help"};
+    assert_int_equal(parse(2, help, &o, err), CLI_HELP);
+    char *extra[] = {"p", "--max-depth", "9"};
+    assert_int_equal(parse(3, extra, &o, err), CLI_OK);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_pcg32_matches_reference_output),
+        cmocka_unit_test(test_pcg32_float_is_in_unit_interval_and_uniform),
+        cmocka_unit_test(test_pcg32_pixel_streams_differ),
+        cmocka_unit_test(test_pcg32_bounded_stays_in_range),
+        cmocka_unit_test(test_welford_matches_two_pass_formula),
+        cmocka_unit_test(test_welford_is_stable_with_a_large_offset),
+        cmocka_unit_test(test_welford_merge_equals_one_pass),
+        cmocka_unit_test(test_loglog_slope_recovers_power_law),
+        cmocka_unit_test(test_camera_centre_ray_looks_at_target),
+        cmocka_unit_test(test_camera_edges_span_the_field_of_view),
+        cmocka_unit_test(test_offset_origin_moves_to_the_normal_side_at_every_scale),
+        cmocka_unit_test(test_spawn_offsets_towards_the_direction),
+        cmocka_unit_test(test_render_is_bit_identical_for_any_thread_count),
+        cmocka_unit_test(test_render_counts_every_camera_ray),
+        cmocka_unit_test(test_render_drops_and_counts_nan_samples),
+        cmocka_unit_test(test_one_sample_goes_through_the_pixel_centre),
+        cmocka_unit_test(test_cli_reads_every_shared_flag),
+        cmocka_unit_test(test_cli_rejects_bad_flags_with_a_clear_message),
+        cmocka_unit_test(test_cli_rejects_an_unwritable_directory),
+        cmocka_unit_test(test_cli_help_and_extras),
+    };
+    return cmocka_run_group_tests_name("common", tests, NULL, NULL);
+}

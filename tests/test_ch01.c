@@ -1,0 +1,461 @@
+/* test_ch01.c -- ray casting: each shape against its closed form, the hard
+ * cases the chapter text names, and Blinn-Phong against the formula. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <string.h>
+
+#include "01-ray-casting/ray_casting.h"
+#include "01-ray-casting/scene.h"
+#include "01-ray-casting/shapes.h"
+#include "render.h"
+#include "test_support.h"
+
+static ray ray_from(float ox, float oy, float oz, float dx, float dy, float dz)
+{
+    return ray_make(vec3_make(ox, oy, oz), vec3_make(dx, dy, dz));
+}
+
+/* ---- ray-sphere ----------------------------------------------------------- */
+
+static void test_sphere_hit_from_outside(void **state)
+{
+    (void)state;
+    sphere s = {vec3_make(0, 0, 0), 1.0f};
+    hit_record hit;
+    assert_true(sphere_intersect(&s, ray_from(0, 0, -5, 0, 0, 1), &hit));
+    assert_close(hit.t, 4.0, 1e-6);
+    assert_true(hit.front_face);
+    assert_close(hit.normal_geometric.z, -1.0, 1e-6);
+    assert_close(hit.point.z, -1.0, 1e-6);
+}
+
+static void test_sphere_hit_from_inside_returns_the_exit(void **state)
+{
+    (void)state;
+    sphere s = {vec3_make(0, 0, 0), 2.0f};
+    hit_record hit;
+    assert_true(sphere_intersect(&s, ray_from(0, 0, 0, 1, 0, 0), &hit));
+    assert_close(hit.t, 2.0, 1e-6);
+    assert_false(hit.front_face);
+    assert_close(hit.normal_geometric.x, -1.0, 1e-6); /* faces the ray: inwards */
+}
+
+static void test_sphere_tangent_and_miss(void **state)
+{
+    (void)state;
+    sphere s = {vec3_make(0, 0, 0), 1.0f};
+    hit_record hit;
+    /* Tangent: the ray grazes the sphere at (1, 0, 0). */
+    assert_true(sphere_intersect(&s, ray_from(1, 0, -5, 0, 0, 1), &hit));
+    assert_close(hit.t, 5.0, 1e-3);
+    assert_false(sphere_intersect(&s, ray_from(1.001f, 0, -5, 0, 0, 1), &hit));
+    /* Behind the origin: no hit for t > 0. */
+    assert_false(sphere_intersect(&s, ray_from(0, 0, 5, 0, 0, 1), &hit));
+    /* A direction that is not unit length: t is in units of |d|. */
+    assert_true(sphere_intersect(&s, ray_from(0, 0, -5, 0, 0, 2), &hit));
+    assert_close(hit.t, 2.0, 1e-6);
+}
+
+/* A radius-1 sphere 1e4 away: t = 9999. In float, the lecture's b^2 - 4ac
+ * cancels to nothing (see shapes.c); the robust form keeps it. */
+static void test_far_small_sphere_is_hit_at_the_right_distance(void **state)
+{
+    (void)state;
+    sphere s = {vec3_make(0, 0, 1e4f), 1.0f};
+    hit_record hit;
+    assert_true(sphere_intersect(&s, ray_from(0, 0, 0, 0, 0, 1), &hit));
+    assert_close(hit.t, 9999.0, 1e-3);
+    /* Slightly off-centre too: the hit is at 1e4 - sqrt(1 - 0.6^2) = 9999.2. */
+    assert_true(sphere_intersect(&s, ray_from(0.6f, 0, 0, 0, 0, 1), &hit));
+    assert_close(hit.t, 9999.2, 2e-3);
+}
+
+/* The twin: the same case through the lecture's formula is wrong, which is
+ * what the test above guards against. */
+static void test_naive_quadratic_fails_on_the_far_small_sphere(void **state)
+{
+    (void)state;
+    sphere s = {vec3_make(0, 0, 1e4f), 1.0f};
+    hit_record hit;
+    bool found = sphere_intersect_naive(&s, ray_from(0, 0, 0, 0, 0, 1), &hit);
+    assert_true(!found || fabsf(hit.t - 9999.0f) > 0.5f);
+}
+
+/* ---- ray-plane ------------------------------------------------------------ */
+
+static void test_plane_hit_and_parallel_miss(void **state)
+{
+    (void)state;
+    plane p = {vec3_make(0, 1, 0), vec3_make(0, 1, 0)};
+    hit_record hit;
+    assert_true(plane_intersect(&p, ray_from(0, 3, 0, 0, -1, 0), &hit));
+    assert_close(hit.t, 2.0, 1e-6);
+    assert_true(hit.front_face);
+    assert_true(plane_intersect(&p, ray_from(0, -3, 0, 0, 1, 0), &hit)); /* from below */
+    assert_false(hit.front_face);
+    assert_false(plane_intersect(&p, ray_from(0, 3, 0, 1, 0, 0), &hit));
+    assert_false(plane_intersect(&p, ray_from(0, 1, 0, 1, 0, 0), &hit)); /* in the plane */
+}
+
+/* ---- ray-triangle (Moller-Trumbore) --------------------------------------- */
+
+static const triangle unit_triangle = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+
+static void test_triangle_hit_point_is_the_barycentric_combination(void **state)
+{
+    (void)state;
+    triangle tri = {{1, 2, 3}, {4, 2.5f, 3}, {2, 5, 4}};
+    pcg32 rng = pcg32_for_pixel(1, 1);
+    for (int i = 0; i < 1000; i++) {
+        /* A point inside by its barycentrics, and a ray aimed at it. */
+        float b1 = pcg32_float(&rng), b2 = pcg32_float(&rng);
+        if (b1 + b2 > 1) {
+            b1 = 1 - b1;
+            b2 = 1 - b2;
+        }
+        vec3 target = vec3_add(vec3_add(vec3_scale(tri.p0, 1 - b1 - b2), vec3_scale(tri.p1, b1)),
+                               vec3_scale(tri.p2, b2));
+        vec3 origin = vec3_make(pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2, -5);
+        ray r = ray_make(origin, vec3_sub(target, origin));
+        hit_record hit;
+        assert_true(triangle_intersect(&tri, r, &hit));
+        assert_close(hit.t, 1.0, 1e-5);
+        assert_close(hit.u, b1, 1e-5);
+        assert_close(hit.v, b2, 1e-5);
+        vec3 along_ray = ray_at(r, hit.t);
+        assert_close(vec3_length(vec3_sub(hit.point, along_ray)), 0.0, 1e-5);
+        assert_close(vec3_length(vec3_sub(hit.point, target)), 0.0, 1e-5);
+    }
+}
+
+static void test_triangle_ray_in_its_plane_gives_no_hit_and_no_nan(void **state)
+{
+    (void)state;
+    hit_record hit;
+    memset(&hit, 0, sizeof hit);
+    /* In the plane z = 0, straight through the triangle. */
+    assert_false(triangle_intersect(&unit_triangle, ray_from(-1, 0.25f, 0, 1, 0, 0), &hit));
+    assert_false(triangle_intersect(&unit_triangle, ray_from(0.2f, 0.2f, 0, 1, 1, 0), &hit));
+    assert_false(isnan(hit.t)); /* the record was not touched */
+}
+
+static void test_tiny_triangle_is_hit(void **state)
+{
+    (void)state;
+    /* Side 2e-4: its determinant is ~1e-8, which a "|det| < 1e-8" cut-off
+     * would refuse. */
+    const float side = 2e-4f;
+    triangle tiny = {{0, 0, 0}, {side, 0, 0}, {0, side, 0}};
+    hit_record hit;
+    assert_true(triangle_intersect(&tiny, ray_from(side / 4, side / 4, -1, 0, 0, 1), &hit));
+    assert_close(hit.t, 1.0, 1e-6);
+    assert_false(triangle_intersect(&tiny, ray_from(side, side, -1, 0, 0, 1), &hit));
+}
+
+static void test_triangle_back_face_and_outside(void **state)
+{
+    (void)state;
+    hit_record hit;
+    assert_true(triangle_intersect(&unit_triangle, ray_from(0.25f, 0.25f, 1, 0, 0, -1), &hit));
+    assert_true(hit.front_face); /* counter-clockwise seen from +z */
+    assert_true(triangle_intersect(&unit_triangle, ray_from(0.25f, 0.25f, -1, 0, 0, 1), &hit));
+    assert_false(hit.front_face);
+    assert_close(hit.normal_geometric.z, -1.0, 1e-6);
+    assert_false(triangle_intersect(&unit_triangle, ray_from(0.6f, 0.6f, 1, 0, 0, -1), &hit));
+}
+
+/* ---- implicit surface (sphere-traced torus) ------------------------------- */
+
+static void test_torus_hit_along_its_plane(void **state)
+{
+    (void)state;
+    implicit_torus torus = {vec3_make(0, 0, 0), 1.0f, 0.25f};
+    hit_record hit;
+    /* From x = -3 along +x: the outer edge of the tube is at x = -1.25. */
+    assert_true(implicit_intersect(&torus, ray_from(-3, 0, 0, 1, 0, 0), &hit));
+    assert_close(hit.t, 1.75, 1e-5);
+    assert_close(hit.normal_geometric.x, -1.0, 1e-4);
+    assert_close(implicit_torus_value(&torus, hit.point), 0.0, 1e-5);
+    /* Down the hole: the axis never meets the tube. */
+    assert_false(implicit_intersect(&torus, ray_from(0, 5, 0, 0, -1, 0), &hit));
+    /* From above onto the tube's top at (1, 0.25, 0). */
+    assert_true(implicit_intersect(&torus, ray_from(1, 5, 0, 0, -1, 0), &hit));
+    assert_close(hit.t, 4.75, 1e-5);
+}
+
+/* A naive root finder for comparison: fixed steps of `step`, a hit where f
+ * changes sign. */
+static bool fixed_step_march(const implicit_torus *torus, ray r, float step, float t_end)
+{
+    float previous = implicit_torus_value(torus, r.origin);
+    for (float t = step; t < t_end; t += step) {
+        float f = implicit_torus_value(torus, ray_at(r, t));
+        if ((f < 0) != (previous < 0))
+            return true;
+        previous = f;
+    }
+    return false;
+}
+
+static void test_sphere_tracing_does_not_skip_a_thin_torus(void **state)
+{
+    (void)state;
+    /* A tube 2e-3 thick, crossed straight through its middle. */
+    implicit_torus thin = {vec3_make(0, 0, 0), 1.0f, 1e-3f};
+    /* Start at y = 3.0037 so that steps of 0.01 land at y = +0.0037 and
+     * -0.0063, either side of the tube. */
+    ray r = ray_from(1.0f, 3.0037f, 0.0001f, 0, -1, 0);
+    hit_record hit;
+    assert_true(implicit_intersect(&thin, r, &hit));
+    assert_close(hit.t, 3.0037 - 1e-3, 1e-5);
+    /* The twin: a fixed step of 0.01 jumps over the tube. */
+    assert_false(fixed_step_march(&thin, r, 0.01f, 6.0f));
+}
+
+static void test_sphere_tracing_grazing_ray(void **state)
+{
+    (void)state;
+    implicit_torus torus = {vec3_make(0, 0, 0), 1.0f, 0.25f};
+    hit_record hit;
+    /* Just above the top of the tube (y = 0.25) along x: misses ... */
+    assert_false(implicit_intersect(&torus, ray_from(-3, 0.2502f, 0, 1, 0, 0), &hit));
+    /* ... just below it: hits the outer side near x = -1. */
+    assert_true(implicit_intersect(&torus, ray_from(-3, 0.2490f, 0, 1, 0, 0), &hit));
+    assert_true(hit.point.x > -1.03f && hit.point.x < -0.97f);
+}
+
+/* ---- leaving a surface: no self-intersection at any scale ----------------- */
+
+static vec3 random_unit(pcg32 *rng)
+{
+    for (;;) {
+        vec3 v = vec3_make(2 * pcg32_float(rng) - 1, 2 * pcg32_float(rng) - 1, 2 * pcg32_float(rng) - 1);
+        float l2 = vec3_length_squared(v);
+        if (l2 > 1e-4f && l2 <= 1.0f)
+            return vec3_scale(v, 1.0f / sqrtf(l2));
+    }
+}
+
+typedef struct {
+    int self_hits;  /* outgoing rays that hit the surface they left */
+    int trials;
+} self_hit_count;
+
+/* 10^4 random hits per scale on a sphere and a triangle placed away from the
+ * origin at that scale; from each, a ray leaves into the open half space. A
+ * convex or flat surface can never be hit again by such a ray. With
+ * `offset` false the origin is the bare hit point: the twin that shows the
+ * test can fail. */
+static self_hit_count count_self_hits(float scale, bool offset)
+{
+    self_hit_count count = {0, 0};
+    pcg32 rng = pcg32_for_pixel(2024, (uint64_t)scale);
+    sphere s = {vec3_scale(vec3_make(0.3f, -0.7f, 0.5f), scale), 0.8f * scale};
+    triangle tri = {vec3_scale(vec3_make(1.1f, 0.2f, -0.4f), scale), vec3_scale(vec3_make(-0.3f, 0.9f, 0.6f), scale),
+                    vec3_scale(vec3_make(0.4f, -0.8f, 1.3f), scale)};
+    for (int i = 0; i < 10000; i++) {
+        bool use_sphere = i % 2 == 0;
+        /* A ray from a random point outside aimed at a random point of the shape. */
+        vec3 origin = vec3_scale(vec3_scale(random_unit(&rng), 4.0f), scale);
+        vec3 target;
+        if (use_sphere) {
+            target = vec3_add(s.center, vec3_scale(random_unit(&rng), s.radius * 0.9f));
+        } else {
+            float b1 = pcg32_float(&rng), b2 = pcg32_float(&rng);
+            if (b1 + b2 > 1) {
+                b1 = 1 - b1;
+                b2 = 1 - b2;
+            }
+            target = vec3_add(vec3_add(vec3_scale(tri.p0, 1 - b1 - b2), vec3_scale(tri.p1, b1)), vec3_scale(tri.p2, b2));
+        }
+        ray in = ray_make(origin, vec3_normalize(vec3_sub(target, origin)));
+        hit_record hit, again;
+        bool found = use_sphere ? sphere_intersect(&s, in, &hit) : triangle_intersect(&tri, in, &hit);
+        if (!found)
+            continue;
+        /* Leave into the side the ray came from (a reflection or shadow ray). */
+        vec3 out = random_unit(&rng);
+        if (vec3_dot(out, hit.normal_geometric) < 0)
+            out = vec3_neg(out);
+        ray leaving = offset ? ray_spawn(hit.point, hit.normal_geometric, out) : ray_make(hit.point, out);
+        bool again_found = use_sphere ? sphere_intersect(&s, leaving, &again) : triangle_intersect(&tri, leaving, &again);
+        count.trials++;
+        count.self_hits += again_found;
+    }
+    return count;
+}
+
+static void test_spawned_rays_never_rehit_their_surface(void **state)
+{
+    (void)state;
+    const float scales[] = {1.0f, 1e2f, 1e4f, 1e6f};
+    for (int s = 0; s < 4; s++) {
+        self_hit_count c = count_self_hits(scales[s], true);
+        assert_true(c.trials > 9000);
+        if (c.self_hits != 0)
+            fail_msg("scale %g: %d of %d spawned rays hit their own surface", scales[s], c.self_hits, c.trials);
+    }
+}
+
+static void test_unoffset_rays_do_rehit_their_surface(void **state)
+{
+    (void)state;
+    /* The twin: without the offset, rounding puts about half the hit points
+     * just behind the surface, and many rays find it again. */
+    int total = 0;
+    const float scales[] = {1.0f, 1e2f, 1e4f};
+    for (int s = 0; s < 3; s++)
+        total += count_self_hits(scales[s], false).self_hits;
+    assert_true(total > 100);
+}
+
+static void test_refracted_ray_into_a_sphere_finds_the_far_side(void **state)
+{
+    (void)state;
+    /* A ray entering a sphere must reach the far side, not the entry point. */
+    const float scales[] = {1.0f, 1e2f, 1e4f};
+    pcg32 rng = pcg32_for_pixel(77, 0);
+    for (int s = 0; s < 3; s++) {
+        sphere sp = {vec3_make(0.5f * scales[s], 0, 0), scales[s]};
+        for (int i = 0; i < 2000; i++) {
+            vec3 n = random_unit(&rng);
+            vec3 p = vec3_add(sp.center, vec3_scale(n, sp.radius));
+            vec3 inward = random_unit(&rng);
+            if (vec3_dot(inward, n) > -0.05f)
+                continue;
+            hit_record hit;
+            ray r = ray_spawn(p, n, inward);
+            assert_true(sphere_intersect(&sp, r, &hit));
+            /* The chord length is 2 R |cos|: at least 0.1 R here. */
+            assert_true(hit.t > 0.09f * sp.radius);
+        }
+    }
+}
+
+/* ---- Blinn-Phong, by hand ------------------------------------------------- */
+
+static void build_one_sphere_scene(scene *sc, bool with_blocker)
+{
+    scene_init(sc);
+    sc->camera = (scene_camera){vec3_make(0, 0, 5), vec3_make(0, 0, 0), vec3_make(0, 1, 0), 30.0f};
+    sc->ambient = vec3_splat(0.1f);
+    sc->background = vec3_splat(0.0f);
+    int m = scene_add_material(sc, material_blinn_phong(vec3_make(0.5f, 0.25f, 0.125f), vec3_splat(0.4f), 10.0f));
+    scene_add_sphere(sc, vec3_make(0, 0, 0), 1.0f, m);
+    scene_add_point_light(sc, vec3_make(3, 0, 5), vec3_splat(50.0f));
+    if (with_blocker) /* a small sphere on the segment from (0,0,1) to the light */
+        scene_add_sphere(sc, vec3_make(1.5f, 0, 3), 0.2f, m);
+}
+
+static void test_blinn_phong_pixel_equals_the_formula(void **state)
+{
+    (void)state;
+    scene sc;
+    build_one_sphere_scene(&sc, false);
+    camera cam = scene_make_camera(&sc, 9, 9);
+    render_job job = {.cam = &cam, .spp = 1, .seed = 1, .threads = 1, .radiance = ray_cast_radiance, .scene = &sc};
+    ray_counters counters = {0};
+    vec3 c = render_pixel(&job, 4, 4, &counters, NULL); /* the centre pixel: hit (0,0,1) */
+
+    /* By hand: p = (0,0,1), n = v = (0,0,1), to the light (3,0,4): r^2 = 25,
+     * l = (0.6, 0, 0.8), n.l = 0.8; h = unit(l + v) = unit(0.6, 0, 1.8),
+     * n.h = 1.8 / sqrt(0.36 + 3.24) = 3 / sqrt(10). */
+    double irradiance = 50.0 / 25.0;
+    double n_dot_h = 3.0 / sqrt(10.0);
+    double specular = 0.4 * irradiance * pow(n_dot_h, 10.0);
+    const double k_d[3] = {0.5, 0.25, 0.125};
+    const float got[3] = {c.x, c.y, c.z};
+    for (int i = 0; i < 3; i++)
+        assert_close(got[i], 0.1 * k_d[i] + k_d[i] * irradiance * 0.8 + specular, 1e-5);
+    assert_int_equal(counters.shadow_rays, 1);
+    scene_free(&sc);
+}
+
+static void test_shadowed_point_gets_only_ambient(void **state)
+{
+    (void)state;
+    scene sc;
+    build_one_sphere_scene(&sc, true);
+    camera cam = scene_make_camera(&sc, 9, 9);
+    render_job job = {.cam = &cam, .spp = 1, .seed = 1, .threads = 1, .radiance = ray_cast_radiance, .scene = &sc};
+    ray_counters counters = {0};
+    vec3 c = render_pixel(&job, 4, 4, &counters, NULL);
+    assert_close(c.x, 0.1 * 0.5, 1e-6);
+    assert_close(c.z, 0.1 * 0.125, 1e-6);
+    scene_free(&sc);
+}
+
+static void test_light_behind_the_surface_casts_no_shadow_ray(void **state)
+{
+    (void)state;
+    scene sc;
+    build_one_sphere_scene(&sc, false);
+    sc.lights[0].position = vec3_make(0, 0, -5); /* behind the sphere */
+    hit_record hit;
+    ray_counters counters = {0};
+    assert_true(scene_intersect(&sc, ray_from(0, 0, 5, 0, 0, -1), &hit, &counters));
+    vec3 c = blinn_phong_shade(&sc, &hit, vec3_make(0, 0, 1), &counters);
+    assert_int_equal(counters.shadow_rays, 0);
+    assert_close(c.x, 0.05, 1e-6);
+    scene_free(&sc);
+}
+
+/* ---- the whole picture ---------------------------------------------------- */
+
+static image render_demo(int threads)
+{
+    scene sc;
+    scene_build_ray_casting_demo(&sc);
+    camera cam = scene_make_camera(&sc, 96, 54);
+    render_job job = {.cam = &cam, .spp = 2, .seed = 5, .threads = threads, .quiet = true,
+                      .radiance = ray_cast_radiance, .scene = &sc};
+    image img = image_make(96, 54);
+    render_stats stats;
+    render_image(&job, &img, &stats);
+    assert_int_equal(stats.counters.nonfinite_samples, 0);
+    scene_free(&sc);
+    return img;
+}
+
+static void test_demo_is_bit_identical_for_one_and_two_threads(void **state)
+{
+    (void)state;
+    image one = render_demo(1), two = render_demo(2);
+    assert_memory_equal(one.rgb, two.rgb, 96 * 54 * 3 * sizeof(float));
+    for (int i = 0; i < 96 * 54 * 3; i++)
+        assert_true(isfinite(one.rgb[i]) && one.rgb[i] >= 0.0f);
+    image_free(&one);
+    image_free(&two);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sphere_hit_from_outside),
+        cmocka_unit_test(test_sphere_hit_from_inside_returns_the_exit),
+        cmocka_unit_test(test_sphere_tangent_and_miss),
+        cmocka_unit_test(test_far_small_sphere_is_hit_at_the_right_distance),
+        cmocka_unit_test(test_naive_quadratic_fails_on_the_far_small_sphere),
+        cmocka_unit_test(test_plane_hit_and_parallel_miss),
+        cmocka_unit_test(test_triangle_hit_point_is_the_barycentric_combination),
+        cmocka_unit_test(test_triangle_ray_in_its_plane_gives_no_hit_and_no_nan),
+        cmocka_unit_test(test_tiny_triangle_is_hit),
+        cmocka_unit_test(test_triangle_back_face_and_outside),
+        cmocka_unit_test(test_torus_hit_along_its_plane),
+        cmocka_unit_test(test_sphere_tracing_does_not_skip_a_thin_torus),
+        cmocka_unit_test(test_sphere_tracing_grazing_ray),
+        cmocka_unit_test(test_spawned_rays_never_rehit_their_surface),
+        cmocka_unit_test(test_unoffset_rays_do_rehit_their_surface),
+        cmocka_unit_test(test_refracted_ray_into_a_sphere_finds_the_far_side),
+        cmocka_unit_test(test_blinn_phong_pixel_equals_the_formula),
+        cmocka_unit_test(test_shadowed_point_gets_only_ambient),
+        cmocka_unit_test(test_light_behind_the_surface_casts_no_shadow_ray),
+        cmocka_unit_test(test_demo_is_bit_identical_for_one_and_two_threads),
+    };
+    return cmocka_run_group_tests_name("ch01 ray casting", tests, NULL, NULL);
+}

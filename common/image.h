@@ -57,7 +57,7 @@ bool image_write_png(const image *img, const char *path, float exposure_stops, c
  * "x.png" writes only the preview. */
 bool image_write(const image *img, const char *path, float exposure_stops, char *err, size_t err_size);
 
-/* Mean squared error over all pixels and channels. */
+/* Mean squared error over all pixels and channels (NaN if the sizes differ). */
 double image_mse(const image *a, const image *reference);
 /* Relative MSE: mean of (a - ref)^2 / (ref^2 + IMAGE_RELMSE_EPSILON), which
  * weighs errors in dark regions as much as in bright ones. */

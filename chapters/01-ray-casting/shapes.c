@@ -114,13 +114,11 @@ bool plane_intersect(const plane *p, ray r, hit_record *hit)
  *   [t, b1, b2] = 1 / (S1 . E1) * [S2 . E2, S1 . S, S2 . D]
  * Cost: 1 division, 27 multiplications, 17 additions. The hit is inside the
  * triangle iff b1 >= 0, b2 >= 0, b1 + b2 <= 1. */
-bool triangle_intersect(const triangle *tri, ray r, hit_record *hit)
+bool triangle_intersect_barycentric(const triangle *tri, const ray *r, float *t_out, float *b1_out, float *b2_out)
 {
     vec3 e1 = vec3_sub(tri->p1, tri->p0);
     vec3 e2 = vec3_sub(tri->p2, tri->p0);
-    vec3 s = vec3_sub(r.origin, tri->p0);
-    vec3 s1 = vec3_cross(r.direction, e2);
-    vec3 s2 = vec3_cross(s, e1);
+    vec3 s1 = vec3_cross(r->direction, e2);
     float determinant = vec3_dot(s1, e1);
     /* Only an exactly zero determinant (the ray lies parallel to the plane)
      * is refused. The usual "|det| < 1e-8" cut-off would also refuse every
@@ -130,13 +128,27 @@ bool triangle_intersect(const triangle *tri, ray r, hit_record *hit)
     if (determinant == 0.0f)
         return false;
     float inverse = 1.0f / determinant;
-    float t = vec3_dot(s2, e2) * inverse;
+    vec3 s = vec3_sub(r->origin, tri->p0);
+    /* The same three products as the formula, computed in an order that
+     * lets most misses leave early: b1 needs only S1 and S. */
     float b1 = vec3_dot(s1, s) * inverse;
-    float b2 = vec3_dot(s2, r.direction) * inverse;
-    if (!(b1 >= 0.0f && b2 >= 0.0f && b1 + b2 <= 1.0f))
+    if (!(b1 >= 0.0f && b1 <= 1.0f))
         return false;
-    if (!(t > r.t_min && t < r.t_max))
+    vec3 s2 = vec3_cross(s, e1);
+    float b2 = vec3_dot(s2, r->direction) * inverse;
+    if (!(b2 >= 0.0f && b1 + b2 <= 1.0f))
         return false;
+    float t = vec3_dot(s2, e2) * inverse;
+    if (!(t > r->t_min && t < r->t_max))
+        return false;
+    *t_out = t;
+    *b1_out = b1;
+    *b2_out = b2;
+    return true;
+}
+
+void triangle_fill_hit(const triangle *tri, ray r, float t, float b1, float b2, hit_record *hit)
+{
     hit->t = t;
     hit->u = b1;
     hit->v = b2;
@@ -144,7 +156,16 @@ bool triangle_intersect(const triangle *tri, ray r, hit_record *hit)
      * of the vertices, whatever the distance travelled (see ray.c). */
     hit->point = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - b1 - b2), vec3_scale(tri->p1, b1)),
                           vec3_scale(tri->p2, b2));
+    vec3 e1 = vec3_sub(tri->p1, tri->p0), e2 = vec3_sub(tri->p2, tri->p0);
     hit_set_normal(hit, r, vec3_normalize(vec3_cross(e1, e2)));
+}
+
+bool triangle_intersect(const triangle *tri, ray r, hit_record *hit)
+{
+    float t, b1, b2;
+    if (!triangle_intersect_barycentric(tri, &r, &t, &b1, &b2))
+        return false;
+    triangle_fill_hit(tri, r, t, b1, b2, hit);
     return true;
 }
 

@@ -46,6 +46,11 @@ bool plane_intersect(const plane *p, ray r, hit_record *hit);
 
 /* Moller-Trumbore, exactly as the lecture writes it. */
 bool triangle_intersect(const triangle *tri, ray r, hit_record *hit);
+/* The same test returning only t and the barycentrics (b1, b2): what an
+ * acceleration structure calls in its inner loop, filling the hit record
+ * once, for the closest hit only, with triangle_fill_hit(). */
+bool triangle_intersect_barycentric(const triangle *tri, const ray *r, float *t, float *b1, float *b2);
+void triangle_fill_hit(const triangle *tri, ray r, float t, float b1, float b2, hit_record *hit);
 
 float implicit_torus_value(const implicit_torus *torus, vec3 p);
 bool implicit_intersect(const implicit_torus *torus, ray r, hit_record *hit);

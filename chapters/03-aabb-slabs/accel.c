@@ -1,0 +1,110 @@
+/* accel.c -- the triangle set every structure is built over, and brute force. */
+#include "accel.h"
+
+#include <stdlib.h>
+
+#include "memory.h"
+#include "timer.h"
+
+void triangle_set_from_mesh(triangle_set *set, const mesh *m)
+{
+    set->count = m->face_count;
+    set->triangles = memory_allocate((size_t)m->face_count, sizeof *set->triangles);
+    set->boxes = memory_allocate((size_t)m->face_count, sizeof *set->boxes);
+    set->bounds = aabb_empty();
+    set->source = m;
+    for (int i = 0; i < m->face_count; i++) {
+        triangle t = {mesh_vertex(m, i, 0), mesh_vertex(m, i, 1), mesh_vertex(m, i, 2)};
+        set->triangles[i] = t;
+        set->boxes[i] = aabb_add_point(aabb_add_point(aabb_add_point(aabb_empty(), t.p0), t.p1), t.p2);
+        set->bounds = aabb_union(set->bounds, set->boxes[i]);
+    }
+}
+
+void triangle_set_free(triangle_set *set)
+{
+    free(set->triangles);
+    free(set->boxes);
+    set->triangles = NULL;
+    set->boxes = NULL;
+    set->count = 0;
+}
+
+void triangle_set_fill_hit(const triangle_set *set, int index, ray r, float t, float b1, float b2, hit_record *hit)
+{
+    triangle_fill_hit(&set->triangles[index], r, t, b1, b2, hit);
+    hit->shape_id = index;
+    hit->material_id = -1;
+    const mesh *m = set->source;
+    if (m == NULL)
+        return;
+    const mesh_face *f = &m->faces[index];
+    hit->material_id = f->material;
+    if (f->normal[0] >= 0 && f->normal[1] >= 0 && f->normal[2] >= 0) {
+        /* Interpolated vertex normal, turned to the side of the geometric
+         * normal (a shading normal on the far side would light the back). */
+        vec3 n = vec3_add(vec3_add(vec3_scale(m->normals[f->normal[0]], 1.0f - b1 - b2),
+                                   vec3_scale(m->normals[f->normal[1]], b1)),
+                          vec3_scale(m->normals[f->normal[2]], b2));
+        if (vec3_length_squared(n) > 0.0f) {
+            n = vec3_normalize(n);
+            hit->normal_shading = vec3_dot(n, hit->normal_geometric) < 0.0f ? vec3_neg(n) : n;
+        }
+    }
+}
+
+/* ---- brute force ---------------------------------------------------------- */
+
+static bool brute_force_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    const triangle_set *set = a->set;
+    int best = -1;
+    float best_b1 = 0, best_b2 = 0;
+    for (int i = 0; i < set->count; i++) {
+        float t, b1, b2;
+        if (triangle_intersect_barycentric(&set->triangles[i], &r, &t, &b1, &b2)) {
+            best = i;
+            r.t_max = t; /* only closer hits from now on */
+            best_b1 = b1;
+            best_b2 = b2;
+        }
+    }
+    counters->primitive_tests += (uint64_t)set->count;
+    if (best < 0)
+        return false;
+    triangle_set_fill_hit(set, best, r, r.t_max, best_b1, best_b2, hit);
+    return true;
+}
+
+static bool brute_force_any_hit(const accel *a, ray r, ray_counters *counters)
+{
+    const triangle_set *set = a->set;
+    for (int i = 0; i < set->count; i++) {
+        float t, b1, b2;
+        if (triangle_intersect_barycentric(&set->triangles[i], &r, &t, &b1, &b2)) {
+            counters->primitive_tests += (uint64_t)i + 1;
+            return true;
+        }
+    }
+    counters->primitive_tests += (uint64_t)set->count;
+    return false;
+}
+
+static void brute_force_destroy(accel *a) { free(a); }
+
+static const accel_ops brute_force_ops = {brute_force_closest_hit, brute_force_any_hit, brute_force_destroy};
+
+accel *brute_force_build(const triangle_set *set)
+{
+    double start = timer_seconds();
+    accel *a = memory_allocate(1, sizeof *a);
+    a->ops = &brute_force_ops;
+    a->set = set;
+    a->stats.name = "brute";
+    a->stats.bytes = sizeof *a;
+    a->stats.nodes = 1;
+    a->stats.leaves = 1;
+    a->stats.references = set->count;
+    a->stats.build_seconds = timer_seconds() - start;
+    return a;
+}

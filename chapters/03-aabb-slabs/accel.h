@@ -1,0 +1,97 @@
+/* accel.h -- one interface for every acceleration structure, so that one
+ * render loop, one test and one benchmark run them all side by side.
+ *
+ *   chapter 03: brute force (test every triangle)   brute_force_build()
+ *   chapter 04: uniform grid                        grid_build()
+ *   chapter 05: kd-tree                             kdtree_build()
+ *   chapter 06: BVH                                 bvh_build()
+ *
+ * Usage:
+ *   triangle_set tris; triangle_set_from_mesh(&tris, &m);
+ *   accel *a = brute_force_build(&tris);
+ *   if (accel_closest_hit(a, r, &hit, &counters)) ...   hit.shape_id = triangle index
+ *   if (accel_any_hit(a, shadow_ray, &counters)) ...     occluded
+ *   printf("%s: %.1f ms, %.1f bytes/triangle\n", a->stats.name, ...);
+ *   accel_destroy(a); triangle_set_free(&tris);
+ *
+ * Every structure counts, per ray, the nodes or cells it visits
+ * (counters->box_tests) and the triangles it tests (primitive_tests).
+ */
+#ifndef ACCEL_H
+#define ACCEL_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "01-ray-casting/shapes.h"
+#include "03-aabb-slabs/aabb.h"
+#include "counters.h"
+#include "mesh.h"
+
+/* The triangles an accelerator is built over, with their corners copied out
+ * of the mesh (the inner loop then reads 36 contiguous bytes per triangle),
+ * and each one's bounding box, which every builder needs. */
+typedef struct {
+    triangle *triangles;
+    aabb *boxes;
+    int count;
+    aabb bounds;        /* of all triangles */
+    const mesh *source; /* for vertex normals and materials; may be NULL */
+} triangle_set;
+
+void triangle_set_from_mesh(triangle_set *set, const mesh *m);
+void triangle_set_free(triangle_set *set);
+/* Fill a hit record for triangle `index` hit at (t, b1, b2): the point, the
+ * geometric normal, the interpolated vertex normal where the mesh has them,
+ * and the material. */
+void triangle_set_fill_hit(const triangle_set *set, int index, ray r, float t, float b1, float b2, hit_record *hit);
+
+typedef struct {
+    const char *name;
+    double build_seconds;
+    size_t bytes;     /* memory of the structure itself, not the triangles */
+    int nodes;        /* nodes, or cells for a grid */
+    int leaves;       /* leaves, or non-empty cells */
+    int max_depth;
+    long references;  /* triangle references stored in leaves or cells */
+} accel_stats;
+
+typedef struct accel accel;
+
+typedef struct {
+    /* The closest hit in (r.t_min, r.t_max); fills hit (shape_id = triangle). */
+    bool (*closest_hit)(const accel *a, ray r, hit_record *hit, ray_counters *counters);
+    /* Is there any hit in (r.t_min, r.t_max)? May stop at the first found. */
+    bool (*any_hit)(const accel *a, ray r, ray_counters *counters);
+    void (*destroy)(accel *a);
+} accel_ops;
+
+/* Each structure's own type starts with this, so a pointer to it is a
+ * pointer to an accel. */
+struct accel {
+    const accel_ops *ops;
+    const triangle_set *set;
+    accel_stats stats;
+};
+
+static inline bool accel_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    return a->ops->closest_hit(a, r, hit, counters);
+}
+
+static inline bool accel_any_hit(const accel *a, ray r, ray_counters *counters)
+{
+    return a->ops->any_hit(a, r, counters);
+}
+
+static inline void accel_destroy(accel *a)
+{
+    if (a != NULL)
+        a->ops->destroy(a);
+}
+
+/* Brute force: every ray tests every triangle. The baseline every structure
+ * must agree with, and beat. */
+accel *brute_force_build(const triangle_set *set);
+
+#endif

@@ -26,7 +26,9 @@
 #include "01-ray-casting/shapes.h"
 #include "03-aabb-slabs/aabb.h"
 #include "counters.h"
+#include "camera.h"
 #include "mesh.h"
+#include "rng.h"
 
 /* The triangles an accelerator is built over, with their corners copied out
  * of the mesh (the inner loop then reads 36 contiguous bytes per triangle),
@@ -93,5 +95,25 @@ static inline void accel_destroy(accel *a)
 /* Brute force: every ray tests every triangle. The baseline every structure
  * must agree with, and beat. */
 accel *brute_force_build(const triangle_set *set);
+
+/* ---- looking at a mesh through any structure ------------------------------
+ * What every accelerator chapter's program renders: the mesh lit by a light
+ * at the eye (brightest where it faces the camera), or, with heatmap set, the
+ * cost of each ray: the nodes or cells it visited plus the triangles it
+ * tested, as a colour from dark blue (cheap) to yellow and white (expensive),
+ * so you can see where a structure works hard. */
+typedef struct {
+    const accel *structure;
+    bool heatmap;
+    float heatmap_max_cost; /* the cost shown as white */
+} accel_view;
+
+vec3 accel_view_radiance(const void *view, ray r, pcg32 *rng, ray_counters *counters);
+/* The view of the Embree harness's coherent ray set: from
+ * c + unit(0.3, 0.4, 1) * 2.5 * half-diagonal, looking at the centre c of
+ * the bounds, tan(vertical fov / 2) = 0.3. */
+camera accel_view_camera(aabb bounds, int width, int height);
+/* The heat map's colour for cost / max_cost. */
+vec3 accel_heat_colour(float fraction);
 
 #endif

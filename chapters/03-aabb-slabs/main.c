@@ -134,11 +134,7 @@ int main(int argc, char **argv)
     }
 
     /* The same view as the Embree harness's coherent ray set. */
-    vec3 centre = aabb_centroid(sc.set.bounds);
-    float half_diagonal = 0.5f * vec3_length(aabb_extent(sc.set.bounds));
-    vec3 eye = vec3_add(centre, vec3_scale(vec3_normalize(vec3_make(0.3f, 0.4f, 1.0f)), 2.5f * half_diagonal));
-    camera cam = camera_look_at(eye, centre, vec3_make(0, 1, 0), 2.0f * atanf(0.3f) * 180.0f / (float)PI, opts.width,
-                                opts.height);
+    camera cam = accel_view_camera(sc.set.bounds, opts.width, opts.height);
     render_stats stats;
     int status = program_render(&opts, spec.program, boxed_radiance, &sc, &cam, &stats);
     if (status == 0 && !opts.quiet) {

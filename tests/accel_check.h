@@ -37,7 +37,7 @@ typedef enum {
 static const char *const accel_check_mesh_names[MESH_KIND_COUNT] = {
     "icosphere", "tori field", "soup", "teapot in stadium", "coincident", "degenerate", "flat"};
 
-static void accel_check_make_mesh(mesh *m, accel_check_mesh kind)
+static inline void accel_check_make_mesh(mesh *m, accel_check_mesh kind)
 {
     mesh_init(m);
     switch (kind) {
@@ -87,7 +87,7 @@ static void accel_check_make_mesh(mesh *m, accel_check_mesh kind)
     }
 }
 
-static vec3 accel_check_random_unit(pcg32 *rng)
+static inline vec3 accel_check_random_unit(pcg32 *rng)
 {
     float z = 2.0f * pcg32_float(rng) - 1.0f, phi = 2.0f * (float)PI * pcg32_float(rng);
     float s = sqrtf(fmaxf(0.0f, 1.0f - z * z));
@@ -99,7 +99,7 @@ static vec3 accel_check_random_unit(pcg32 *rng)
  * aim at the midpoint of a random edge (shared edges and vertices are where
  * hits are easiest to lose). A few have axis-aligned directions with zero
  * components, the slab test's +0/-0 cases. */
-static ray accel_check_ray(const mesh *m, vec3 lo, vec3 hi, pcg32 *rng, int i)
+static inline ray accel_check_ray(const mesh *m, vec3 lo, vec3 hi, pcg32 *rng, int i)
 {
     vec3 extent = vec3_sub(hi, lo);
     vec3 centre = vec3_scale(vec3_add(lo, hi), 0.5f);
@@ -126,7 +126,7 @@ static ray accel_check_ray(const mesh *m, vec3 lo, vec3 hi, pcg32 *rng, int i)
 
 /* Returns the number of mismatches (0 when the structure is right) and
  * prints the first few. */
-static long accel_check_mesh_kind(accel_builder build, accel_check_mesh kind, int ray_count, const char *name)
+static inline long accel_check_mesh_kind(accel_builder build, accel_check_mesh kind, int ray_count, const char *name)
 {
     mesh m;
     accel_check_make_mesh(&m, kind);
@@ -183,7 +183,7 @@ static long accel_check_mesh_kind(accel_builder build, accel_check_mesh kind, in
 }
 
 /* Every mesh kind, ray_count rays each. */
-static void accel_check_all(accel_builder build, int ray_count, const char *name)
+static inline void accel_check_all(accel_builder build, int ray_count, const char *name)
 {
     long total = 0;
     for (int kind = 0; kind < MESH_KIND_COUNT; kind++)

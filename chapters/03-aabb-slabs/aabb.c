@@ -44,8 +44,10 @@ bool aabb_slab_test(const aabb *box, const slab_ray *r, float ray_t_min, float r
         /* t_min and t_max for this pair of planes */
         float t_near = (vec3_axis(box->lo, axis) - origin) * inverse;
         float t_far = (vec3_axis(box->hi, axis) - origin) * inverse;
-        /* A negative direction meets the hi plane first. */
-        if (t_near > t_far) {
+        /* A negative direction meets the hi plane first. Decided by the
+         * sign of 1/d, not by comparing the two t: one of them may be NaN
+         * (below), and a comparison with NaN is always false. */
+        if (inverse < 0.0f) {
             float swap = t_near;
             t_near = t_far;
             t_far = swap;

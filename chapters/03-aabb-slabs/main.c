@@ -139,9 +139,11 @@ int main(int argc, char **argv)
     int status = program_render(&opts, spec.program, boxed_radiance, &sc, &cam, &stats);
     if (status == 0 && !opts.quiet) {
         double rays = (double)stats.counters.camera_rays;
-        printf("%s: %.2f box tests and %.1f triangle tests per ray (without boxes: %d triangle tests per ray)\n",
-               sc.use_boxes ? "with boxes" : "without boxes", (double)stats.counters.box_tests / rays,
-               (double)stats.counters.primitive_tests / rays, sc.set.count);
+        if (sc.use_boxes)
+            printf("with boxes: %.1f box tests and %.1f triangle tests per ray (without: %d triangle tests per ray)\n",
+                   (double)stats.counters.box_tests / rays, (double)stats.counters.primitive_tests / rays, sc.set.count);
+        else
+            printf("without boxes: %.1f triangle tests per ray\n", (double)stats.counters.primitive_tests / rays);
     }
     triangle_set_free(&sc.set);
     mesh_free(&m);

@@ -5,6 +5,8 @@
 #   make chNN        build and run chapter NN          (make ch01)
 #   make test-chNN   build and run chapter NN's tests  (make test-ch01)
 #   make sanitize    the test suites under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make bench       time the acceleration structures beside Embree (figures, CSV)
+#   make plots       draw every figure (gnuplot) from data the programs write
 #   make help        everything else
 #
 # Everything generated goes under build/.
@@ -29,7 +31,7 @@ TEST_LDLIBS = -lcmocka
 DEBIAN_PACKAGES := gcc make libcmocka-dev libopenexr-dev libstb-dev gnuplot-nox
 
 .DEFAULT_GOAL := all
-.PHONY: all demo test sanitize deps help clean bench plots docs
+.PHONY: all demo test sanitize deps bench-deps help clean bench plots plot-data docs
 .DELETE_ON_ERROR:
 
 # ---------------------------------------------------------------- sources --
@@ -87,6 +89,9 @@ endef
 LINK_SO_FAR :=
 $(foreach c,$(CHAPTERS),$(eval $(call CHAPTER_RULES,$(c))))
 
+# Everything the chapters built, latest first: what benchmarks link.
+ALL_LIBS := $(LINK_SO_FAR) $(COMMON_LIB)
+
 # Suites of common/ (every tests/test_*.c that is not a chapter's) link common/ only.
 COMMON_TEST_SRC := $(filter-out tests/test_ch%,$(sort $(wildcard tests/test_*.c)))
 COMMON_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(COMMON_TEST_SRC))
@@ -124,6 +129,65 @@ sanitize:
 	@$(MAKE) --no-print-directory test BUILD=$(BUILD)/sanitize OPT=-O1 \
 	  SANITIZE_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
 
+# ---------------------------------------------------------------- benchmarks --
+# The Embree harness lives in ../shared/anchors (beside this repository); it
+# is built here, never copied in. Embree itself comes from Debian.
+SHARED ?= ../shared
+BENCH_SIZES ?= 1024 10240 102400 1048576
+BENCH_REPS ?= 3
+comma := ,
+empty :=
+space := $(empty) $(empty)
+
+$(BUILD)/bin/bench_accel: $(BUILD)/obj/tests/bench_accel.o $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+
+$(BUILD)/bin/embree_bench: $(SHARED)/anchors/embree_bench.c | bench-deps
+	@mkdir -p $(dir $@)
+	$(CC) -O2 -std=c99 -Wall $< -o $@ -lembree3 -lm
+
+# Embree and ours, one after the other, on the same machine in one run.
+bench: $(BUILD)/bin/bench_accel
+	@mkdir -p $(BUILD)/data
+	@if [ -f $(SHARED)/anchors/embree_bench.c ]; then \
+	  $(MAKE) --no-print-directory $(BUILD)/bin/embree_bench && \
+	  rm -f $(BUILD)/data/embree.txt && \
+	  for n in $(BENCH_SIZES); do \
+	    $(BUILD)/bin/embree_bench embree $$n medium 1 $(BENCH_REPS) | tee -a $(BUILD)/data/embree.txt; \
+	  done; \
+	else echo "no $(SHARED)/anchors/embree_bench.c: timing without Embree"; fi
+	$(BUILD)/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS) \
+	  --out $(BUILD)/data/accel.csv $(if $(wildcard $(SHARED)/anchors/embree_bench.c),--embree $(BUILD)/data/embree.txt)
+
+# ---------------------------------------------------------------- plots --
+# Every figure is drawn by a gnuplot script in plots/ from CSV that a program
+# wrote under build/data/: plots/chNN_*.gp from chapter NN's program run with
+# --data, plots/accel_*.gp from the benchmark.
+PLOT_SCRIPTS := $(sort $(wildcard plots/*.gp))
+DATA_CHAPTERS := $(foreach c,$(CHAPTERS),$(if $(wildcard plots/ch$(call chapter_number,$(c))_*.gp),$(c)))
+
+$(BUILD)/data/accel.csv:
+	@$(MAKE) --no-print-directory bench
+
+plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),$(BUILD)/data/accel.csv)
+	@mkdir -p $(BUILD)/data $(BUILD)/out
+	@for c in $(DATA_CHAPTERS); do \
+	  n=$${c%%-*}; echo "$(BUILD)/bin/$$c --data $(BUILD)/data"; \
+	  $(BUILD)/bin/$$c --quiet --data $(BUILD)/data --out $(BUILD)/out/ch$$n.exr || exit 1; \
+	done
+
+plots: plot-data
+	@mkdir -p $(BUILD)/plots
+	@for s in $(PLOT_SCRIPTS); do \
+	  echo "gnuplot $$s"; \
+	  gnuplot -e "data_dir='$(BUILD)/data'; plot_dir='$(BUILD)/plots'" $$s || exit 1; \
+	done
+	@echo "Plots are in $(BUILD)/plots/ (PNG and SVG)."
+
+bench-deps:
+	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="libembree-dev"
+
 # Installs what is missing, by Debian package name, and says what it installed.
 deps:
 	@if ! command -v dpkg-query >/dev/null 2>&1; then \
@@ -140,7 +204,7 @@ deps:
 	echo "installed:$$missing"
 
 help:
-	@sed -n '2,11p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '3,13p' Makefile | sed 's/^# \{0,1\}//'
 	@echo "chapters: $(CHAPTERS)"
 
 clean:

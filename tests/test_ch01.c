@@ -12,6 +12,7 @@
 #include "01-ray-casting/ray_casting.h"
 #include "01-ray-casting/scene.h"
 #include "01-ray-casting/shapes.h"
+#include "mesh.h"
 #include "render.h"
 #include "test_support.h"
 
@@ -167,6 +168,101 @@ static void test_triangle_back_face_and_outside(void **state)
     assert_false(hit.front_face);
     assert_close(hit.normal_geometric.z, -1.0, 1e-6);
     assert_false(triangle_intersect(&unit_triangle, ray_from(0.6f, 0.6f, 1, 0, 0, -1), &hit));
+}
+
+/* ---- watertightness: rays through shared edges and vertices --------------- */
+
+typedef bool (*triangle_test)(const triangle *, const ray *, float *, float *, float *);
+
+/* Shoots `count` rays from outside a closed icosphere at its vertices and at
+ * points on its edges, and counts the rays that none of the triangles around
+ * that vertex or edge reports as hit: leaks through a closed surface. */
+static long count_leaks(triangle_test test, int count)
+{
+    mesh m;
+    mesh_init(&m);
+    mesh_icosphere(&m, vec3_make(0.3f, -0.2f, 0.1f), 1.0f, 3, -1);
+    pcg32 rng = pcg32_for_pixel(1313, 0);
+    long leaks = 0;
+    for (int i = 0; i < count; i++) {
+        int face = (int)pcg32_bounded(&rng, (uint32_t)m.face_count);
+        int k = (int)pcg32_bounded(&rng, 3);
+        int a = m.faces[face].position[k], b = m.faces[face].position[(k + 1) % 3];
+        vec3 target = m.positions[a];
+        bool on_edge = i % 2 == 1;
+        if (on_edge) { /* a point along the edge a-b, as exactly as floats allow */
+            float s = pcg32_float(&rng);
+            target = vec3_add(vec3_scale(m.positions[a], 1.0f - s), vec3_scale(m.positions[b], s));
+        }
+        /* From outside, above the surface there, slightly tilted. */
+        vec3 outward = vec3_normalize(vec3_sub(target, vec3_make(0.3f, -0.2f, 0.1f)));
+        vec3 tilt = vec3_scale(vec3_make(pcg32_float(&rng) - 0.5f, pcg32_float(&rng) - 0.5f, pcg32_float(&rng) - 0.5f),
+                               0.8f);
+        vec3 origin = vec3_add(target, vec3_scale(vec3_add(outward, tilt), 3.0f));
+        if (vec3_dot(vec3_sub(origin, target), outward) <= 0.1f)
+            continue;
+        ray r = ray_make(origin, vec3_sub(target, origin));
+        bool hit = false;
+        for (int f = 0; f < m.face_count && !hit; f++) {
+            const int *p = m.faces[f].position;
+            bool has_a = p[0] == a || p[1] == a || p[2] == a;
+            bool has_b = p[0] == b || p[1] == b || p[2] == b;
+            if (!(on_edge ? has_a && has_b : has_a))
+                continue;
+            triangle tri = {m.positions[p[0]], m.positions[p[1]], m.positions[p[2]]};
+            float t, b1, b2;
+            hit = test(&tri, &r, &t, &b1, &b2);
+        }
+        leaks += !hit;
+    }
+    mesh_free(&m);
+    return leaks;
+}
+
+static void test_watertight_triangles_do_not_leak_at_shared_edges(void **state)
+{
+    (void)state;
+    const int rays = 1000000;
+    long watertight = count_leaks(triangle_intersect_watertight, rays);
+    long moller_trumbore = count_leaks(triangle_intersect_barycentric, rays);
+    print_message("rays through shared edges and vertices of a closed mesh: %ld of %d leak with "
+                  "Moller-Trumbore, %ld with the watertight test\n", moller_trumbore, rays, watertight);
+    assert_int_equal(watertight, 0);
+    /* The twin: the lecture's test does leak, which is what makes this a test. */
+    assert_true(moller_trumbore > 0);
+}
+
+static void test_watertight_agrees_with_moller_trumbore_inside(void **state)
+{
+    (void)state;
+    triangle tri = {{1, 2, 3}, {4, 2.5f, 3}, {2, 5, 4}};
+    pcg32 rng = pcg32_for_pixel(4, 4);
+    for (int i = 0; i < 10000; i++) {
+        float b1 = 0.05f + 0.4f * pcg32_float(&rng), b2 = 0.05f + 0.4f * pcg32_float(&rng);
+        vec3 target = vec3_add(vec3_add(vec3_scale(tri.p0, 1 - b1 - b2), vec3_scale(tri.p1, b1)), vec3_scale(tri.p2, b2));
+        vec3 origin = vec3_make(pcg32_float(&rng) * 8 - 4, pcg32_float(&rng) * 8 - 4, pcg32_float(&rng) * 8 - 4);
+        ray r = ray_make(origin, vec3_sub(target, origin));
+        /* Not grazing: there both tests lose digits, differently. */
+        vec3 normal = vec3_normalize(vec3_cross(vec3_sub(tri.p1, tri.p0), vec3_sub(tri.p2, tri.p0)));
+        if (fabsf(vec3_dot(vec3_normalize(r.direction), normal)) < 0.2f)
+            continue;
+        float t1, u1, v1, t2, u2, v2;
+        bool a = triangle_intersect_barycentric(&tri, &r, &t1, &u1, &v1);
+        bool b = triangle_intersect_watertight(&tri, &r, &t2, &u2, &v2);
+        assert_true(a == b);
+        if (a) {
+            /* Each test rounds to a few ulps of coordinates up to ~8 in size,
+             * divided by a cosine of at least 0.2: 5e-5 covers both. */
+            const double agreement = 5e-5;
+            assert_close(t2, t1, agreement);
+            assert_close(u2, u1, agreement);
+            assert_close(v2, v1, agreement);
+        }
+    }
+    /* In the plane: no hit, no NaN. */
+    float t, u, v;
+    ray in_plane = ray_make(vec3_make(-1, 0.25f, 0), vec3_make(1, 0, 0));
+    assert_false(triangle_intersect_watertight(&unit_triangle, &in_plane, &t, &u, &v));
 }
 
 /* ---- implicit surface (sphere-traced torus) ------------------------------- */
@@ -446,6 +542,8 @@ int main(void)
         cmocka_unit_test(test_triangle_ray_in_its_plane_gives_no_hit_and_no_nan),
         cmocka_unit_test(test_tiny_triangle_is_hit),
         cmocka_unit_test(test_triangle_back_face_and_outside),
+        cmocka_unit_test(test_watertight_triangles_do_not_leak_at_shared_edges),
+        cmocka_unit_test(test_watertight_agrees_with_moller_trumbore_inside),
         cmocka_unit_test(test_torus_hit_along_its_plane),
         cmocka_unit_test(test_sphere_tracing_does_not_skip_a_thin_torus),
         cmocka_unit_test(test_sphere_tracing_grazing_ray),

@@ -169,6 +169,70 @@ bool triangle_intersect(const triangle *tri, ray r, hit_record *hit)
     return true;
 }
 
+/* ---- Ray-triangle, watertight (Woop, Benthin and Wald, 2013) -------------
+ * Moller-Trumbore decides "inside" from barycentrics computed separately for
+ * each triangle. A ray through an edge shared by two triangles gets two
+ * different roundings of (nearly) zero, and both triangles can say "just
+ * outside": the ray leaks through a closed mesh. The watertight test instead
+ * moves into a frame where the ray runs along +z from the origin, and decides
+ * from the three 2D edge functions U, V, W of the projected vertices. An edge
+ * function computed for a shared edge in one triangle is exactly the negation
+ * of the one computed in the other (the same products, subtracted the other
+ * way round), so at least one of the two triangles sees the ray inside or on
+ * its edge. That holds only if a*b - c*d is rounded the same way in both, which
+ * fused multiply-add would break: geometry is compiled with -ffp-contract=off. */
+bool triangle_intersect_watertight(const triangle *tri, const ray *r, float *t_out, float *b1_out, float *b2_out)
+{
+    /* The ray's largest direction component becomes z; a negative z flips
+     * the winding, so swap x and y to keep it. */
+    vec3 abs_d = vec3_abs(r->direction);
+    int kz = abs_d.x > abs_d.y ? (abs_d.x > abs_d.z ? 0 : 2) : (abs_d.y > abs_d.z ? 1 : 2);
+    int kx = (kz + 1) % 3, ky = (kx + 1) % 3;
+    if (vec3_axis(r->direction, kz) < 0.0f) {
+        int swap = kx;
+        kx = ky;
+        ky = swap;
+    }
+    /* Shear so the ray becomes (0, 0, 1). */
+    float dz = vec3_axis(r->direction, kz);
+    float shear_x = vec3_axis(r->direction, kx) / dz;
+    float shear_y = vec3_axis(r->direction, ky) / dz;
+    float shear_z = 1.0f / dz;
+    vec3 a = vec3_sub(tri->p0, r->origin), b = vec3_sub(tri->p1, r->origin), c = vec3_sub(tri->p2, r->origin);
+    float ax = vec3_axis(a, kx) - shear_x * vec3_axis(a, kz), ay = vec3_axis(a, ky) - shear_y * vec3_axis(a, kz);
+    float bx = vec3_axis(b, kx) - shear_x * vec3_axis(b, kz), by = vec3_axis(b, ky) - shear_y * vec3_axis(b, kz);
+    float cx = vec3_axis(c, kx) - shear_x * vec3_axis(c, kz), cy = vec3_axis(c, ky) - shear_y * vec3_axis(c, kz);
+    /* The edge functions: twice the signed areas of the sub-triangles the
+     * origin (now (0,0)) makes with each edge. */
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    /* Exactly zero may be a rounding of a tiny value of either sign: redo in
+     * double, where these products of floats are exact. */
+    if (u == 0.0f || v == 0.0f || w == 0.0f) {
+        u = (float)((double)cx * (double)by - (double)cy * (double)bx);
+        v = (float)((double)ax * (double)cy - (double)ay * (double)cx);
+        w = (float)((double)bx * (double)ay - (double)by * (double)ax);
+    }
+    /* Inside iff all three have the same sign (either winding), or are 0. */
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
+        return false;
+    float determinant = u + v + w;
+    if (determinant == 0.0f) /* the ray is in the triangle's plane */
+        return false;
+    /* t, scaled by the determinant, compared without dividing first. */
+    float az = shear_z * vec3_axis(a, kz), bz = shear_z * vec3_axis(b, kz), cz = shear_z * vec3_axis(c, kz);
+    float scaled_t = u * az + v * bz + w * cz;
+    float inverse = 1.0f / determinant;
+    float t = scaled_t * inverse;
+    if (!(t > r->t_min && t < r->t_max))
+        return false;
+    *t_out = t;
+    *b1_out = v * inverse; /* the weight of p1 */
+    *b2_out = w * inverse; /* the weight of p2 */
+    return true;
+}
+
 /* ---- Implicit surface f(p) = 0: sphere tracing --------------------------
  * For a general implicit surface there is no formula for t: we walk along the
  * ray looking for where f(o + t d) reaches 0. A fixed step is the obvious root

@@ -50,6 +50,10 @@ bool triangle_intersect(const triangle *tri, ray r, hit_record *hit);
  * acceleration structure calls in its inner loop, filling the hit record
  * once, for the closest hit only, with triangle_fill_hit(). */
 bool triangle_intersect_barycentric(const triangle *tri, const ray *r, float *t, float *b1, float *b2);
+/* The watertight test of Woop, Benthin and Wald (2013): a ray through an edge
+ * or vertex shared by triangles of a closed mesh hits at least one of them,
+ * which Moller-Trumbore does not promise. Same outputs as above. */
+bool triangle_intersect_watertight(const triangle *tri, const ray *r, float *t, float *b1, float *b2);
 void triangle_fill_hit(const triangle *tri, ray r, float t, float b1, float b2, hit_record *hit);
 
 float implicit_torus_value(const implicit_torus *torus, vec3 p);

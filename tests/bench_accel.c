@@ -1,0 +1,384 @@
+/* bench_accel.c -- what each acceleration structure costs and buys, measured
+ * on the same work as the Embree harness in ../shared/anchors/embree_bench.c:
+ * the "tori field" mesh (mesh_tori_field, bit-identical to the harness's) and
+ * its two ray sets, generated here operation for operation as the harness
+ * does:
+ *   coherent   1024 x 1024 pinhole rays in scanline order
+ *   incoherent 2^20 rays, origins uniform in the bounds, directions uniform
+ * For every structure and mesh size: build time, bytes per triangle, and
+ * Mrays/s for closest hit and any hit on both sets, one thread and all
+ * threads. Prints a table and writes CSV. With --embree FILE (the harness's
+ * output lines), prints our figures as ratios of Embree's.
+ *
+ * This is a benchmark, not a test: it prints figures and asserts nothing
+ * about time. It does check that every structure finds the same hits (the
+ * same count and sum of t as brute force or the BVH), so a fast wrong answer
+ * cannot hide in the table. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#include "03-aabb-slabs/accel.h"
+#include "04-uniform-grid/grid.h"
+#include "05-kd-tree/kdtree.h"
+#include "06-bvh/bvh.h"
+#include "memory.h"
+#include "mesh.h"
+#include "timer.h"
+
+typedef struct {
+    int count;
+    ray *rays;
+} ray_set;
+
+/* ---- the harness's ray sets ------------------------------------------------ */
+
+static uint64_t splitmix_state;
+
+static double splitmix_uniform(void)
+{
+    uint64_t z = (splitmix_state += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    z ^= z >> 31;
+    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static vec3 unit(vec3 a) { return vec3_scale(a, 1.0f / sqrtf(vec3_dot(a, a))); }
+
+static ray_set rays_coherent(aabb bounds, int width, int height)
+{
+    ray_set set = {width * height, memory_allocate((size_t)width * (size_t)height, sizeof(ray))};
+    vec3 c = vec3_scale(vec3_add(bounds.lo, bounds.hi), 0.5f);
+    vec3 diagonal = vec3_sub(bounds.hi, bounds.lo);
+    float rb = 0.5f * sqrtf(vec3_dot(diagonal, diagonal));
+    vec3 eye = vec3_add(c, vec3_scale(unit(vec3_make(0.3f, 0.4f, 1.0f)), 2.5f * rb));
+    vec3 forward = unit(vec3_sub(c, eye));
+    vec3 right = unit(vec3_cross(forward, vec3_make(0, 1, 0)));
+    vec3 up = vec3_cross(right, forward);
+    float th = 0.3f, tw = th * (float)width / (float)height;
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            float u = (2 * (x + 0.5f) / (float)width - 1) * tw, v = (1 - 2 * (y + 0.5f) / (float)height) * th;
+            vec3 d = unit(vec3_add(forward, vec3_add(vec3_scale(right, u), vec3_scale(up, v))));
+            set.rays[(size_t)y * (size_t)width + (size_t)x] = ray_make(eye, d);
+        }
+    return set;
+}
+
+static ray_set rays_incoherent(aabb bounds, int count)
+{
+    ray_set set = {count, memory_allocate((size_t)count, sizeof(ray))};
+    splitmix_state = 0xBADC0DE;
+    for (int k = 0; k < count; k++) {
+        vec3 o;
+        o.x = (float)(bounds.lo.x + (bounds.hi.x - bounds.lo.x) * splitmix_uniform());
+        o.y = (float)(bounds.lo.y + (bounds.hi.y - bounds.lo.y) * splitmix_uniform());
+        o.z = (float)(bounds.lo.z + (bounds.hi.z - bounds.lo.z) * splitmix_uniform());
+        float z = (float)(2 * splitmix_uniform() - 1);
+        float phi = (float)(2 * PI * splitmix_uniform());
+        float s = sqrtf(1 - z * z);
+        set.rays[k] = ray_make(o, vec3_make(s * cosf(phi), s * sinf(phi), z));
+    }
+    return set;
+}
+
+/* ---- timing ------------------------------------------------------------------ */
+
+typedef struct {
+    double seconds;
+    long hits;
+    double t_sum;
+    ray_counters counters;
+} trace_result;
+
+static trace_result trace(const accel *a, const ray_set *rays, int count, bool closest, int threads)
+{
+    trace_result result = {0};
+    long hits = 0;
+    double t_sum = 0.0;
+    double start = timer_seconds();
+#pragma omp parallel num_threads(threads) reduction(+ : hits, t_sum)
+    {
+        ray_counters mine = {0};
+#pragma omp for schedule(dynamic, 1024)
+        for (int k = 0; k < count; k++) {
+            if (closest) {
+                hit_record hit;
+                if (accel_closest_hit(a, rays->rays[k], &hit, &mine)) {
+                    hits++;
+                    t_sum += hit.t;
+                }
+            } else {
+                hits += accel_any_hit(a, rays->rays[k], &mine);
+            }
+        }
+#pragma omp critical(bench_counters)
+        counters_add(&result.counters, &mine);
+    }
+    result.seconds = timer_seconds() - start;
+    result.hits = hits;
+    result.t_sum = t_sum;
+    return result;
+}
+
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Median of `reps` timings of the same trace: robust to a stray slow run. */
+static trace_result trace_median(const accel *a, const ray_set *rays, int count, bool closest, int threads, int reps)
+{
+    double times[16];
+    trace_result r = {0};
+    if (reps > 16)
+        reps = 16;
+    for (int i = 0; i < reps; i++) {
+        r = trace(a, rays, count, closest, threads);
+        times[i] = r.seconds;
+    }
+    qsort(times, (size_t)reps, sizeof times[0], compare_doubles);
+    r.seconds = reps % 2 ? times[reps / 2] : 0.5 * (times[reps / 2 - 1] + times[reps / 2]);
+    return r;
+}
+
+/* ---- the structures ------------------------------------------------------------ */
+
+typedef struct {
+    const char *name;
+    accel *(*build)(const triangle_set *set);
+    long max_triangles; /* larger meshes are skipped (brute force) */
+    int max_rays;       /* rays per set (brute force uses a strided subset) */
+} structure;
+
+static accel *build_brute(const triangle_set *s) { return brute_force_build(s); }
+static accel *build_grid(const triangle_set *s) { return grid_build(s, GRID_DEFAULT_DENSITY); }
+static accel *build_kdtree(const triangle_set *s) { return kdtree_build(s); }
+static accel *build_bvh_median(const triangle_set *s) { return bvh_build(s, BVH_SPLIT_MEDIAN); }
+static accel *build_bvh_sah(const triangle_set *s) { return bvh_build(s, BVH_SPLIT_SAH); }
+
+static const structure structures[] = {
+    {"brute", build_brute, 10240, 1 << 14},
+    {"grid", build_grid, 1L << 30, 1 << 20},
+    {"kdtree", build_kdtree, 1L << 30, 1 << 20},
+    {"bvh-median", build_bvh_median, 1L << 30, 1 << 20},
+    {"bvh-sah", build_bvh_sah, 1L << 30, 1 << 20},
+};
+enum { STRUCTURE_COUNT = sizeof structures / sizeof structures[0] };
+
+/* A strided subset of a ray set (every k-th ray), as the harness does for
+ * brute force. */
+static ray_set ray_subset(const ray_set *all, int count)
+{
+    if (count >= all->count)
+        return *all;
+    ray_set s = {count, memory_allocate((size_t)count, sizeof(ray))};
+    int stride = all->count / count;
+    for (int k = 0; k < count; k++)
+        s.rays[k] = all->rays[(size_t)k * (size_t)stride];
+    return s;
+}
+
+/* ---- Embree's figures ------------------------------------------------------------ */
+
+typedef struct {
+    int triangles;
+    double build_ms, coherent_closest, coherent_any, incoherent_closest, incoherent_any;
+    double coherent_t_sum, incoherent_t_sum;
+} embree_figures;
+
+static int embree_load(const char *path, embree_figures *out, int max)
+{
+    FILE *f = fopen(path, "r");
+    if (f == NULL) {
+        fprintf(stderr, "bench_accel: cannot read '%s' (Embree figures); comparing without them\n", path);
+        return 0;
+    }
+    char line[1024];
+    int n = 0;
+    while (n < max && fgets(line, sizeof line, f)) {
+        embree_figures e;
+        const char *p;
+        if (strncmp(line, "EMBREE ", 7) != 0)
+            continue;
+        if (sscanf(line, "EMBREE tris=%d", &e.triangles) != 1)
+            continue;
+#define FIELD(name, dst) ((p = strstr(line, name "=")) != NULL && sscanf(p + strlen(name) + 1, "%lf", &(dst)) == 1)
+        if (FIELD("build_ms", e.build_ms) && FIELD("coh_isect_Mrays", e.coherent_closest) &&
+            FIELD("coh_occl_Mrays", e.coherent_any) && FIELD("inc_isect_Mrays", e.incoherent_closest) &&
+            FIELD("inc_occl_Mrays", e.incoherent_any) && FIELD("coh_tsum", e.coherent_t_sum) &&
+            FIELD("inc_tsum", e.incoherent_t_sum))
+            out[n++] = e;
+#undef FIELD
+    }
+    fclose(f);
+    return n;
+}
+
+static const embree_figures *embree_find(const embree_figures *e, int n, int triangles)
+{
+    for (int i = 0; i < n; i++)
+        if (e[i].triangles == triangles)
+            return &e[i];
+    return NULL;
+}
+
+/* ---- main ---------------------------------------------------------------------- */
+
+static void usage(void)
+{
+    printf("usage: bench_accel [--sizes 1024,10240,102400,1048576] [--only NAME,...] [--reps N]\n"
+           "                   [--threads N] [--out FILE.csv] [--embree FILE]\n\n"
+           "Times every acceleration structure on the tori field of ../shared/anchors/embree_bench.c,\n"
+           "with the harness's coherent and incoherent ray sets: build ms, bytes per triangle, and\n"
+           "Mrays/s for closest hit and any hit, on one thread and on all. --embree reads the\n"
+           "harness's output ('embree_bench embree N medium 1 R' lines) and prints ratios.\n"
+           "structures: brute grid kdtree bvh-median bvh-sah\n");
+}
+
+int main(int argc, char **argv)
+{
+    long sizes[8] = {1024, 10240, 102400, 1048576};
+    int size_count = 4, reps = 3, threads = 1;
+    const char *out_path = "build/data/accel.csv", *embree_path = NULL, *only = NULL;
+#ifdef _OPENMP
+    threads = omp_get_max_threads();
+#endif
+    for (int i = 1; i < argc; i++) {
+        const char *value = i + 1 < argc ? argv[i + 1] : NULL;
+        if (strcmp(argv[i], "--help") == 0) {
+            usage();
+            return 0;
+        } else if (strcmp(argv[i], "--sizes") == 0 && value) {
+            size_count = 0;
+            char *copy = strdup(value), *save = NULL;
+            for (char *tok = strtok_r(copy, ",", &save); tok && size_count < 8; tok = strtok_r(NULL, ",", &save))
+                sizes[size_count++] = atol(tok);
+            free(copy);
+            i++;
+        } else if (strcmp(argv[i], "--only") == 0 && value) {
+            only = value;
+            i++;
+        } else if (strcmp(argv[i], "--reps") == 0 && value && atoi(value) > 0) {
+            reps = atoi(value);
+            i++;
+        } else if (strcmp(argv[i], "--threads") == 0 && value && atoi(value) > 0) {
+            threads = atoi(value);
+            i++;
+        } else if (strcmp(argv[i], "--out") == 0 && value) {
+            out_path = value;
+            i++;
+        } else if (strcmp(argv[i], "--embree") == 0 && value) {
+            embree_path = value;
+            i++;
+        } else {
+            fprintf(stderr, "bench_accel: unknown or incomplete argument '%s' (try --help)\n", argv[i]);
+            return 2;
+        }
+    }
+    embree_figures embree[8];
+    int embree_count = embree_path ? embree_load(embree_path, embree, 8) : 0;
+
+    FILE *csv = fopen(out_path, "w");
+    if (csv == NULL) {
+        fprintf(stderr, "bench_accel: cannot write '%s'\n", out_path);
+        return 1;
+    }
+    fprintf(csv, "structure,triangles,build_ms,bytes_per_triangle,nodes,leaves,max_depth,threads,"
+                 "coherent_closest_mrays,coherent_any_mrays,incoherent_closest_mrays,incoherent_any_mrays,"
+                 "coherent_closest_mrays_all,incoherent_closest_mrays_all,"
+                 "boxes_per_ray,triangles_per_ray,coherent_hits,incoherent_hits\n");
+    /* Embree's own figures go into the same CSV, so plots draw it beside ours. */
+    for (int i = 0; i < embree_count; i++)
+        fprintf(csv, "embree,%d,%.3f,,,,,1,%.4f,%.4f,%.4f,%.4f,,,,,,\n", embree[i].triangles, embree[i].build_ms,
+                embree[i].coherent_closest, embree[i].coherent_any, embree[i].incoherent_closest,
+                embree[i].incoherent_any);
+    printf("%-10s %9s %9s %7s | %-23s | %-23s | %-15s | %s\n", "structure", "triangles", "build ms", "B/tri",
+           "coherent Mrays/s 1 thr", "incoherent Mrays/s 1 thr", "closest, all thr", "tests/ray (inc.)");
+    printf("%-10s %9s %9s %7s | %11s %11s | %11s %11s | %7s %7s |\n", "", "", "", "", "closest", "any", "closest",
+           "any", "coh", "inc");
+
+    for (int s = 0; s < size_count; s++) {
+        mesh m;
+        mesh_init(&m);
+        mesh_tori_field(&m, sizes[s]);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        ray_set coherent = rays_coherent(set.bounds, 1024, 1024);
+        ray_set incoherent = rays_incoherent(set.bounds, 1 << 20);
+        const embree_figures *e = embree_find(embree, embree_count, set.count);
+
+        for (int k = 0; k < STRUCTURE_COUNT; k++) {
+            const structure *st = &structures[k];
+            if (only != NULL && strstr(only, st->name) == NULL)
+                continue;
+            if (set.count > st->max_triangles)
+                continue;
+            /* Build: the median of `reps` builds, keeping the last. */
+            double build_times[16];
+            accel *a = NULL;
+            for (int r = 0; r < reps && r < 16; r++) {
+                accel_destroy(a);
+                a = st->build(&set);
+                build_times[r] = a->stats.build_seconds;
+            }
+            int build_reps = reps < 16 ? reps : 16;
+            qsort(build_times, (size_t)build_reps, sizeof(double), compare_doubles);
+            double build_ms = 1e3 * build_times[build_reps / 2];
+
+            ray_set coh = ray_subset(&coherent, st->max_rays), inc = ray_subset(&incoherent, st->max_rays);
+            trace(a, &coh, coh.count, true, 1); /* warm-up, not counted */
+            trace_result cc = trace_median(a, &coh, coh.count, true, 1, reps);
+            trace_result ca = trace_median(a, &coh, coh.count, false, 1, reps);
+            trace_result ic = trace_median(a, &inc, inc.count, true, 1, reps);
+            trace_result ia = trace_median(a, &inc, inc.count, false, 1, reps);
+            trace_result cc_all = trace_median(a, &coh, coh.count, true, threads, reps);
+            trace_result ic_all = trace_median(a, &inc, inc.count, true, threads, reps);
+            double mrays_cc = coh.count / cc.seconds * 1e-6, mrays_ca = coh.count / ca.seconds * 1e-6;
+            double mrays_ic = inc.count / ic.seconds * 1e-6, mrays_ia = inc.count / ia.seconds * 1e-6;
+            double mrays_cc_all = coh.count / cc_all.seconds * 1e-6, mrays_ic_all = inc.count / ic_all.seconds * 1e-6;
+            /* The counters of one trace of the incoherent set (every rep counts the same). */
+            double boxes = (double)ic.counters.box_tests / inc.count;
+            double tris = (double)ic.counters.primitive_tests / inc.count;
+            double bytes_per_triangle = (double)a->stats.bytes / set.count;
+
+            printf("%-10s %9d %9.2f %7.1f | %11.3f %11.3f | %11.3f %11.3f | %7.3f %7.3f | %.1f boxes, %.1f tris\n",
+                   st->name, set.count, build_ms, bytes_per_triangle, mrays_cc, mrays_ca, mrays_ic, mrays_ia,
+                   mrays_cc_all, mrays_ic_all, boxes, tris);
+            if (e != NULL && st->max_rays >= coherent.count)
+                /* Ratios to Embree, and a check that both did the same work:
+                 * the sums of closest-hit t agree to a few parts per million
+                 * (Embree's watertight triangle test and ours differ only at
+                 * edges). */
+                printf("%-10s %9s %8.2fx %7s | %10.2fx %10.2fx | %10.2fx %10.2fx | ratio to Embree "
+                       "(build: time; trace: speed) | t-sum differs by %.1e / %.1e\n",
+                       "", "", build_ms / e->build_ms, "", mrays_cc / e->coherent_closest, mrays_ca / e->coherent_any,
+                       mrays_ic / e->incoherent_closest, mrays_ia / e->incoherent_any,
+                       fabs(cc.t_sum - e->coherent_t_sum) / e->coherent_t_sum,
+                       fabs(ic.t_sum - e->incoherent_t_sum) / e->incoherent_t_sum);
+            fprintf(csv, "%s,%d,%.3f,%.2f,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%ld,%ld\n", st->name,
+                    set.count, build_ms, bytes_per_triangle, a->stats.nodes, a->stats.leaves, a->stats.max_depth,
+                    threads, mrays_cc, mrays_ca, mrays_ic, mrays_ia, mrays_cc_all, mrays_ic_all, boxes, tris, cc.hits,
+                    ic.hits);
+            fflush(stdout);
+            if (coh.rays != coherent.rays)
+                free(coh.rays);
+            if (inc.rays != incoherent.rays)
+                free(inc.rays);
+            accel_destroy(a);
+        }
+        free(coherent.rays);
+        free(incoherent.rays);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    fclose(csv);
+    printf("wrote %s\n", out_path);
+    return 0;
+}

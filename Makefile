@@ -7,6 +7,7 @@
 #   make sanitize    the test suites under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make bench       time the acceleration structures beside Embree (figures, CSV)
 #   make plots       draw every figure (gnuplot) from data the programs write
+#   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
 #   make help        everything else
 #
 # Everything generated goes under build/.
@@ -31,7 +32,7 @@ TEST_LDLIBS = -lcmocka
 DEBIAN_PACKAGES := gcc make libcmocka-dev libopenexr-dev libstb-dev gnuplot-nox
 
 .DEFAULT_GOAL := all
-.PHONY: all demo test sanitize deps bench-deps help clean bench plots plot-data docs
+.PHONY: all demo test sanitize fuzz fuzz-deps deps bench-deps help clean bench plots plot-data docs
 .DELETE_ON_ERROR:
 
 # ---------------------------------------------------------------- sources --
@@ -187,6 +188,32 @@ plots: plot-data
 
 bench-deps:
 	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="libembree-dev"
+
+# ---------------------------------------------------------------- fuzzing --
+# One libFuzzer target per parser (tests/fuzz_NAME.c), built with clang and
+# the address and undefined-behaviour sanitizers, run for FUZZ_SECONDS each
+# from the seed corpus tests/fuzz/NAME/.
+FUZZ_SECONDS ?= 30
+FUZZ_TARGETS := $(patsubst tests/fuzz_%.c,%,$(sort $(wildcard tests/fuzz_*.c)))
+
+$(BUILD)/fuzz/fuzz_%: tests/fuzz_%.c $(COMMON_SRC) | fuzz-deps
+	@mkdir -p $(dir $@)
+	clang -std=c11 -D_DEFAULT_SOURCE -g -O1 -ffp-contract=off -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
+	  $(CPPFLAGS) $^ -o $@ $(LDLIBS)
+
+fuzz: $(foreach t,$(FUZZ_TARGETS),$(BUILD)/fuzz/fuzz_$(t))
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p $(BUILD)/fuzz/corpus_$$t; \
+	  echo "fuzzing $$t for $(FUZZ_SECONDS) s (seed corpus tests/fuzz/$$t/)"; \
+	  $(BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 \
+	    $(BUILD)/fuzz/corpus_$$t tests/fuzz/$$t > $(BUILD)/fuzz/$$t.log 2>&1 \
+	    || { tail -40 $(BUILD)/fuzz/$$t.log; echo "fuzz_$$t FOUND A CRASH (input saved in the current directory)"; exit 1; }; \
+	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(BUILD)/fuzz/$$t.log); \
+	  echo "fuzz_$$t: $$runs inputs, no crash"; \
+	done
+
+fuzz-deps:
+	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="clang libclang-rt-14-dev"
 
 # Installs what is missing, by Debian package name, and says what it installed.
 deps:

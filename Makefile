@@ -8,6 +8,7 @@
 #   make bench       time the acceleration structures beside Embree (figures, CSV)
 #   make plots       draw every figure (gnuplot) from data the programs write
 #   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
+#   make valgrind    one small render of each chapter program under valgrind
 #   make help        everything else
 #
 # Everything generated goes under build/.
@@ -32,7 +33,7 @@ TEST_LDLIBS = -lcmocka
 DEBIAN_PACKAGES := gcc make libcmocka-dev libopenexr-dev libstb-dev gnuplot-nox
 
 .DEFAULT_GOAL := all
-.PHONY: all demo test sanitize fuzz fuzz-deps deps bench-deps help clean bench plots plot-data docs
+.PHONY: all demo test sanitize valgrind valgrind-deps fuzz fuzz-deps deps bench-deps help clean bench plots plot-data docs
 .DELETE_ON_ERROR:
 
 # ---------------------------------------------------------------- sources --
@@ -188,6 +189,21 @@ plots: plot-data
 
 bench-deps:
 	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="libembree-dev"
+
+# ---------------------------------------------------------------- valgrind --
+# One small render of every chapter program under valgrind: no invalid reads
+# or writes, no definite leaks. (OpenMP's thread pool keeps its stacks until
+# exit, which valgrind calls "possibly lost"; those are not ours.)
+valgrind: $(PROGRAMS) | valgrind-deps
+	@mkdir -p $(BUILD)/valgrind
+	@for c in $(CHAPTERS); do \
+	  echo "valgrind $(BUILD)/bin/$$c"; \
+	  valgrind -q --error-exitcode=1 --leak-check=full --errors-for-leak-kinds=definite --show-possibly-lost=no \
+	    $(BUILD)/bin/$$c --width 32 --height 24 --threads 2 --quiet --out $(BUILD)/valgrind/$$c.exr || exit 1; \
+	done; echo "valgrind: no errors and no leaks in $(words $(CHAPTERS)) programs"
+
+valgrind-deps:
+	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="valgrind"
 
 # ---------------------------------------------------------------- fuzzing --
 # One libFuzzer target per parser (tests/fuzz_NAME.c), built with clang and

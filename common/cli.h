@@ -29,6 +29,10 @@ typedef struct {
     const char *out;    /* .exr (plus a .png preview beside it) or .png */
     float exposure;     /* preview brightness in stops */
     bool quiet;
+    /* Not a flag: set by programs that integrate over the pixel (the path
+     * tracer) so that even one sample per pixel lands at a random point
+     * inside it, rather than at its centre (see render.h). */
+    bool jitter;
 } cli_options;
 
 typedef enum { CLI_INT, CLI_FLOAT, CLI_STRING, CLI_BOOL } cli_kind;

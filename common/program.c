@@ -17,7 +17,8 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
                       .quiet = opts->quiet,
                       .label = label,
                       .radiance = radiance,
-                      .scene = scene};
+                      .scene = scene,
+                      .jitter = opts->jitter};
     render_stats stats;
     render_image(&job, &img, &stats);
 

@@ -17,7 +17,7 @@ vec3 render_pixel(const render_job *job, int x, int y, ray_counters *counters, v
     welford channel[3] = {{0}, {0}, {0}};
     for (int s = 0; s < job->spp; s++) {
         float px = (float)x + 0.5f, py = (float)y + 0.5f;
-        if (job->spp > 1) {
+        if (job->spp > 1 || job->jitter) {
             px = (float)x + pcg32_float(&rng);
             py = (float)y + pcg32_float(&rng);
         }

@@ -17,7 +17,9 @@
  * dynamically but each pixel is computed by exactly one of them.
  *
  * With spp = 1 the ray goes through the pixel centre (lecture 13); with more,
- * each sample is placed uniformly at random inside the pixel (lecture 16).
+ * or with `jitter` set, each sample is placed uniformly at random inside the
+ * pixel (lecture 16): the pixel's value is then the average over its area,
+ * and estimates with different sample counts estimate the same thing.
  * Samples that are NaN or Inf are dropped before they are added, and counted.
  */
 #ifndef RENDER_H
@@ -42,6 +44,7 @@ typedef struct {
     radiance_fn radiance;
     const void *scene;
     image *standard_error; /* optional: per-pixel standard error of the mean, per channel */
+    bool jitter;           /* random positions in the pixel even when spp = 1 */
 } render_job;
 
 typedef struct {

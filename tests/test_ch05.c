@@ -1,0 +1,683 @@
+/* test_ch05.c -- the kd-tree: brute force agreement on every test mesh, the
+ * SAH cost against the formula, and the hard cases of spatial splits, each
+ * with its answer worked out by hand: coincident triangles, a ray lying in a
+ * split plane, a triangle straddling into the far cell, planar triangles on
+ * a split plane; plus the naive "stop at the first leaf with a hit" failing
+ * the case that exists for it. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+
+#include "test_support.h"
+#include "accel_check.h"
+
+#include "05-kd-tree/kdtree.h"
+
+/* The t values below are exact in real numbers; Moller-Trumbore in float
+ * gets within a few ulps of them for t <= 10. */
+static const double T_TOLERANCE = 1e-5;
+
+/* ---- a handful of triangles and a tree over them --------------------------- */
+
+typedef struct {
+    mesh m;
+    triangle_set set;
+    accel *tree;
+    accel *brute;
+} scene;
+
+static void scene_make(scene *s, vec3 (*corners)[3], int count, const kdtree_options *options)
+{
+    mesh_init(&s->m);
+    for (int i = 0; i < count; i++) {
+        int a = mesh_add_position(&s->m, corners[i][0]);
+        int b = mesh_add_position(&s->m, corners[i][1]);
+        int c = mesh_add_position(&s->m, corners[i][2]);
+        mesh_add_triangle(&s->m, a, b, c, -1);
+    }
+    triangle_set_from_mesh(&s->set, &s->m);
+    kdtree_options defaults = kdtree_default_options();
+    s->tree = kdtree_build_with(&s->set, options != NULL ? options : &defaults);
+    s->brute = brute_force_build(&s->set);
+}
+
+static void scene_free(scene *s)
+{
+    accel_destroy(s->tree);
+    accel_destroy(s->brute);
+    triangle_set_free(&s->set);
+    mesh_free(&s->m);
+}
+
+typedef struct {
+    bool found;
+    float t;
+    int triangle;
+    ray_counters counters;
+} trace_result;
+
+static trace_result trace(const accel *a, ray r)
+{
+    trace_result out = {false, 0.0f, -1, {0}};
+    hit_record hit;
+    out.found = accel_closest_hit(a, r, &hit, &out.counters);
+    if (out.found) {
+        out.t = hit.t;
+        out.triangle = hit.shape_id;
+    }
+    return out;
+}
+
+static ray ray_between(float ox, float oy, float oz, float dx, float dy, float dz, float t_min, float t_max)
+{
+    ray r = ray_make(vec3_make(ox, oy, oz), vec3_make(dx, dy, dz));
+    r.t_min = t_min;
+    r.t_max = t_max;
+    return r;
+}
+
+/* Closest hit is `triangle` at t; any-hit agrees. */
+static void expect_hit(const scene *s, ray r, int triangle, double t)
+{
+    trace_result got = trace(s->tree, r);
+    assert_true(got.found);
+    assert_int_equal(got.triangle, triangle);
+    assert_close(got.t, t, T_TOLERANCE);
+    ray_counters c = {0};
+    assert_true(accel_any_hit(s->tree, r, &c));
+}
+
+static const kd_tree *as_tree(const accel *a) { return (const kd_tree *)a; }
+
+/* Does the subtree under node hold triangle t in one of its leaves? */
+static bool subtree_holds(const kd_tree *tree, uint32_t node, int t)
+{
+    const kd_node *n = &tree->nodes[node];
+    if (kd_node_is_leaf(n)) {
+        for (uint32_t i = 0; i < kd_node_triangle_count(n); i++)
+            if ((int)tree->references[n->first_reference + i] == t)
+                return true;
+        return false;
+    }
+    return subtree_holds(tree, node + 1, t) || subtree_holds(tree, kd_node_above_child(n), t);
+}
+
+/* The first interior node (depth first) splitting `axis` at `position`, or -1. */
+static int find_split_node(const kd_tree *tree, uint32_t node, int axis, float position)
+{
+    const kd_node *n = &tree->nodes[node];
+    if (kd_node_is_leaf(n))
+        return -1;
+    if (kd_node_axis(n) == axis && n->split == position)
+        return (int)node;
+    int below = find_split_node(tree, node + 1, axis, position);
+    return below >= 0 ? below : find_split_node(tree, kd_node_above_child(n), axis, position);
+}
+
+/* ---- agreement with brute force --------------------------------------------- */
+
+static void test_kdtree_agrees_with_brute_force(void **state)
+{
+    (void)state;
+    accel_check_all(kdtree_build, 15000, "kd-tree");
+}
+
+/* A tree cut off at depth 2 has big leaves but must give the same answers:
+ * the depth limit changes the speed, never the result. */
+static accel *build_shallow(const triangle_set *set)
+{
+    kdtree_options o = kdtree_default_options();
+    o.max_depth = 2;
+    return kdtree_build_with(set, &o);
+}
+
+static void test_shallow_tree_agrees_with_brute_force(void **state)
+{
+    (void)state;
+    accel_check_all(build_shallow, 1000, "kd-tree (depth 2)");
+}
+
+/* ---- the SAH ---------------------------------------------------------------- */
+
+static void test_split_cost_is_the_sah_formula(void **state)
+{
+    (void)state;
+    /* Box [0,4] x [0,2] x [0,1]: SA = 2 (4*2 + 2*1 + 1*4) = 28. Split x at 1:
+     * below [0,1]: SA = 2 (2 + 2 + 1) = 10; above [1,4]: SA = 2 (6 + 2 + 3) = 22.
+     * C_traverse = 1, C_isect = 2, 3 below and 5 above:
+     *   1 + (10/28) 3 * 2 + (22/28) 5 * 2 = 1 + 280/28 = 11. */
+    kdtree_options o = {1.0f, 2.0f, 0.8f, 0};
+    aabb box = {{0, 0, 0}, {4, 2, 1}};
+    assert_close(kdtree_split_cost(&o, box, 0, 1.0f, 3, 5), 11.0, 1e-5);
+    /* Nothing below: the empty bonus, 0.8 (1 + (22/28) 5 * 2) = 0.8 * 8.857. */
+    assert_close(kdtree_split_cost(&o, box, 0, 1.0f, 0, 5), 0.8 * (1.0 + 220.0 / 28.0), 1e-5);
+    /* The same split on z at 0.25: both children keep the 4 x 2 faces,
+     * below 2 (8 + 0.5 + 1) = 19, above 2 (8 + 1.5 + 3) = 25. */
+    assert_close(kdtree_split_cost(&o, box, 2, 0.25f, 3, 5), 1.0 + (19.0 * 3 + 25.0 * 5) * 2.0 / 28.0, 1e-5);
+}
+
+static void test_depth_limit_is_8_plus_1_3_log2_n(void **state)
+{
+    (void)state;
+    assert_int_equal(kdtree_depth_limit(1), 8);
+    assert_int_equal(kdtree_depth_limit(1024), 21);   /* 8 + 13 */
+    assert_int_equal(kdtree_depth_limit(102400), 29); /* 8 + 1.3 * 16.64 = 29.6 */
+    assert_int_equal(kdtree_depth_limit(1 << 30), 47); /* 8 + 39 */
+    /* and the trees keep to it */
+    mesh m;
+    mesh_init(&m);
+    mesh_tori_field(&m, 10240);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = kdtree_build(&set);
+    assert_true(a->stats.max_depth <= kdtree_depth_limit(10240));
+    assert_true(a->stats.max_depth >= 10); /* and it did split */
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+static void test_nodes_are_8_bytes(void **state)
+{
+    (void)state;
+    assert_int_equal(sizeof(kd_node), 8);
+}
+
+/* ---- coincident triangles ----------------------------------------------------
+ * 64 copies of one triangle: every candidate plane lies on the node's box
+ * (the copies' box is the node), and a plane inside could not separate any
+ * copy from another anyway. The build must stop with one leaf, not recurse
+ * to the depth limit making 2^21 nodes. */
+static void test_coincident_triangles_make_one_leaf(void **state)
+{
+    (void)state;
+    mesh m;
+    mesh_init(&m);
+    mesh_coincident(&m, 64);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = kdtree_build(&set);
+    assert_int_equal(a->stats.nodes, 1);
+    assert_int_equal(a->stats.leaves, 1);
+    assert_int_equal(a->stats.references, 64);
+    /* (-1,-1,0), (1,-1,0), (0,1,0): a ray down the z axis hits at t = 3. */
+    ray_counters c = {0};
+    hit_record hit;
+    assert_true(accel_closest_hit(a, ray_make(vec3_make(0, 0, 3), vec3_make(0, 0, -1)), &hit, &c));
+    assert_close(hit.t, 3.0, T_TOLERANCE);
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* The 64 copies next to a sphere of 80 triangles: the tree splits around
+ * the sphere as it would without the copies, and the copies stay together
+ * in one leaf, each referenced once. Without the "a split must separate
+ * something" rule the copies' leaf would be split on and on, and the node
+ * count would reach 2^depth. */
+static void test_coincident_triangles_beside_a_sphere_stay_in_one_leaf(void **state)
+{
+    (void)state;
+    mesh alone, both;
+    mesh_init(&alone);
+    mesh_init(&both);
+    mesh_icosphere(&alone, vec3_make(0, 0, 2), 0.5f, 1, -1);
+    mesh_coincident(&both, 64);
+    mesh_icosphere(&both, vec3_make(0, 0, 2), 0.5f, 1, -1);
+    triangle_set set_alone, set_both;
+    triangle_set_from_mesh(&set_alone, &alone);
+    triangle_set_from_mesh(&set_both, &both);
+    accel *a = kdtree_build(&set_alone), *b = kdtree_build(&set_both);
+    const kd_tree *tree = as_tree(b);
+    /* Each copy (triangles 0..63) is referenced exactly once, and all in the
+     * same leaf: count references per copy, and find the leaf of copy 0. */
+    long copies = 0;
+    for (long i = 0; i < b->stats.references; i++)
+        copies += tree->references[i] < 64;
+    assert_int_equal(copies, 64);
+    int leaf_of_copy0 = -1;
+    for (int i = 0; i < b->stats.nodes; i++) {
+        const kd_node *n = &tree->nodes[i];
+        if (!kd_node_is_leaf(n))
+            continue;
+        bool has0 = false;
+        int count = 0;
+        for (uint32_t k = 0; k < kd_node_triangle_count(n); k++) {
+            uint32_t t = tree->references[n->first_reference + k];
+            has0 |= t == 0;
+            count += t < 64;
+        }
+        if (has0) {
+            leaf_of_copy0 = i;
+            assert_int_equal(count, 64);
+        }
+    }
+    assert_true(leaf_of_copy0 >= 0);
+    /* Bounded: the copies cost a few planes that cut them off from the
+     * sphere. A build that kept splitting the copies' leaf would make up to
+     * 2^depth nodes (depth limit 17 here), not tens. */
+    print_message("sphere alone: %d nodes; with 64 copies: %d nodes\n", a->stats.nodes, b->stats.nodes);
+    assert_true(b->stats.nodes <= 2 * a->stats.nodes);
+    accel_destroy(a);
+    accel_destroy(b);
+    triangle_set_free(&set_alone);
+    triangle_set_free(&set_both);
+    mesh_free(&alone);
+    mesh_free(&both);
+}
+
+/* ---- a ray lying in a split plane ---------------------------------------------
+ * Eight triangles on each side of the plane x = 0, every one with an edge on
+ * it, and one straddling it. Each lies flat in a plane y = c, facing a ray
+ * that travels along y:
+ *   L_i (i = 0..7): (-8, y, -1), (0, y, -1), (0, y, 1), y = 1 + i/8; x in [-8, 0]
+ *   R_i (i = 0..7): (0, y, -1), (8, y, -1), (0, y, 1), y = 1 + i/8 + 1/16; x in [0, 8]
+ *   S:              (-8, 2.5, -1), (8, 2.5, -1), (0, 2.5, 1); x in [-8, 8]
+ * Built with C_traverse = 0.5 (C_isect = 1), so that each side is cut
+ * again along y. The root is x in [-8, 8], y in [1, 2.5], z in [-1, 1]:
+ * SA = 2 (16*1.5 + 1.5*2 + 2*16) = 118. Splitting x at 0 gives two halves
+ * of SA 2 (8*1.5 + 3 + 16) = 62 holding 9 triangles each (8 plus S):
+ *   0.5 + (62/118) 9 + (62/118) 9 = 10.0,
+ * against 17 for a leaf. The best plane on y is y = 1.625 (L_5 lies in it):
+ * 11 triangles below in SA 86.5, 6 above in SA 95.5, 0.5 + (86.5 * 11 +
+ * 95.5 * 6) / 118 = 13.4. No plane on z lies inside the box.
+ * So the root splits x at 0: L_i below (ending at 0), R_i above (starting
+ * at 0), S in both.
+ *
+ * A ray along the y axis (o = 0, d = (0, +-1, 0)) lies in that plane: its
+ * d_x = 0 and o_x = 0 give t_split = 0 * inf = NaN. It must find L_i and R_i
+ * (hit on their edges at x = 0, with barycentrics that are exactly 1/2 and
+ * 0 or 1/2: worked out in the comments of the expected values) and S. */
+enum { PLANE_PAIRS = 8 };
+
+static float plane_y_left(int i) { return 1.0f + (float)i / 8.0f; }
+static float plane_y_right(int i) { return 1.0f + (float)i / 8.0f + 1.0f / 16.0f; }
+
+static void make_split_plane_scene(scene *s)
+{
+    vec3 corners[2 * PLANE_PAIRS + 1][3];
+    for (int i = 0; i < PLANE_PAIRS; i++) {
+        float yl = plane_y_left(i), yr = plane_y_right(i);
+        corners[i][0] = vec3_make(-8, yl, -1);
+        corners[i][1] = vec3_make(0, yl, -1);
+        corners[i][2] = vec3_make(0, yl, 1);
+        corners[PLANE_PAIRS + i][0] = vec3_make(0, yr, -1);
+        corners[PLANE_PAIRS + i][1] = vec3_make(8, yr, -1);
+        corners[PLANE_PAIRS + i][2] = vec3_make(0, yr, 1);
+    }
+    corners[2 * PLANE_PAIRS][0] = vec3_make(-8, 2.5f, -1);
+    corners[2 * PLANE_PAIRS][1] = vec3_make(8, 2.5f, -1);
+    corners[2 * PLANE_PAIRS][2] = vec3_make(0, 2.5f, 1);
+    kdtree_options o = kdtree_default_options();
+    o.traversal_cost = 0.5f;
+    scene_make(s, corners, 2 * PLANE_PAIRS + 1, &o);
+    /* The precondition worked out above: the root splits x at 0. And with
+     * the cheap traversal step, each side is cut further along y, so that
+     * cells inside one side lie behind one another on the ray. */
+    const kd_tree *tree = as_tree(s->tree);
+    const kd_node *root = &tree->nodes[0];
+    assert_false(kd_node_is_leaf(root));
+    assert_int_equal(kd_node_axis(root), 0);
+    assert_close(root->split, 0.0, 0.0);
+    assert_false(kd_node_is_leaf(&tree->nodes[1]));
+    assert_false(kd_node_is_leaf(&tree->nodes[kd_node_above_child(root)]));
+}
+
+static const int TRI_L0 = 0, TRI_R0 = PLANE_PAIRS, TRI_S = 2 * PLANE_PAIRS;
+
+static void test_ray_in_split_plane_finds_triangles_on_both_sides(void **state)
+{
+    (void)state;
+    scene s;
+    make_split_plane_scene(&s);
+    /* d_x = +0 and d_x = -0: 1/d_x = +inf or -inf, and either way NaN. */
+    const float zeros[2] = {0.0f, -0.0f};
+    for (int z = 0; z < 2; z++) {
+        float dx = zeros[z];
+        /* L_0 at y = 1 is first: t = 1 (on its edge, b1 = b2 = 1/2). */
+        expect_hit(&s, ray_between(0, 0, 0, dx, 1, 0, 0, INFINITY), TRI_L0, 1.0);
+        /* Past it (t > 1): R_0 at y = 1.0625 (on its edge, b1 = 0). */
+        expect_hit(&s, ray_between(0, 0, 0, dx, 1, 0, 1.0f, INFINITY), TRI_R0, 1.0625);
+        /* Past L_1 at 1.125 too: R_1 at 1.1875. */
+        expect_hit(&s, ray_between(0, 0, 0, dx, 1, 0, 1.15f, INFINITY), TRI_R0 + 1, 1.1875);
+        /* Past every L_i and R_i (the last, R_7, is at 1.9375): S at 2.5. */
+        expect_hit(&s, ray_between(0, 0, 0, dx, 1, 0, 1.95f, INFINITY), TRI_S, 2.5);
+        /* Coming down from y = 3: S first (t = 0.5), then R_7 (y = 1.9375,
+         * t = 1.0625), then L_7 (y = 1.875, t = 1.125). */
+        expect_hit(&s, ray_between(dx, 3, 0, 0, -1, 0, 0, INFINITY), TRI_S, 0.5);
+        expect_hit(&s, ray_between(0, 3, 0, dx, -1, 0, 0.5f, INFINITY), TRI_R0 + 7, 1.0625);
+        expect_hit(&s, ray_between(0, 3, 0, dx, -1, 0, 1.07f, INFINITY), TRI_L0 + 7, 1.125);
+        /* A segment that ends before L_0: nothing. */
+        ray_counters c = {0};
+        assert_false(accel_any_hit(s.tree, ray_between(0, 0, 0, dx, 1, 0, 0, 0.99f), &c));
+        assert_false(trace(s.tree, ray_between(0, 0, 0, dx, 1, 0, 0, 0.99f)).found);
+    }
+    scene_free(&s);
+}
+
+/* The in-plane ray visits both children, but neither is in front of the
+ * other. Going up y with d_x = +0, the below child (the L_i) is walked
+ * first: from t > 1, say, its first hit is L_1 at 1.125, and the cells of
+ * the below side that come after L_1's (pushed on the stack above the
+ * in-plane entry) all start beyond it, so the usual stop ("the next cell
+ * starts beyond the hit") would answer L_1. The closest is R_0 at 1.0625,
+ * in the other child. With d_x = -0 the above child (R_i) is walked first
+ * and R_i would hide L_i. Every i, both ways. */
+static void test_ray_in_split_plane_does_not_stop_in_the_first_child(void **state)
+{
+    (void)state;
+    scene s;
+    make_split_plane_scene(&s);
+    for (int i = 0; i < PLANE_PAIRS; i++) {
+        /* d_x = +0, just past L_i: R_i is closest, L_{i+1} is found first. */
+        expect_hit(&s, ray_between(0, 0, 0, 0.0f, 1, 0, plane_y_left(i), INFINITY), TRI_R0 + i, plane_y_right(i));
+        /* d_x = -0, just past R_{i-1}: L_i is closest, R_i is found first. */
+        float t_min = i > 0 ? plane_y_right(i - 1) : 0.0f;
+        expect_hit(&s, ray_between(0, 0, 0, -0.0f, 1, 0, t_min, INFINITY), TRI_L0 + i, plane_y_left(i));
+    }
+    scene_free(&s);
+}
+
+/* Parallel to the plane but off it: d_x = 0, o_x = -/+0.5, t_split =
+ * (0 - o_x) * (1/d_x) = +inf or -inf by the signs. Whatever the sign of the
+ * zero, the ray stays on its side: at x = -0.5 it meets L_0 (x in [-8, 0])
+ * at t = 1 and never R_0; at x = +0.5, R_0 at 1.0625. It visits one child,
+ * so it tests only that child's 9 triangles. */
+static void test_ray_parallel_to_split_plane_stays_on_its_side(void **state)
+{
+    (void)state;
+    scene s;
+    make_split_plane_scene(&s);
+    const float zeros[2] = {0.0f, -0.0f};
+    for (int z = 0; z < 2; z++) {
+        trace_result left = trace(s.tree, ray_between(-0.5f, 0, 0, zeros[z], 1, 0, 0, INFINITY));
+        assert_true(left.found);
+        assert_int_equal(left.triangle, TRI_L0);
+        assert_close(left.t, 1.0, T_TOLERANCE);
+        trace_result right = trace(s.tree, ray_between(0.5f, 0, 0, zeros[z], 1, 0, 0, INFINITY));
+        assert_true(right.found);
+        assert_int_equal(right.triangle, TRI_R0);
+        assert_close(right.t, 1.0625, T_TOLERANCE);
+        assert_true(left.counters.primitive_tests <= PLANE_PAIRS + 1);
+        assert_true(right.counters.primitive_tests <= PLANE_PAIRS + 1);
+    }
+    scene_free(&s);
+}
+
+/* ---- a triangle straddling into the far cell ----------------------------------
+ *   T: (0, -1, -0.5), (0, 1, -0.5), (7, 0, 3)  in the plane x = 1 + 2z: x in [0, 7]
+ *   U: (2, -0.5, -1), (2, 0.5, -1), (2.5, 0, 1) in the plane x = 2.25 + z/4: x in [2, 2.5]
+ * Root box x [0, 7], y [-1, 1], z [-1, 3]: SA = 2 (14 + 8 + 28) = 100. With
+ * C_traverse = 0.1 and C_isect = 1 (a leaf: 2), the candidates:
+ *   x = 2.5 (U ends): below SA 46 holds T, U; above SA 70 holds T: 0.1 + 1.62
+ *   x = 2 (U starts): 40 holds T; 76 holds T, U:                  0.1 + 1.92
+ *   z = 1 (U ends):   64 holds T, U; 64 holds T:                  0.1 + 1.92
+ *   z = -0.5 (T starts): 37 holds U; 91 holds T, U:               0.1 + 2.19
+ *   y = +-0.5 (U's sides): 67 holds T; 89 holds T, U:             0.1 + 2.45
+ * so with one split allowed the root splits x at 2.5: above [2.5, 7] holds
+ * T alone, below [0, 2.5] holds T and U.
+ *
+ * A ray from (8, y, 0) going -x enters at x = 7 (t = 1), crosses the plane
+ * x = 2.5 at t = 5.5: the above child is the near one, [1, 5.5]. It meets T
+ * where x = 1 + 2 * 0 = 1 (t = 7), in the far child. */
+static void make_straddle_scene(scene *s)
+{
+    vec3 corners[2][3] = {
+        {{0, -1, -0.5f}, {0, 1, -0.5f}, {7, 0, 3}},  /* T, triangle 0 */
+        {{2, -0.5f, -1}, {2, 0.5f, -1}, {2.5f, 0, 1}}, /* U, triangle 1 */
+    };
+    kdtree_options o = {0.1f, 1.0f, 0.8f, 1};
+    scene_make(s, corners, 2, &o);
+    const kd_tree *tree = as_tree(s->tree);
+    const kd_node *root = &tree->nodes[0];
+    assert_false(kd_node_is_leaf(root));
+    assert_int_equal(kd_node_axis(root), 0);
+    assert_close(root->split, 2.5, 0.0);
+    assert_true(subtree_holds(tree, 1, 0) && subtree_holds(tree, 1, 1));                  /* below: T, U */
+    assert_true(subtree_holds(tree, kd_node_above_child(root), 0));                       /* above: T */
+    assert_false(subtree_holds(tree, kd_node_above_child(root), 1));
+}
+
+/* At y = 0.8 the ray passes beside U (U is 0.25 wide at z = 0) and through
+ * T. The near cell tests T and finds its hit at t = 7, beyond the cell's
+ * t_exit = 5.5: that must not end the walk. The far cell tests T (again) and
+ * U, and the answer is T at t = 7. */
+static void test_straddling_triangle_hit_in_far_cell_is_found(void **state)
+{
+    (void)state;
+    scene s;
+    make_straddle_scene(&s);
+    trace_result got = trace(s.tree, ray_between(8, 0.8f, 0, -1, 0, 0, 0, INFINITY));
+    assert_true(got.found);
+    assert_int_equal(got.triangle, 0);
+    assert_close(got.t, 7.0, T_TOLERANCE);
+    /* Both cells were walked: T in the near one, T and U in the far one. */
+    assert_int_equal(got.counters.primitive_tests, 3);
+    scene_free(&s);
+}
+
+/* At y = 0 the ray meets U at x = 2.25 (t = 5.75), in the far cell, before
+ * T's hit at t = 7, which the near cell found first. */
+static void test_closer_triangle_in_far_cell_beats_the_straddler_found_first(void **state)
+{
+    (void)state;
+    scene s;
+    make_straddle_scene(&s);
+    expect_hit(&s, ray_between(8, 0, 0, -1, 0, 0, 0, INFINITY), 1, 5.75);
+    trace_result brute = trace(s.brute, ray_between(8, 0, 0, -1, 0, 0, 0, INFINITY));
+    assert_int_equal(brute.triangle, 1);
+    scene_free(&s);
+}
+
+/* The twin: the same walk, front to back with the same stack, but stopping
+ * at the first leaf where any triangle is hit, wherever the hit lies (the
+ * naive reading of "front to back"). It answers T on the case above. */
+static int naive_first_leaf_hit(const kd_tree *tree, ray r, float *t_hit)
+{
+    slab_ray sr = slab_ray_make(r);
+    float t_enter, t_exit;
+    if (!aabb_slab_test(&tree->bounds, &sr, r.t_min, r.t_max, &t_enter, &t_exit))
+        return -1;
+    struct {
+        uint32_t node;
+        float t_enter, t_exit;
+    } stack[KD_MAX_DEPTH];
+    int top = 0;
+    uint32_t index = 0;
+    for (;;) {
+        const kd_node *n = &tree->nodes[index];
+        while (!kd_node_is_leaf(n)) {
+            int axis = kd_node_axis(n);
+            float t_split = (n->split - vec3_axis(sr.origin, axis)) * vec3_axis(sr.inverse_direction, axis);
+            bool down = vec3_axis(r.direction, axis) < 0.0f;
+            uint32_t near = down ? kd_node_above_child(n) : index + 1, far = down ? index + 1 : kd_node_above_child(n);
+            if (t_split > t_exit || t_split <= 0.0f) {
+                index = near;
+            } else if (t_split < t_enter) {
+                index = far;
+            } else {
+                stack[top].node = far;
+                stack[top].t_enter = t_split;
+                stack[top++].t_exit = t_exit;
+                index = near;
+                t_exit = t_split;
+            }
+            n = &tree->nodes[index];
+        }
+        int best = -1;
+        for (uint32_t i = 0; i < kd_node_triangle_count(n); i++) {
+            float t, b1, b2;
+            int k = (int)tree->references[n->first_reference + i];
+            if (triangle_intersect_barycentric(&tree->base.set->triangles[k], &r, &t, &b1, &b2)) {
+                best = k;
+                r.t_max = *t_hit = t;
+            }
+        }
+        if (best >= 0) /* the naive step: any hit ends the walk */
+            return best;
+        if (top == 0)
+            return -1;
+        top--;
+        index = stack[top].node;
+        t_enter = stack[top].t_enter;
+        t_exit = stack[top].t_exit;
+    }
+}
+
+static void test_naive_stop_at_first_leaf_hit_returns_the_wrong_triangle(void **state)
+{
+    (void)state;
+    scene s;
+    make_straddle_scene(&s);
+    float t = 0.0f;
+    int naive = naive_first_leaf_hit(as_tree(s.tree), ray_between(8, 0, 0, -1, 0, 0, 0, INFINITY), &t);
+    assert_int_equal(naive, 0); /* T at 7, not U at 5.75 */
+    assert_close(t, 7.0, T_TOLERANCE);
+    /* ...and where the hit does lie in the first cell with a hit, the naive
+     * walk agrees: it is the stopping rule, not the walk, that is wrong. */
+    naive = naive_first_leaf_hit(as_tree(s.tree), ray_between(-1, 0, 0, 1, 0, 0, 0, INFINITY), &t);
+    assert_int_equal(naive, 0);
+    assert_close(t, 2.0, T_TOLERANCE); /* T at x = 1, from x = -1 */
+    scene_free(&s);
+}
+
+/* ---- planar triangles on a split plane ---------------------------------------
+ * A flat 8 x 8 grid (128 triangles) in the plane z = 0 over [-1, 1]^2, and a
+ * small cluster on each side of it: 8 triangles at z in [0.5, 0.75] over
+ * [0.5, 1]^2 and 8 at z in [-0.75, -0.5] over [-1, -0.5]^2. The grid's
+ * triangles are flat in z: one planar event each, all at z = 0, the plane
+ * that separates the clusters. The tree must split there (precondition
+ * below), put all 128 on the same side (Wald and Havran: planar triangles
+ * follow the SAH's choice as a group), and rays from above and from below
+ * must find them, including rays aimed exactly at grid vertices, where up
+ * to six triangles meet. */
+enum { FLAT_N = 8, CLUSTER = 8, FLAT_TRIANGLES = 2 * FLAT_N * FLAT_N };
+
+static void make_flat_scene(scene *s)
+{
+    static vec3 corners[FLAT_TRIANGLES + 2 * CLUSTER + 1][3];
+    int k = 0;
+    for (int i = 0; i < FLAT_N; i++)
+        for (int j = 0; j < FLAT_N; j++) {
+            float x0 = -1.0f + 0.25f * (float)i, y0 = -1.0f + 0.25f * (float)j, x1 = x0 + 0.25f, y1 = y0 + 0.25f;
+            corners[k][0] = vec3_make(x0, y0, 0);
+            corners[k][1] = vec3_make(x1, y0, 0);
+            corners[k++][2] = vec3_make(x1, y1, 0);
+            corners[k][0] = vec3_make(x0, y0, 0);
+            corners[k][1] = vec3_make(x1, y1, 0);
+            corners[k++][2] = vec3_make(x0, y1, 0);
+        }
+    for (int c = 0; c < CLUSTER; c++) {
+        float u = 0.0625f * (float)c;
+        corners[k][0] = vec3_make(0.5f + u, 0.5f, 0.5f);
+        corners[k][1] = vec3_make(0.5625f + u, 1.0f, 0.5f);
+        corners[k++][2] = vec3_make(0.5f + u, 0.75f, 0.75f);
+        corners[k][0] = vec3_make(-1.0f + u, -1.0f, -0.5f);
+        corners[k][1] = vec3_make(-0.9375f + u, -0.5f, -0.5f);
+        corners[k++][2] = vec3_make(-1.0f + u, -0.75f, -0.75f);
+    }
+    /* A post standing across the plane at x = 0.9, y in [-0.2, 0.2]. */
+    corners[k][0] = vec3_make(0.9f, -0.2f, -0.3f);
+    corners[k][1] = vec3_make(0.9f, 0.2f, -0.3f);
+    corners[k++][2] = vec3_make(0.9f, 0.0f, 0.3f);
+    scene_make(s, corners, k, NULL);
+}
+
+static void test_planar_triangles_on_a_split_plane(void **state)
+{
+    (void)state;
+    scene s;
+    make_flat_scene(&s);
+    const kd_tree *tree = as_tree(s.tree);
+    int node = find_split_node(tree, 0, 2, 0.0f);
+    assert_true(node >= 0); /* precondition: a split lands on the grid */
+    const kd_node *n = &tree->nodes[node];
+    /* The grid triangles in that node all went to the same side of it. */
+    int below = 0, above = 0;
+    for (int t = 0; t < FLAT_TRIANGLES; t++) {
+        below += subtree_holds(tree, (uint32_t)node + 1, t);
+        above += subtree_holds(tree, kd_node_above_child(n), t);
+    }
+    print_message("split z = 0 at node %d: %d grid triangles below it, %d above\n", node, below, above);
+    assert_true(below + above > 0);
+    assert_true(below == 0 || above == 0);
+
+    /* Straight down from z = 2 and straight up from z = -2, onto every grid
+     * vertex clear of the clusters and onto every cell centre: t = 2, a grid
+     * triangle, whichever side they are on. (Vertices shared by six
+     * triangles: any of them is right.) */
+    for (int i = 0; i <= 2 * FLAT_N; i++)
+        for (int j = 0; j <= 2 * FLAT_N; j++) {
+            float x = -1.0f + 0.125f * (float)i, y = -1.0f + 0.125f * (float)j;
+            for (int from = -1; from <= 1; from += 2) {
+                bool blocked = from > 0 ? (x >= 0.5f && y >= 0.5f) : (x <= -0.5f && y <= -0.5f);
+                if (blocked)
+                    continue;
+                trace_result got = trace(s.tree, ray_between(x, y, 2.0f * (float)from, 0, 0, (float)-from, 0, INFINITY));
+                assert_true(got.found);
+                assert_true(got.triangle < FLAT_TRIANGLES);
+                assert_close(got.t, 2.0, T_TOLERANCE);
+            }
+        }
+    /* Slanted rays through vertices from above and below agree with brute force. */
+    for (int i = 1; i < FLAT_N; i++) {
+        float x = -1.0f + 0.25f * (float)i;
+        for (int from = -1; from <= 1; from += 2) {
+            ray r = ray_between(x - 0.5f, 0.3f, (float)from, 0.5f, -0.3f, (float)-from, 0, INFINITY);
+            trace_result got = trace(s.tree, r), want = trace(s.brute, r);
+            assert_true(got.found && want.found);
+            assert_close(got.t, want.t, T_TOLERANCE);
+        }
+    }
+    /* A ray lying in the grid's plane (d_z = 0, o_z = 0: NaN at that split)
+     * cannot hit the flat triangles (Moller-Trumbore's determinant is 0),
+     * but must reach the post at x = 0.9: t = 2.9 from x = -2. */
+    expect_hit(&s, ray_between(-2, 0, 0, 1, 0, 0, 0, INFINITY), FLAT_TRIANGLES + 2 * CLUSTER, 2.9);
+    scene_free(&s);
+}
+
+/* ---- edge cases of the input -------------------------------------------------- */
+
+static void test_empty_and_degenerate_meshes(void **state)
+{
+    (void)state;
+    /* No triangles: one empty leaf, every ray misses. */
+    scene s;
+    scene_make(&s, NULL, 0, NULL);
+    assert_int_equal(s.tree->stats.nodes, 1);
+    assert_false(trace(s.tree, ray_between(0, 0, -1, 0, 0, 1, 0, INFINITY)).found);
+    scene_free(&s);
+    /* Only a point and a segment (zero-area triangles): a box with no area
+     * is a leaf; rays miss, as brute force says. */
+    vec3 corners[2][3] = {{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}, {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}};
+    scene_make(&s, corners, 2, NULL);
+    assert_false(trace(s.tree, ray_between(0.5f, 0, -1, 0, 0, 1, 0, INFINITY)).found);
+    assert_false(trace(s.tree, ray_between(-1, 0, 0, 1, 0, 0, 0, INFINITY)).found);
+    scene_free(&s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_kdtree_agrees_with_brute_force),
+        cmocka_unit_test(test_shallow_tree_agrees_with_brute_force),
+        cmocka_unit_test(test_split_cost_is_the_sah_formula),
+        cmocka_unit_test(test_depth_limit_is_8_plus_1_3_log2_n),
+        cmocka_unit_test(test_nodes_are_8_bytes),
+        cmocka_unit_test(test_coincident_triangles_make_one_leaf),
+        cmocka_unit_test(test_coincident_triangles_beside_a_sphere_stay_in_one_leaf),
+        cmocka_unit_test(test_ray_in_split_plane_finds_triangles_on_both_sides),
+        cmocka_unit_test(test_ray_in_split_plane_does_not_stop_in_the_first_child),
+        cmocka_unit_test(test_ray_parallel_to_split_plane_stays_on_its_side),
+        cmocka_unit_test(test_straddling_triangle_hit_in_far_cell_is_found),
+        cmocka_unit_test(test_closer_triangle_in_far_cell_beats_the_straddler_found_first),
+        cmocka_unit_test(test_naive_stop_at_first_leaf_hit_returns_the_wrong_triangle),
+        cmocka_unit_test(test_planar_triangles_on_a_split_plane),
+        cmocka_unit_test(test_empty_and_degenerate_meshes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

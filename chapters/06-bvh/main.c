@@ -1,0 +1,236 @@
+/* 06-bvh: a bounding volume hierarchy over a mesh, split at the median object
+ * (the lecture's heuristics) or by the surface area heuristic.
+ *
+ * Builds the BVH over the tori field (102400 triangles by default), renders
+ * it (or, with --heatmap, what each ray cost), and prints the tree's figures
+ * and the tests per ray. --bench also times the Embree harness's two ray
+ * sets (shared/anchors/embree_bench.c) on one thread. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "06-bvh/bvh.h"
+#include "cli.h"
+#include "memory.h"
+#include "program.h"
+#include "timer.h"
+
+/* ---- the Embree harness's ray sets, for --bench ----------------------------- */
+
+/* splitmix64, as the harness uses it for its incoherent rays */
+static uint64_t splitmix64_next(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static double splitmix64_uniform(uint64_t *state)
+{
+    return (double)(splitmix64_next(state) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+enum { BENCH_COHERENT_SIZE = 1024, BENCH_INCOHERENT_RAYS = 1 << 20, BENCH_REPEATS = 3 };
+
+/* coherent: a 1024 x 1024 pinhole image of the bounds, as the harness (and
+ * accel_view_camera) sets it up; incoherent: origins uniform in the bounds,
+ * directions uniform on the sphere, from the harness's seed. */
+static ray *bench_rays(aabb bounds, bool coherent, int *count)
+{
+    if (coherent) {
+        *count = BENCH_COHERENT_SIZE * BENCH_COHERENT_SIZE;
+        ray *rays = memory_allocate((size_t)*count, sizeof *rays);
+        camera cam = accel_view_camera(bounds, BENCH_COHERENT_SIZE, BENCH_COHERENT_SIZE);
+        for (int y = 0; y < BENCH_COHERENT_SIZE; y++)
+            for (int x = 0; x < BENCH_COHERENT_SIZE; x++)
+                rays[y * BENCH_COHERENT_SIZE + x] = camera_ray(&cam, (float)x + 0.5f, (float)y + 0.5f);
+        return rays;
+    }
+    *count = BENCH_INCOHERENT_RAYS;
+    ray *rays = memory_allocate((size_t)*count, sizeof *rays);
+    uint64_t state = 0xBADC0DE;
+    vec3 lo = bounds.lo, e = aabb_extent(bounds);
+    for (int i = 0; i < *count; i++) {
+        vec3 o;
+        o.x = lo.x + e.x * (float)splitmix64_uniform(&state);
+        o.y = lo.y + e.y * (float)splitmix64_uniform(&state);
+        o.z = lo.z + e.z * (float)splitmix64_uniform(&state);
+        float z = (float)(2.0 * splitmix64_uniform(&state) - 1.0);
+        float phi = (float)(2.0 * PI * splitmix64_uniform(&state));
+        float s = sqrtf(1.0f - z * z);
+        rays[i] = ray_make(o, vec3_make(s * cosf(phi), s * sinf(phi), z));
+    }
+    return rays;
+}
+
+/* CPU time of this thread: on a machine shared with other work it counts
+ * only the time this thread ran, which the wall clock does not. */
+static double thread_cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Median of BENCH_REPEATS timings of closest hit and of any hit, one thread. */
+static void bench(const accel *a, bool coherent)
+{
+    int count;
+    ray *rays = bench_rays(a->set->bounds, coherent, &count);
+    double closest[BENCH_REPEATS], any[BENCH_REPEATS], closest_cpu[BENCH_REPEATS], any_cpu[BENCH_REPEATS];
+    long hits = 0;
+    double t_sum = 0.0;
+    ray_counters counters = {0};
+    for (int rep = 0; rep < BENCH_REPEATS; rep++) {
+        hits = 0;
+        t_sum = 0.0;
+        double start = timer_seconds(), start_cpu = thread_cpu_seconds();
+        for (int i = 0; i < count; i++) {
+            hit_record hit;
+            if (accel_closest_hit(a, rays[i], &hit, &counters)) {
+                hits++;
+                t_sum += hit.t;
+            }
+        }
+        closest[rep] = timer_seconds() - start;
+        closest_cpu[rep] = thread_cpu_seconds() - start_cpu;
+        start = timer_seconds();
+        start_cpu = thread_cpu_seconds();
+        for (int i = 0; i < count; i++)
+            accel_any_hit(a, rays[i], &counters);
+        any[rep] = timer_seconds() - start;
+        any_cpu[rep] = thread_cpu_seconds() - start_cpu;
+    }
+    qsort(closest, BENCH_REPEATS, sizeof *closest, compare_doubles);
+    qsort(any, BENCH_REPEATS, sizeof *any, compare_doubles);
+    qsort(closest_cpu, BENCH_REPEATS, sizeof *closest_cpu, compare_doubles);
+    qsort(any_cpu, BENCH_REPEATS, sizeof *any_cpu, compare_doubles);
+    int m = BENCH_REPEATS / 2;
+    printf("bench %-10s %7d rays, 1 thread: closest hit %.2f Mrays/s, any hit %.2f Mrays/s (by CPU time: %.2f and "
+           "%.2f)\n",
+           coherent ? "coherent" : "incoherent", count, count / closest[m] * 1e-6, count / any[m] * 1e-6,
+           count / closest_cpu[m] * 1e-6, count / any_cpu[m] * 1e-6);
+    printf("      hit fraction %.4f, sum of t %.6e\n", (double)hits / count, t_sum);
+    double tests = (double)count * BENCH_REPEATS * 2;
+    printf("      %.2f nodes visited and %.2f triangles tested per ray (closest and any hit together)\n",
+           (double)counters.box_tests / tests, (double)counters.primitive_tests / tests);
+    free(rays);
+}
+
+/* ---- the program -------------------------------------------------------------- */
+
+static void usage_error(const char *message, const char *value)
+{
+    fprintf(stderr, "06-bvh: %s '%s'\ntry --help\n", message, value);
+    exit(2);
+}
+
+int main(int argc, char **argv)
+{
+    cli_options opts = cli_defaults("build/out/ch06.exr", 640, 480, 1);
+    const char *split_name = "sah", *order_name = "sign", *mesh_name = "tori", *obj_path = NULL;
+    int triangles = 102400;
+    bool heatmap = false, run_bench = false;
+    float heatmap_max = 120.0f;
+    const cli_flag extras[] = {
+        {"--split", CLI_STRING, &split_name, "median|sah",
+         "median: longest axis, median object (the lecture); sah: surface area heuristic (default)", 0, 0},
+        {"--order", CLI_STRING, &order_name, "sign|distance",
+         "near child first by the sign of d on the split axis (default), or by where the ray enters", 0, 0},
+        {"--mesh", CLI_STRING, &mesh_name, "tori|stadium|icosphere", "the procedural mesh (default tori)", 0, 0},
+        {"--triangles", CLI_INT, &triangles, "N", "tori field size: 1024, 10240, 102400 (default) or 1048576", 1,
+         1048576},
+        {"--obj", CLI_STRING, &obj_path, "FILE", "load a Wavefront OBJ file instead", 0, 0},
+        {"--heatmap", CLI_BOOL, &heatmap, NULL, "show the cost of each ray: nodes visited + triangles tested", 0, 0},
+        {"--heatmap-max", CLI_FLOAT, &heatmap_max, "COST", "the cost shown as white (default 120)", 1, 1e6},
+        {"--bench", CLI_BOOL, &run_bench, NULL, "also time the Embree harness's ray sets on one thread", 0, 0},
+    };
+    cli_spec spec = {"06-bvh",
+                     "Bounding volume hierarchies (GAMES101 lecture 14): find the bounding box of the objects,\n"
+                     "recursively split the set of objects in two subsets, recompute their bounding boxes, stop\n"
+                     "when a node contains few objects and store them in a leaf. --split median splits along\n"
+                     "the longest axis at the median object; --split sah where the surface area heuristic says.\n"
+                     "Prints the tree's figures and the box and triangle tests per ray.",
+                     extras, (int)(sizeof extras / sizeof extras[0])};
+    cli_parse_or_exit(argc, argv, &spec, &opts);
+
+    bvh_split split = BVH_SPLIT_SAH;
+    if (strcmp(split_name, "median") == 0)
+        split = BVH_SPLIT_MEDIAN;
+    else if (strcmp(split_name, "sah") != 0)
+        usage_error("--split must be median or sah, not", split_name);
+    bvh_order order = BVH_ORDER_AXIS_SIGN;
+    if (strcmp(order_name, "distance") == 0)
+        order = BVH_ORDER_DISTANCE;
+    else if (strcmp(order_name, "sign") != 0)
+        usage_error("--order must be sign or distance, not", order_name);
+
+    mesh m;
+    mesh_init(&m);
+    if (obj_path != NULL) {
+        char err[MESH_ERROR_SIZE];
+        if (!mesh_load_obj(&m, obj_path, err, sizeof err)) {
+            fprintf(stderr, "06-bvh: %s\n", err);
+            mesh_free(&m);
+            return 1;
+        }
+        if (m.face_count == 0) {
+            fprintf(stderr, "06-bvh: %s: no triangles\n", obj_path);
+            mesh_free(&m);
+            return 1;
+        }
+    } else if (strcmp(mesh_name, "tori") == 0) {
+        mesh_tori_field(&m, triangles);
+    } else if (strcmp(mesh_name, "stadium") == 0) {
+        mesh_teapot_in_stadium(&m, 6, 200.0f);
+    } else if (strcmp(mesh_name, "icosphere") == 0) {
+        mesh_icosphere(&m, vec3_make(0, 0, 0), 1.0f, 7, -1);
+    } else {
+        usage_error("--mesh must be tori, stadium or icosphere, not", mesh_name);
+    }
+
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = bvh_build(&set, split);
+    bvh_set_order(a, order);
+    const bvh *b = (const bvh *)a;
+    const accel_stats *s = &a->stats;
+    if (!opts.quiet) {
+        double n = (double)set.count;
+        printf("%s over %d triangles: built in %.1f ms; %.1f bytes per triangle (nodes %.1f, index %.1f, "
+               "triangles %.1f)\n",
+               s->name, set.count, s->build_seconds * 1e3, (double)s->bytes / n,
+               (double)b->node_count * sizeof(bvh_node) / n, (double)sizeof(int),
+               (double)sizeof(bvh_triangle));
+        printf("%d nodes, %d leaves (%.2f triangles per leaf), depth %d, %.2f references per triangle, "
+               "SAH cost %.1f\n",
+               s->nodes, s->leaves, n / s->leaves, s->max_depth, (double)s->references / n, bvh_sah_cost(b));
+    }
+    if (run_bench) {
+        bench(a, true);
+        bench(a, false);
+    }
+
+    accel_view view = {a, heatmap, heatmap_max};
+    camera cam = accel_view_camera(set.bounds, opts.width, opts.height);
+    render_stats stats;
+    int status = program_render(&opts, spec.program, accel_view_radiance, &view, &cam, &stats);
+    if (status == 0 && !opts.quiet) {
+        double rays = (double)stats.counters.camera_rays;
+        printf("%s, %s order: %.2f nodes visited and %.2f triangles tested per ray\n", s->name,
+               order == BVH_ORDER_DISTANCE ? "distance" : "axis-sign", (double)stats.counters.box_tests / rays,
+               (double)stats.counters.primitive_tests / rays);
+    }
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+    return status;
+}

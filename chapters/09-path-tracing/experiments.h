@@ -1,0 +1,64 @@
+/* experiments.h -- what accuracy costs in time: chapter 09's measurements.
+ *
+ *   experiment_reference()   the image every error is measured against,
+ *                            rendered once at high sample count and cached
+ *   experiment_convergence() RMSE and relMSE against the reference for each
+ *                            rung, as a function of samples per pixel and
+ *                            of seconds (CSV for plots/ch09_*.gp)
+ *   experiment_russian_roulette()  variance, time and efficiency for a
+ *                            range of P_RR
+ *   render_progressive()     passes of doubling sample counts until a time
+ *                            budget or a target error (estimated from the
+ *                            per-pixel variance) is reached
+ */
+#ifndef EXPERIMENTS_H
+#define EXPERIMENTS_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "09-path-tracing/path_tracer.h"
+#include "image.h"
+#include "render.h"
+
+/* A render whose error can be estimated: the mean and, per pixel, the
+ * standard error of that mean. */
+typedef struct {
+    image mean;
+    image standard_error;
+    long spp;
+    double seconds;
+    ray_counters counters;
+} estimate_image;
+
+void estimate_image_free(estimate_image *e);
+
+/* Renders with `spp` samples per pixel; seed picks the random streams. */
+estimate_image render_estimate(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int threads);
+
+/* The error the image's own variance predicts: sqrt of the mean over pixels
+ * and channels of standard_error^2 / (mean^2 + eps), a relative RMSE. */
+double estimate_relative_error(const estimate_image *e);
+
+/* Renders passes of 1, 1, 2, 4, ... samples per pixel (each with its own
+ * seed), merging them, until `seconds` have passed or the estimated relative
+ * error is below `target_error` (either may be 0: not used). Prints one line
+ * per pass to `log` (if not NULL). */
+estimate_image render_progressive(const path_tracer *pt, const camera *cam, uint64_t seed, int threads,
+                                  double seconds, double target_error, FILE *log);
+
+/* Loads the cached reference from `path` if it is there and of this size,
+ * else renders it (MIS, `spp` samples) and saves it. */
+bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int threads, const char *path,
+                          estimate_image *out, char *err, size_t err_size);
+
+/* Writes DIR/ch09_convergence.csv and DIR/ch09_time_to_error.csv, prints a
+ * table of the time each rung needs to reach `target_relmse`. */
+bool experiment_convergence(const pt_scene *sc, const camera *cam, const estimate_image *reference, int max_spp,
+                            int threads, double target_relmse, const char *dir, char *err, size_t err_size);
+
+/* Writes DIR/ch09_russian_roulette.csv. */
+bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp,
+                                 int threads, const char *dir, char *err, size_t err_size);
+
+#endif

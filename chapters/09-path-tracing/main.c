@@ -1,0 +1,138 @@
+/* 09-path-tracing: the Cornell box by path tracing (lecture 16), each rung of
+ * the integrator ladder selectable, and the measurements of what accuracy
+ * costs in time. */
+#include <stdio.h>
+#include <string.h>
+
+#include "09-path-tracing/experiments.h"
+#include "09-path-tracing/path_tracer.h"
+#include "cli.h"
+#include "program.h"
+
+static bool build_scene(pt_scene *sc, const char *name, const char *obj, char *err, size_t err_size)
+{
+    if (obj != NULL)
+        return pt_scene_load_obj(sc, obj, err, err_size);
+    if (strcmp(name, "cornell") == 0)
+        pt_scene_build_cornell_box(sc);
+    else if (strcmp(name, "materials") == 0)
+        pt_scene_build_cornell_box_materials(sc);
+    else if (strcmp(name, "furnace") == 0)
+        pt_scene_build_furnace(sc, 0.5f, 0.5f);
+    else if (strcmp(name, "white-furnace") == 0)
+        pt_scene_build_white_furnace(sc, pt_diffuse(vec3_splat(0.5f)), vec3_splat(1.0f));
+    else if (strcmp(name, "glass-furnace") == 0)
+        pt_scene_build_white_furnace(sc, pt_glass(1.5f), vec3_splat(1.0f));
+    else if (strcmp(name, "point-in-sphere") == 0)
+        pt_scene_build_point_in_sphere(sc, 0.5f, (float)PI);
+    else {
+        snprintf(err, err_size, "--scene: unknown scene '%s' (cornell, materials, furnace, white-furnace, "
+                                "glass-furnace, point-in-sphere)", name);
+        return false;
+    }
+    return true;
+}
+
+int main(int argc, char **argv)
+{
+    cli_options opts = cli_defaults("build/out/ch09.exr", 512, 512, 16);
+    const char *integrator = "lecture", *rr = "fixed", *scene_name = "cornell", *obj = NULL, *data = NULL;
+    float rr_probability = 0.8f, time_budget = 0.0f, target_error = 0.0f;
+    int max_depth = 64, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
+    const cli_flag extras[] = {
+        {"--integrator", CLI_STRING, &integrator, "NAME", "lecture (default), cosine or mis: the rung of the ladder", 0, 0},
+        {"--rr", CLI_STRING, &rr, "MODE", "Russian roulette: fixed (default, P_RR), throughput, or off", 0, 0},
+        {"--rr-probability", CLI_FLOAT, &rr_probability, "P", "P_RR for --rr fixed (default 0.8)", 0.01, 1.0},
+        {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
+        {"--scene", CLI_STRING, &scene_name, "NAME",
+         "cornell (default), materials (glossy metal, glass), furnace, white-furnace, glass-furnace, point-in-sphere", 0, 0},
+        {"--obj", CLI_STRING, &obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
+        {"--time-budget", CLI_FLOAT, &time_budget, "SECONDS", "progressive: passes until this much time is spent", 0.0, 1e6},
+        {"--target-error", CLI_FLOAT, &target_error, "E",
+         "progressive: passes until the estimated relative error is below E", 0.0, 10.0},
+        {"--data", CLI_STRING, &data, "DIR", "run the experiments (error against time) and write CSV into DIR", 0, 0},
+        {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 96)", 8, 1024},
+        {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached reference (default 4096)", 16, 1 << 20},
+        {"--experiment-spp", CLI_INT, &experiment_spp, "N", "largest spp of the experiments (default 256)", 1, 1 << 16},
+    };
+    cli_spec spec = {"09-path-tracing",
+                     "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"
+                     "bounce, direct light by sampling the light's area, Russian roulette. Renders the Cornell\n"
+                     "box; --integrator climbs the ladder (lecture -> cosine -> mis). --time-budget or\n"
+                     "--target-error render progressively; --data DIR measures error against time.",
+                     extras, sizeof extras / sizeof extras[0]};
+    cli_parse_or_exit(argc, argv, &spec, &opts);
+    opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
+
+    path_tracer pt;
+    pt_scene sc;
+    char err[1024];
+    pt_integrator chosen;
+    if (!pt_integrator_parse(integrator, &chosen)) {
+        fprintf(stderr, "09-path-tracing: --integrator: unknown '%s' (lecture, cosine, mis)\n", integrator);
+        return 2;
+    }
+    pt_russian_roulette rr_mode;
+    if (strcmp(rr, "fixed") == 0)
+        rr_mode = RR_FIXED;
+    else if (strcmp(rr, "throughput") == 0)
+        rr_mode = RR_THROUGHPUT;
+    else if (strcmp(rr, "off") == 0)
+        rr_mode = RR_OFF;
+    else {
+        fprintf(stderr, "09-path-tracing: --rr: unknown '%s' (fixed, throughput, off)\n", rr);
+        return 2;
+    }
+    if (!build_scene(&sc, scene_name, obj, err, sizeof err)) {
+        fprintf(stderr, "09-path-tracing: %s\n", err);
+        return obj != NULL ? 1 : 2;
+    }
+    pt = path_tracer_defaults(&sc);
+    pt.integrator = chosen;
+    pt.russian_roulette = rr_mode;
+    pt.rr_probability = rr_probability;
+    pt.max_depth = max_depth;
+
+    int status = 0;
+    if (data != NULL) {
+        /* The experiments: a cached reference, then every rung at doubling
+         * sample counts, then the Russian roulette sweep. */
+        camera cam = pt_scene_camera(&sc, experiment_size, experiment_size);
+        char reference_path[4096];
+        snprintf(reference_path, sizeof reference_path, "%s/ch09_reference_%s_%d.exr", data, obj ? "obj" : scene_name,
+                 experiment_size);
+        estimate_image reference;
+        if (!experiment_reference(&pt, &cam, reference_spp, opts.threads, reference_path, &reference, err, sizeof err) ||
+            !experiment_convergence(&sc, &cam, &reference, experiment_spp, opts.threads, 1e-2, data, err, sizeof err) ||
+            !experiment_russian_roulette(&sc, &cam, &reference, 16, opts.threads, data, err, sizeof err)) {
+            fprintf(stderr, "09-path-tracing: %s\n", err);
+            status = 1;
+        }
+        estimate_image_free(&reference);
+    } else if (time_budget > 0.0f || target_error > 0.0f) {
+        camera cam = pt_scene_camera(&sc, opts.width, opts.height);
+        estimate_image e = render_progressive(&pt, &cam, opts.seed, opts.threads, time_budget, target_error,
+                                              opts.quiet ? NULL : stdout);
+        if (!image_write(&e.mean, opts.out, opts.exposure, err, sizeof err)) {
+            fprintf(stderr, "09-path-tracing: %s\n", err);
+            status = 1;
+        } else if (!opts.quiet) {
+            printf("09-path-tracing: %s, %ld spp in %.2f s, estimated relative error %.4f -> %s\n",
+                   pt_integrator_name(pt.integrator), e.spp, e.seconds, estimate_relative_error(&e), opts.out);
+            counters_print(stdout, &e.counters, e.seconds);
+        }
+        estimate_image_free(&e);
+    } else {
+        camera cam = pt_scene_camera(&sc, opts.width, opts.height);
+        render_stats stats;
+        status = program_render(&opts, spec.program, path_trace_radiance, &pt, &cam, &stats);
+        if (status == 0 && !opts.quiet) {
+            double samples = (double)opts.width * opts.height * opts.spp;
+            printf("%s: %.3f s per million camera samples (%d threads, %s, %s Russian roulette)\n",
+                   pt_integrator_name(pt.integrator), stats.seconds / samples * 1e6, opts.threads,
+                   pt_integrator_name(pt.integrator), rr);
+        }
+    }
+    pt_scene_free(&sc);
+    return status;
+}

@@ -1,0 +1,52 @@
+/* path_tracer.h -- lecture 16's path tracer, then the steps beyond it.
+ *
+ * The rungs of the ladder (--integrator), each a small step from the last:
+ *   PT_LECTURE  the lecture's shade(p, wo), exactly: the light sampled by
+ *               area (pdf 1/A), the hemisphere sampled uniformly
+ *               (pdf 1/(2 pi)), Russian roulette with a fixed P_RR
+ *   PT_COSINE   the same, but directions drawn in proportion to cos(theta)
+ *   PT_MIS      directions drawn from the BSDF, and light sampling and BSDF
+ *               sampling combined by multiple importance sampling (power
+ *               heuristic): glossy surfaces and small lights both work
+ * and, separately, Russian roulette with a fixed probability or on the path
+ * throughput.
+ *
+ * Usage:
+ *   path_tracer pt = path_tracer_defaults(&scene);
+ *   pt.integrator = PT_MIS;
+ *   render_job job = {..., .radiance = path_trace_radiance, .scene = &pt};
+ */
+#ifndef PATH_TRACER_H
+#define PATH_TRACER_H
+
+#include "09-path-tracing/scene_pt.h"
+#include "rng.h"
+
+typedef enum { PT_LECTURE, PT_COSINE, PT_MIS } pt_integrator;
+typedef enum {
+    RR_OFF,        /* no Russian roulette: paths end at max_depth */
+    RR_FIXED,      /* continue with probability P_RR at every bounce (the lecture) */
+    RR_THROUGHPUT, /* continue with probability min(1, max throughput) after rr_start_depth bounces */
+} pt_russian_roulette;
+
+typedef struct {
+    const pt_scene *scene;
+    pt_integrator integrator;
+    pt_russian_roulette russian_roulette;
+    float rr_probability; /* P_RR of RR_FIXED */
+    int rr_start_depth;   /* RR_THROUGHPUT: bounces before it starts */
+    /* Light that bounced more than max_depth times is not counted. With
+     * Russian roulette this is only a guard (0.8^64 = 6e-7 of the paths get
+     * that far); without it, it is the truncation. */
+    int max_depth;
+} path_tracer;
+
+path_tracer path_tracer_defaults(const pt_scene *scene);
+
+/* render.h's radiance_fn; ctx points to a path_tracer. */
+vec3 path_trace_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *counters);
+
+const char *pt_integrator_name(pt_integrator i);
+bool pt_integrator_parse(const char *name, pt_integrator *out);
+
+#endif

@@ -1,0 +1,337 @@
+/* scene_pt.c -- the path tracer's scenes. */
+#include "scene_pt.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "06-bvh/bvh.h"
+#include "memory.h"
+
+void pt_scene_init(pt_scene *sc)
+{
+    memset(sc, 0, sizeof *sc);
+    mesh_init(&sc->geometry);
+    sc->up = vec3_make(0, 1, 0);
+    sc->vertical_fov_degrees = 40.0f;
+}
+
+void pt_scene_free(pt_scene *sc)
+{
+    accel_destroy(sc->bvh);
+    triangle_set_free(&sc->triangles);
+    mesh_free(&sc->geometry);
+    free(sc->spheres);
+    free(sc->materials);
+    free(sc->point_lights);
+    free(sc->emitters);
+    free(sc->emitter_cdf);
+    memset(sc, 0, sizeof *sc);
+}
+
+pt_material pt_diffuse(vec3 albedo) { return (pt_material){BSDF_DIFFUSE, albedo, vec3_splat(0.0f), 1.0f, 1.0f}; }
+
+pt_material pt_emitter(vec3 albedo, vec3 emission)
+{
+    pt_material m = pt_diffuse(albedo);
+    m.emission = emission;
+    return m;
+}
+
+pt_material pt_glossy(vec3 f0, float roughness) { return (pt_material){BSDF_GLOSSY, f0, vec3_splat(0.0f), roughness, 1.0f}; }
+
+pt_material pt_glass(float ior) { return (pt_material){BSDF_GLASS, vec3_splat(1.0f), vec3_splat(0.0f), 0.0f, ior}; }
+
+pt_material pt_mirror(vec3 albedo) { return (pt_material){BSDF_MIRROR, albedo, vec3_splat(0.0f), 0.0f, 1.0f}; }
+
+int pt_scene_add_material(pt_scene *sc, pt_material m)
+{
+    sc->materials = memory_grow(sc->materials, &sc->material_capacity, sc->material_count + 1, sizeof m);
+    sc->materials[sc->material_count] = m;
+    return sc->material_count++;
+}
+
+void pt_scene_add_triangle(pt_scene *sc, vec3 p0, vec3 p1, vec3 p2, int material)
+{
+    int a = mesh_add_position(&sc->geometry, p0), b = mesh_add_position(&sc->geometry, p1);
+    int c = mesh_add_position(&sc->geometry, p2);
+    mesh_add_triangle(&sc->geometry, a, b, c, material);
+}
+
+void pt_scene_add_quad(pt_scene *sc, vec3 p0, vec3 p1, vec3 p2, vec3 p3, int material)
+{
+    pt_scene_add_triangle(sc, p0, p1, p2, material);
+    pt_scene_add_triangle(sc, p0, p2, p3, material);
+}
+
+void pt_scene_add_sphere(pt_scene *sc, vec3 center, float radius, int material, bool inside_out)
+{
+    sc->spheres = memory_grow(sc->spheres, &sc->sphere_capacity, sc->sphere_count + 1, sizeof(pt_sphere));
+    sc->spheres[sc->sphere_count++] = (pt_sphere){center, radius, material, inside_out};
+}
+
+void pt_scene_add_point_light(pt_scene *sc, vec3 position, vec3 intensity)
+{
+    sc->point_lights = memory_grow(sc->point_lights, &sc->point_light_capacity, sc->point_light_count + 1,
+                                   sizeof(pt_point_light));
+    sc->point_lights[sc->point_light_count++] = (pt_point_light){position, intensity};
+}
+
+void pt_scene_finish(pt_scene *sc)
+{
+    triangle_set_from_mesh(&sc->triangles, &sc->geometry);
+    sc->bvh = bvh_build(&sc->triangles, BVH_SPLIT_SAH);
+    /* The emitter table: every triangle whose material emits, with the
+     * running sum of areas, to pick one in proportion to its area. */
+    sc->emitter_count = 0;
+    sc->emitter_area = 0.0;
+    for (int pass = 0; pass < 2; pass++) {
+        int n = 0;
+        double area = 0.0;
+        for (int i = 0; i < sc->geometry.face_count; i++) {
+            const pt_material *m = &sc->materials[sc->geometry.faces[i].material];
+            if (vec3_max_component(m->emission) <= 0.0f)
+                continue;
+            if (pass == 1) {
+                const triangle *t = &sc->triangles.triangles[i];
+                area += 0.5 * (double)vec3_length(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
+                sc->emitters[n] = i;
+                sc->emitter_cdf[n] = area;
+            }
+            n++;
+        }
+        if (pass == 0) {
+            sc->emitters = memory_allocate((size_t)n, sizeof(int));
+            sc->emitter_cdf = memory_allocate((size_t)n, sizeof(double));
+        } else {
+            sc->emitter_count = n;
+            sc->emitter_area = area;
+        }
+    }
+}
+
+/* ---- intersection ---------------------------------------------------------- */
+
+bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters)
+{
+    bool found = false;
+    if (sc->bvh != NULL && sc->triangles.count > 0 && accel_closest_hit(sc->bvh, r, hit, counters)) {
+        found = true;
+        r.t_max = hit->t;
+    }
+    for (int i = 0; i < sc->sphere_count; i++) {
+        const pt_sphere *s = &sc->spheres[i];
+        sphere shape = {s->center, s->radius};
+        counters->primitive_tests++;
+        if (sphere_intersect(&shape, r, hit)) {
+            found = true;
+            r.t_max = hit->t;
+            hit->shape_id = -1 - i; /* spheres count down from -1; triangles up from 0 */
+            hit->material_id = s->material;
+            if (s->inside_out) /* the front is the inside */
+                hit->front_face = !hit->front_face;
+        }
+    }
+    return found;
+}
+
+bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters)
+{
+    if (sc->bvh != NULL && sc->triangles.count > 0 && accel_any_hit(sc->bvh, r, counters))
+        return true;
+    hit_record ignored;
+    for (int i = 0; i < sc->sphere_count; i++) {
+        sphere shape = {sc->spheres[i].center, sc->spheres[i].radius};
+        counters->primitive_tests++;
+        if (sphere_intersect(&shape, r, &ignored))
+            return true;
+    }
+    return false;
+}
+
+bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u2, vec3 *point, vec3 *normal,
+                             int *material)
+{
+    if (sc->emitter_count == 0)
+        return false;
+    /* Pick a triangle with probability area / total area (binary search in
+     * the running sum), then a uniform point on it: together, a uniform
+     * point on all the emitting area, pdf = 1 / emitter_area. */
+    double target = (double)u_pick * sc->emitter_area;
+    int lo = 0, hi = sc->emitter_count - 1;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (sc->emitter_cdf[mid] <= target)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    int index = sc->emitters[lo];
+    const triangle *t = &sc->triangles.triangles[index];
+    /* A uniform point on a triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1). */
+    float s = sqrtf(u1);
+    float b1 = (1.0f - u2) * s, b2 = u2 * s;
+    *point = vec3_add(vec3_add(vec3_scale(t->p0, 1.0f - b1 - b2), vec3_scale(t->p1, b1)), vec3_scale(t->p2, b2));
+    *normal = vec3_normalize(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
+    *material = sc->geometry.faces[index].material;
+    return true;
+}
+
+camera pt_scene_camera(const pt_scene *sc, int width, int height)
+{
+    return camera_look_at(sc->eye, sc->target, sc->up, sc->vertical_fov_degrees, width, height);
+}
+
+/* ---- scenes ------------------------------------------------------------------ */
+
+static vec3 v(float x, float y, float z) { return vec3_make(x, y, z); }
+
+/* Reflectances of the box's paints as RGB (the values GAMES101's assignment 7
+ * uses), and the light's emission. */
+static const vec3 CORNELL_WHITE = {0.725f, 0.71f, 0.68f};
+static const vec3 CORNELL_RED = {0.63f, 0.065f, 0.05f};
+static const vec3 CORNELL_GREEN = {0.14f, 0.45f, 0.091f};
+static const vec3 CORNELL_LIGHT = {17.0f, 12.0f, 4.0f};
+
+static void cornell_room(pt_scene *sc, int white, int red, int green, int light)
+{
+    /* Floor, ceiling, back wall, right (green) and left (red) walls: the
+     * published coordinates, each face counter-clockwise seen from inside. */
+    pt_scene_add_quad(sc, v(552.8f, 0, 0), v(0, 0, 0), v(0, 0, 559.2f), v(549.6f, 0, 559.2f), white);
+    pt_scene_add_quad(sc, v(556, 548.8f, 0), v(556, 548.8f, 559.2f), v(0, 548.8f, 559.2f), v(0, 548.8f, 0), white);
+    pt_scene_add_quad(sc, v(549.6f, 0, 559.2f), v(0, 0, 559.2f), v(0, 548.8f, 559.2f), v(556, 548.8f, 559.2f), white);
+    pt_scene_add_quad(sc, v(0, 0, 559.2f), v(0, 0, 0), v(0, 548.8f, 0), v(0, 548.8f, 559.2f), green);
+    pt_scene_add_quad(sc, v(552.8f, 0, 0), v(549.6f, 0, 559.2f), v(556, 548.8f, 559.2f), v(556, 548.8f, 0), red);
+    /* The light, 0.1 mm below the ceiling so the two never coincide, facing down. */
+    pt_scene_add_quad(sc, v(343, 548.7f, 227), v(343, 548.7f, 332), v(213, 548.7f, 332), v(213, 548.7f, 227), light);
+    sc->eye = v(278, 273, -800);
+    sc->target = v(278, 273, 0);
+    /* A 35 mm lens on a 25 mm film: 2 atan(12.5 / 35) = 39.3 degrees. */
+    sc->vertical_fov_degrees = 2.0f * atanf(12.5f / 35.0f) * 180.0f / (float)PI;
+}
+
+static void cornell_short_block(pt_scene *sc, int m)
+{
+    pt_scene_add_quad(sc, v(130, 165, 65), v(82, 165, 225), v(240, 165, 272), v(290, 165, 114), m);
+    pt_scene_add_quad(sc, v(290, 0, 114), v(290, 165, 114), v(240, 165, 272), v(240, 0, 272), m);
+    pt_scene_add_quad(sc, v(130, 0, 65), v(130, 165, 65), v(290, 165, 114), v(290, 0, 114), m);
+    pt_scene_add_quad(sc, v(82, 0, 225), v(82, 165, 225), v(130, 165, 65), v(130, 0, 65), m);
+    pt_scene_add_quad(sc, v(240, 0, 272), v(240, 165, 272), v(82, 165, 225), v(82, 0, 225), m);
+}
+
+static void cornell_tall_block(pt_scene *sc, int m)
+{
+    pt_scene_add_quad(sc, v(423, 330, 247), v(265, 330, 296), v(314, 330, 456), v(472, 330, 406), m);
+    pt_scene_add_quad(sc, v(423, 0, 247), v(423, 330, 247), v(472, 330, 406), v(472, 0, 406), m);
+    pt_scene_add_quad(sc, v(472, 0, 406), v(472, 330, 406), v(314, 330, 456), v(314, 0, 456), m);
+    pt_scene_add_quad(sc, v(314, 0, 456), v(314, 330, 456), v(265, 330, 296), v(265, 0, 296), m);
+    pt_scene_add_quad(sc, v(265, 0, 296), v(265, 330, 296), v(423, 330, 247), v(423, 0, 247), m);
+}
+
+void pt_scene_build_cornell_box(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int white = pt_scene_add_material(sc, pt_diffuse(CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), CORNELL_LIGHT));
+    cornell_room(sc, white, red, green, light);
+    cornell_short_block(sc, white);
+    cornell_tall_block(sc, white);
+    pt_scene_finish(sc);
+}
+
+void pt_scene_build_cornell_box_materials(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int white = pt_scene_add_material(sc, pt_diffuse(CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), CORNELL_LIGHT));
+    int metal = pt_scene_add_material(sc, pt_glossy(vec3_make(0.95f, 0.64f, 0.54f), 0.15f)); /* copper-like */
+    int glass = pt_scene_add_material(sc, pt_glass(1.5f));
+    cornell_room(sc, white, red, green, light);
+    cornell_tall_block(sc, metal);
+    pt_scene_add_sphere(sc, v(185, 90, 170), 90, glass, false);
+    pt_scene_finish(sc);
+}
+
+void pt_scene_build_furnace(pt_scene *sc, float albedo, float emission)
+{
+    pt_scene_init(sc);
+    int m = pt_scene_add_material(sc, pt_emitter(vec3_splat(albedo), vec3_splat(emission)));
+    /* An icosphere's triangles face outwards; the furnace is seen from
+     * inside, so each triangle is added with its winding reversed. */
+    mesh ball;
+    mesh_init(&ball);
+    mesh_icosphere(&ball, v(0, 0, 0), 1.0f, 2, -1);
+    for (int i = 0; i < ball.face_count; i++)
+        pt_scene_add_triangle(sc, mesh_vertex(&ball, i, 0), mesh_vertex(&ball, i, 2), mesh_vertex(&ball, i, 1), m);
+    mesh_free(&ball);
+    sc->eye = v(0.1f, 0.2f, 0.3f);
+    sc->target = v(0.5f, 0.1f, -1.0f);
+    sc->vertical_fov_degrees = 90.0f;
+    pt_scene_finish(sc);
+}
+
+void pt_scene_build_white_furnace(pt_scene *sc, pt_material sphere_material, vec3 environment)
+{
+    pt_scene_init(sc);
+    int m = pt_scene_add_material(sc, sphere_material);
+    pt_scene_add_sphere(sc, v(0, 0, 0), 1.0f, m, false);
+    sc->environment = environment;
+    sc->eye = v(0, 0, 4);
+    sc->target = v(0, 0, 0);
+    sc->vertical_fov_degrees = 40.0f;
+    pt_scene_finish(sc);
+}
+
+void pt_scene_build_point_in_sphere(pt_scene *sc, float albedo, float intensity)
+{
+    pt_scene_init(sc);
+    int m = pt_scene_add_material(sc, pt_diffuse(vec3_splat(albedo)));
+    pt_scene_add_sphere(sc, v(0, 0, 0), 1.0f, m, true);
+    pt_scene_add_point_light(sc, v(0, 0, 0), vec3_splat(intensity));
+    sc->eye = v(0.2f, -0.1f, 0.3f);
+    sc->target = v(0.4f, 0.3f, -1.0f);
+    sc->vertical_fov_degrees = 70.0f;
+    pt_scene_finish(sc);
+}
+
+/* ---- OBJ scenes ---------------------------------------------------------------- */
+
+bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_size)
+{
+    pt_scene_init(sc);
+    if (!mesh_load_obj(&sc->geometry, path, err, err_size)) {
+        pt_scene_free(sc);
+        return false;
+    }
+    /* Materials from the MTL colours; faces without one get a grey diffuse. */
+    for (int i = 0; i < sc->geometry.material_count; i++) {
+        const mesh_material *mm = &sc->geometry.materials[i];
+        pt_material m = pt_emitter(mm->diffuse, mm->emission);
+        if (mm->ior > 1.0f)
+            m = pt_glass(mm->ior);
+        pt_scene_add_material(sc, m);
+    }
+    int grey = pt_scene_add_material(sc, pt_diffuse(vec3_splat(0.7f)));
+    for (int i = 0; i < sc->geometry.face_count; i++)
+        if (sc->geometry.faces[i].material < 0)
+            sc->geometry.faces[i].material = grey;
+    vec3 lo, hi;
+    if (!mesh_bounds(&sc->geometry, &lo, &hi)) {
+        snprintf(err, err_size, "%s: no triangles to render", path);
+        pt_scene_free(sc);
+        return false;
+    }
+    vec3 centre = vec3_scale(vec3_add(lo, hi), 0.5f);
+    float radius = 0.5f * vec3_length(vec3_sub(hi, lo));
+    sc->target = centre;
+    sc->eye = vec3_add(centre, vec3_make(0, 0.3f * radius, 2.8f * radius));
+    sc->vertical_fov_degrees = 45.0f;
+    pt_scene_finish(sc);
+    if (sc->emitter_count == 0 && sc->point_light_count == 0)
+        sc->environment = vec3_splat(1.0f); /* nothing emits: light it with a white sky */
+    return true;
+}

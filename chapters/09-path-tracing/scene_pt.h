@@ -1,0 +1,124 @@
+/* scene_pt.h -- what the path tracer renders: triangles (in chapter 06's BVH)
+ * and spheres, each with a material that may also emit; point lights; and
+ * an environment: the radiance of rays that leave the scene.
+ *
+ * Usage:
+ *   pt_scene sc; pt_scene_build_cornell_box(&sc);      (or pt_scene_init + pt_scene_add_*)
+ *   pt_scene_finish(&sc);       builds the BVH and the table of emitters
+ *   if (pt_scene_intersect(&sc, r, &hit, &counters)) ... hit.material_id
+ *   pt_scene_free(&sc);
+ *
+ * Emitters are one-sided: a triangle emits from its front face (counter-
+ * clockwise seen from outside), a sphere outwards. The lights the path
+ * tracer samples are the emitting triangles, chosen in proportion to their
+ * area, and the point lights; emitting spheres and the environment are
+ * reached only by rays that happen to hit them.
+ */
+#ifndef SCENE_PT_H
+#define SCENE_PT_H
+
+#include <stdbool.h>
+
+#include "01-ray-casting/shapes.h"
+#include "03-aabb-slabs/accel.h"
+#include "camera.h"
+#include "counters.h"
+#include "mesh.h"
+
+typedef enum {
+    BSDF_DIFFUSE, /* Lambertian: f = albedo / pi */
+    BSDF_GLOSSY,  /* GGX microfacet reflection with Schlick's Fresnel (F0 = albedo) */
+    BSDF_GLASS,   /* a smooth dielectric: Fresnel-weighted reflection and refraction */
+    BSDF_MIRROR,  /* perfect reflection of albedo */
+} bsdf_kind;
+
+typedef struct {
+    bsdf_kind kind;
+    vec3 albedo;     /* rho for diffuse, F0 for glossy, the tint of mirror and glass */
+    vec3 emission;   /* L_e, from the front side only */
+    float roughness; /* GGX alpha (glossy) */
+    float ior;       /* index of refraction (glass) */
+} pt_material;
+
+typedef struct {
+    vec3 center;
+    float radius;
+    int material;
+    bool inside_out; /* the outward normal points to the centre: a room seen from inside */
+} pt_sphere;
+
+typedef struct {
+    vec3 position;
+    vec3 intensity; /* I: irradiance I cos(theta) / r^2 at distance r */
+} pt_point_light;
+
+typedef struct {
+    mesh geometry;          /* triangles; face material = index into materials */
+    triangle_set triangles; /* built by pt_scene_finish */
+    accel *bvh;
+    pt_sphere *spheres;
+    int sphere_count, sphere_capacity;
+    pt_material *materials;
+    int material_count, material_capacity;
+    pt_point_light *point_lights;
+    int point_light_count, point_light_capacity;
+    /* The emitting triangles, for sampling a point on a light by area. */
+    int *emitters;        /* triangle indices */
+    double *emitter_cdf;  /* running sum of areas, emitter_cdf[emitter_count - 1] = emitter_area */
+    int emitter_count;
+    double emitter_area;
+    vec3 environment; /* radiance arriving from every direction that escapes */
+    vec3 eye, target, up;
+    float vertical_fov_degrees;
+} pt_scene;
+
+void pt_scene_init(pt_scene *sc);
+void pt_scene_free(pt_scene *sc);
+int pt_scene_add_material(pt_scene *sc, pt_material m);
+/* A quad p0 p1 p2 p3 (counter-clockwise from its front) as two triangles. */
+void pt_scene_add_quad(pt_scene *sc, vec3 p0, vec3 p1, vec3 p2, vec3 p3, int material);
+void pt_scene_add_triangle(pt_scene *sc, vec3 p0, vec3 p1, vec3 p2, int material);
+void pt_scene_add_sphere(pt_scene *sc, vec3 center, float radius, int material, bool inside_out);
+void pt_scene_add_point_light(pt_scene *sc, vec3 position, vec3 intensity);
+/* Builds the BVH over the triangles and the emitter table. */
+void pt_scene_finish(pt_scene *sc);
+
+pt_material pt_diffuse(vec3 albedo);
+pt_material pt_emitter(vec3 albedo, vec3 emission);
+pt_material pt_glossy(vec3 f0, float roughness);
+pt_material pt_glass(float ior);
+pt_material pt_mirror(vec3 albedo);
+
+bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters);
+bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters);
+
+/* A point on the emitting triangles, uniform by area (pdf 1 / emitter_area),
+ * with the emitter's front normal and material. False if there are none. */
+bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u2, vec3 *point, vec3 *normal,
+                             int *material);
+
+camera pt_scene_camera(const pt_scene *sc, int width, int height);
+
+/* The scenes. */
+/* The Cornell box as measured (Cornell University Program of Computer
+ * Graphics): white, red and green walls, a square light in the ceiling, a
+ * short and a tall block; millimetres; the original camera. */
+void pt_scene_build_cornell_box(pt_scene *sc);
+/* The Cornell box with the tall block made a GGX metal and the short block
+ * replaced by a glass sphere: the materials of the later rungs. */
+void pt_scene_build_cornell_box_materials(pt_scene *sc);
+/* The camera inside a closed sphere (an icosphere of triangles, normals
+ * inwards) that reflects albedo and emits `emission` everywhere: radiance is
+ * emission / (1 - albedo) in every direction. */
+void pt_scene_build_furnace(pt_scene *sc, float albedo, float emission);
+/* A sphere of the given material at the origin under a uniform environment
+ * of radiance `environment`, seen from +z. */
+void pt_scene_build_white_furnace(pt_scene *sc, pt_material sphere_material, vec3 environment);
+/* A unit sphere of albedo rho, seen from inside, with a point light of
+ * intensity I at its centre: direct irradiance I everywhere. */
+void pt_scene_build_point_in_sphere(pt_scene *sc, float albedo, float intensity);
+/* An OBJ file's triangles with its MTL colours (Kd albedo, Ke emission; Ni > 1
+ * makes glass), and a camera from its bounds. False with err on failure. */
+bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_size);
+
+#endif

@@ -1,0 +1,395 @@
+/* test_ch09.c -- the path tracer against scenes whose answer is known in
+ * closed form, the rungs against each other, and the estimator's variance
+ * against the 1/N law. Statistical checks use fixed seeds and compare
+ * within 5 standard errors of the pixel's own estimate (a correct
+ * implementation fails one pixel with probability ~6e-7); each has a twin
+ * showing the same check catches a biased image. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <string.h>
+
+#include "09-path-tracing/bsdf.h"
+#include "09-path-tracing/path_tracer.h"
+#include "render.h"
+#include "stats.h"
+#include "test_support.h"
+
+/* How many standard errors a pixel may be from the truth. */
+static const double STANDARD_ERRORS = 5.0;
+/* Standard errors below this are float rounding, not noise (zero-variance
+ * estimators): compare with this instead. */
+static const double ROUNDING_FLOOR = 1e-5;
+
+typedef struct {
+    image mean, standard_error;
+    render_stats stats;
+} render_result;
+
+static render_result render(const path_tracer *pt, int width, int height, int spp, uint64_t seed, int threads)
+{
+    camera cam = pt_scene_camera(pt->scene, width, height);
+    render_result r;
+    r.mean = image_make(width, height);
+    r.standard_error = image_make(width, height);
+    render_job job = {.cam = &cam, .spp = spp, .seed = seed, .threads = threads, .quiet = true,
+                      .radiance = path_trace_radiance, .scene = pt, .standard_error = &r.standard_error,
+                      .jitter = true};
+    render_image(&job, &r.mean, &r.stats);
+    return r;
+}
+
+static void render_result_free(render_result *r)
+{
+    image_free(&r->mean);
+    image_free(&r->standard_error);
+}
+
+/* How many pixel channels are farther than 5 standard errors from `expected`. */
+static int count_outliers(const render_result *r, double expected)
+{
+    int outliers = 0;
+    for (int i = 0; i < r->mean.width * r->mean.height * 3; i++) {
+        double tolerance = fmax(STANDARD_ERRORS * r->standard_error.rgb[i], ROUNDING_FLOOR);
+        outliers += !(fabs(r->mean.rgb[i] - expected) <= tolerance);
+    }
+    return outliers;
+}
+
+static path_tracer tracer(const pt_scene *sc, pt_integrator integrator, pt_russian_roulette rr)
+{
+    path_tracer pt = path_tracer_defaults(sc);
+    pt.integrator = integrator;
+    pt.russian_roulette = rr;
+    return pt;
+}
+
+static const pt_integrator all_rungs[3] = {PT_LECTURE, PT_COSINE, PT_MIS};
+
+/* ---- closed forms ---------------------------------------------------------- */
+
+/* Inside a closed surface that emits Le and reflects rho everywhere, the
+ * radiance is Le / (1 - rho) = 1 in every direction, for every rung. */
+static void test_furnace_every_pixel_is_one(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_furnace(&sc, 0.5f, 0.5f);
+    for (int k = 0; k < 3; k++) {
+        path_tracer pt = tracer(&sc, all_rungs[k], RR_FIXED);
+        render_result r = render(&pt, 8, 8, 64, 11, 2);
+        int outliers = count_outliers(&r, 1.0);
+        if (outliers != 0)
+            fail_msg("%s: %d pixel channels are not 1 within 5 standard errors", pt_integrator_name(all_rungs[k]),
+                     outliers);
+        render_result_free(&r);
+    }
+    pt_scene_free(&sc);
+}
+
+/* Truncated after D bounces, the furnace is the partial sum
+ * Le (1 - rho^(D+1)) / (1 - rho); and the twin: that truncated image must
+ * fail the test for the untruncated value, so the test can see a bias of
+ * that size. */
+static void test_furnace_truncated_at_depth_is_the_partial_sum(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_furnace(&sc, 0.5f, 0.5f);
+    const int depths[] = {0, 1, 2, 5};
+    for (int k = 0; k < 3; k++)
+        for (int d = 0; d < 4; d++) {
+            path_tracer pt = tracer(&sc, all_rungs[k], RR_OFF);
+            pt.max_depth = depths[d];
+            render_result r = render(&pt, 6, 6, 64, 21, 2);
+            double partial = 0.5 * (1.0 - pow(0.5, depths[d] + 1)) / (1.0 - 0.5);
+            int outliers = count_outliers(&r, partial);
+            if (outliers != 0)
+                fail_msg("%s, depth %d: %d pixel channels differ from %.6f", pt_integrator_name(all_rungs[k]),
+                         depths[d], outliers, partial);
+            if (depths[d] == 2) /* the twin: stopping at 2 bounces (0.875) is caught */
+                assert_true(count_outliers(&r, 1.0) > 0);
+            render_result_free(&r);
+        }
+    pt_scene_free(&sc);
+}
+
+/* A point light of intensity pi at the centre of a unit sphere of albedo
+ * 0.5: direct irradiance pi everywhere, reflected radiance 0.5 / pi * pi =
+ * 0.5, and the interreflections double it: radiance 1. */
+static void test_point_light_in_a_sphere_gives_radiance_one(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_point_in_sphere(&sc, 0.5f, (float)PI);
+    for (int k = 0; k < 3; k++) {
+        path_tracer pt = tracer(&sc, all_rungs[k], RR_FIXED);
+        render_result r = render(&pt, 8, 8, 64, 31, 2);
+        assert_int_equal(count_outliers(&r, 1.0), 0);
+        /* the twin: the direct light counted twice (radiance 1.5) is caught */
+        assert_true(count_outliers(&r, 1.5) > 0);
+        render_result_free(&r);
+    }
+    pt_scene_free(&sc);
+}
+
+/* A diffuse sphere under a uniform sky sees the sky in its whole hemisphere:
+ * L = rho L_sky. A glass sphere absorbs nothing: with no Russian roulette
+ * every path carries weight exactly 1 and returns L_sky. */
+static void test_white_furnace_diffuse_and_glass(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_white_furnace(&sc, pt_diffuse(vec3_splat(0.5f)), vec3_splat(2.0f));
+    for (int k = 0; k < 3; k++) {
+        path_tracer pt = tracer(&sc, all_rungs[k], RR_FIXED);
+        render_result r = render(&pt, 16, 16, 64, 41, 2);
+        /* The centre 4x4 pixels all see the sphere. */
+        for (int y = 6; y < 10; y++)
+            for (int x = 6; x < 10; x++) {
+                vec3 m = image_get(&r.mean, x, y), se = image_get(&r.standard_error, x, y);
+                assert_true(fabs(m.x - 1.0) <= fmax(STANDARD_ERRORS * se.x, ROUNDING_FLOOR));
+            }
+        render_result_free(&r);
+    }
+    pt_scene_free(&sc);
+
+    pt_scene_build_white_furnace(&sc, pt_glass(1.5f), vec3_splat(2.0f));
+    for (int k = 0; k < 3; k++) {
+        path_tracer pt = tracer(&sc, all_rungs[k], RR_OFF);
+        render_result r = render(&pt, 16, 16, 16, 43, 2);
+        for (int i = 0; i < 16 * 16 * 3; i++)
+            assert_close(r.mean.rgb[i], 2.0, 1e-5);
+        assert_true(r.stats.counters.refraction_rays > 0);
+        render_result_free(&r);
+    }
+    pt_scene_free(&sc);
+}
+
+/* ---- the rungs agree ----------------------------------------------------------- */
+
+static int count_disagreements(const render_result *a, const render_result *b)
+{
+    int n = 0;
+    for (int i = 0; i < a->mean.width * a->mean.height * 3; i++) {
+        double sa = a->standard_error.rgb[i], sb = b->standard_error.rgb[i];
+        double tolerance = fmax(STANDARD_ERRORS * sqrt(sa * sa + sb * sb), ROUNDING_FLOOR);
+        n += !(fabs(a->mean.rgb[i] - b->mean.rgb[i]) <= tolerance);
+    }
+    return n;
+}
+
+static void check_rungs_agree(pt_scene *sc, int spp)
+{
+    path_tracer reference = tracer(sc, PT_MIS, RR_THROUGHPUT);
+    render_result ref = render(&reference, 8, 8, spp, 51, 2);
+    for (int k = 0; k < 3; k++) {
+        path_tracer pt = tracer(sc, all_rungs[k], RR_FIXED);
+        render_result r = render(&pt, 8, 8, spp, 52 + (uint64_t)k, 2);
+        int n = count_disagreements(&r, &ref);
+        if (n != 0)
+            fail_msg("%s disagrees with MIS in %d pixel channels", pt_integrator_name(all_rungs[k]), n);
+        render_result_free(&r);
+    }
+    render_result_free(&ref);
+}
+
+static void test_every_rung_converges_to_the_same_image(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    check_rungs_agree(&sc, 256);
+    pt_scene_free(&sc);
+    pt_scene_build_cornell_box_materials(&sc); /* glossy metal and glass */
+    check_rungs_agree(&sc, 256);
+    pt_scene_free(&sc);
+}
+
+static void test_russian_roulette_on_and_off_agree_in_mean(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    path_tracer off = tracer(&sc, PT_MIS, RR_OFF);
+    off.max_depth = 40; /* 0.73^40: nothing left to cut */
+    render_result a = render(&off, 8, 8, 128, 61, 2);
+    const pt_russian_roulette modes[2] = {RR_FIXED, RR_THROUGHPUT};
+    for (int m = 0; m < 2; m++) {
+        path_tracer on = tracer(&sc, PT_MIS, modes[m]);
+        render_result b = render(&on, 8, 8, 128, 62, 2);
+        assert_int_equal(count_disagreements(&a, &b), 0);
+        /* Roulette ends paths early: fewer rays. */
+        assert_true(b.stats.counters.indirect_rays < a.stats.counters.indirect_rays);
+        render_result_free(&b);
+    }
+    /* The twin: cutting paths after one bounce is a visible bias. */
+    path_tracer short_paths = tracer(&sc, PT_MIS, RR_OFF);
+    short_paths.max_depth = 1;
+    render_result c = render(&short_paths, 8, 8, 128, 63, 2);
+    assert_true(count_disagreements(&a, &c) > 0);
+    render_result_free(&c);
+    render_result_free(&a);
+    pt_scene_free(&sc);
+}
+
+/* ---- variance falls as 1/N -------------------------------------------------------
+ * The variance of a pixel's estimate over independent renders, averaged over
+ * the pixels, for spp = 1, 2, 4, ... 64: the slope of log variance against
+ * log spp must be -1 within 0.15. */
+static double mean_pixel_variance(const path_tracer *pt, int spp, int renders)
+{
+    enum { SIDE = 8 };
+    welford pixel[SIDE * SIDE * 3];
+    memset(pixel, 0, sizeof pixel);
+    for (int s = 0; s < renders; s++) {
+        render_result r = render(pt, SIDE, SIDE, spp, 1000 * (uint64_t)spp + (uint64_t)s, 1);
+        for (int i = 0; i < SIDE * SIDE * 3; i++)
+            welford_add(&pixel[i], r.mean.rgb[i]);
+        render_result_free(&r);
+    }
+    double sum = 0;
+    for (int i = 0; i < SIDE * SIDE * 3; i++)
+        sum += welford_variance(&pixel[i]);
+    return sum / (SIDE * SIDE * 3);
+}
+
+static void test_variance_falls_as_one_over_spp(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    path_tracer pt = tracer(&sc, PT_COSINE, RR_FIXED);
+    double spp[7], variance[7];
+    for (int k = 0; k < 7; k++) {
+        spp[k] = (double)(1 << k);
+        variance[k] = mean_pixel_variance(&pt, 1 << k, 48);
+    }
+    double slope = stats_loglog_slope(spp, variance, 7);
+    print_message("slope of log variance against log spp: %.3f\n", slope);
+    assert_close(slope, -1.0, 0.15);
+    pt_scene_free(&sc);
+}
+
+/* ---- determinism, counters, hard cases ----------------------------------------------- */
+
+static void test_same_image_for_one_and_two_threads(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box_materials(&sc);
+    for (int k = 0; k < 3; k++) {
+        path_tracer pt = tracer(&sc, all_rungs[k], RR_THROUGHPUT);
+        render_result a = render(&pt, 16, 16, 4, 71, 1), b = render(&pt, 16, 16, 4, 71, 2);
+        assert_memory_equal(a.mean.rgb, b.mean.rgb, 16 * 16 * 3 * sizeof(float));
+        render_result_free(&a);
+        render_result_free(&b);
+    }
+    pt_scene_free(&sc);
+}
+
+static void test_no_glass_no_refraction_and_no_nan(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    for (int k = 0; k < 3; k++) {
+        path_tracer pt = tracer(&sc, all_rungs[k], RR_FIXED);
+        render_result r = render(&pt, 16, 16, 8, 81, 2);
+        assert_int_equal(r.stats.counters.refraction_rays, 0);
+        assert_int_equal(r.stats.counters.reflection_rays, 0);
+        assert_int_equal(r.stats.counters.nonfinite_samples, 0);
+        assert_true(r.stats.counters.shadow_rays > 0);
+        render_result_free(&r);
+    }
+    pt_scene_free(&sc);
+}
+
+/* Emitters are one-sided: a light quad facing down is black from above, and
+ * a surface behind it gets no light samples (no shadow rays either). */
+static void test_one_sided_emitter(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_init(&sc);
+    int light = pt_scene_add_material(&sc, pt_emitter(vec3_splat(0.0f), vec3_splat(3.0f)));
+    int floor = pt_scene_add_material(&sc, pt_diffuse(vec3_splat(0.5f)));
+    /* the light at y = 1, facing down (-y) */
+    pt_scene_add_quad(&sc, vec3_make(-1, 1, -1), vec3_make(1, 1, -1), vec3_make(1, 1, 1), vec3_make(-1, 1, 1), light);
+    /* a floor above the light, at y = 2, facing down too */
+    pt_scene_add_quad(&sc, vec3_make(-5, 2, -5), vec3_make(5, 2, -5), vec3_make(5, 2, 5), vec3_make(-5, 2, 5), floor);
+    pt_scene_finish(&sc);
+    path_tracer pt = tracer(&sc, PT_MIS, RR_OFF);
+    pt.max_depth = 3;
+    /* From below, looking up: the light's front. */
+    sc.eye = vec3_make(0, -3, 0.01f);
+    sc.target = vec3_make(0, 1, 0);
+    render_result below = render(&pt, 4, 4, 4, 91, 1);
+    vec3 centre = image_get(&below.mean, 2, 2);
+    assert_close(centre.x, 3.0, 1e-5);
+    render_result_free(&below);
+    /* From between the light and the ceiling-floor, looking down at the
+     * light's back: black, and the floor above is lit by nothing. */
+    sc.eye = vec3_make(0, 1.5f, 0.01f);
+    sc.target = vec3_make(0, 0, 0);
+    render_result above = render(&pt, 4, 4, 4, 92, 1);
+    for (int i = 0; i < 4 * 4 * 3; i++)
+        assert_close(above.mean.rgb[i], 0.0, 0.0);
+    render_result_free(&above);
+    pt_scene_free(&sc);
+}
+
+static void test_ggx_sampling_matches_its_pdf(void **state)
+{
+    (void)state;
+    /* Seen from straight above, the sampled half vectors h with theta_h
+     * above 45 degrees reflect wi below the horizon, where the sample is
+     * refused; the pdf over the hemisphere integrates to the rest, the
+     * fraction of D(h) cos(theta_h) with cos^2(theta_h) > 1/2:
+     * (1 - 1/2) / (1 + (alpha^2 - 1) / 2). */
+    pt_material m = pt_glossy(vec3_splat(0.9f), 0.3f);
+    vec3 n = vec3_make(0, 0, 1), wo = vec3_make(0, 0, 1);
+    double integral = 0.0;
+    const int steps = 400;
+    for (int i = 0; i < steps; i++)
+        for (int j = 0; j < 2 * steps; j++) {
+            double theta = (i + 0.5) * (PI / 2) / steps, phi = (j + 0.5) * (2 * PI) / (2 * steps);
+            vec3 wi = vec3_make((float)(sin(theta) * cos(phi)), (float)(sin(theta) * sin(phi)), (float)cos(theta));
+            integral += bsdf_pdf(&m, n, wo, wi) * sin(theta) * (PI / 2 / steps) * (2 * PI / (2 * steps));
+        }
+    double alpha2 = 0.3 * 0.3;
+    assert_close(integral, 0.5 / (1.0 + (alpha2 - 1.0) * 0.5), 2e-3);
+    /* The sampled weight equals f cos / pdf evaluated separately. */
+    pcg32 rng = pcg32_for_pixel(5, 5);
+    vec3 wo2 = vec3_normalize(vec3_make(0.3f, 0.1f, 0.9f));
+    for (int k = 0; k < 1000; k++) {
+        bsdf_sample_result s;
+        if (!bsdf_sample(&m, n, wo2, vec2_make(pcg32_float(&rng), pcg32_float(&rng)), 0.5f, true, &s))
+            continue;
+        vec3 f = bsdf_eval(&m, n, wo2, s.wi);
+        double expected = f.x * vec3_dot(n, s.wi) / bsdf_pdf(&m, n, wo2, s.wi);
+        assert_close(s.weight.x, expected, 1e-4 * fmax(1.0, expected));
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_furnace_every_pixel_is_one),
+        cmocka_unit_test(test_furnace_truncated_at_depth_is_the_partial_sum),
+        cmocka_unit_test(test_point_light_in_a_sphere_gives_radiance_one),
+        cmocka_unit_test(test_white_furnace_diffuse_and_glass),
+        cmocka_unit_test(test_every_rung_converges_to_the_same_image),
+        cmocka_unit_test(test_russian_roulette_on_and_off_agree_in_mean),
+        cmocka_unit_test(test_variance_falls_as_one_over_spp),
+        cmocka_unit_test(test_same_image_for_one_and_two_threads),
+        cmocka_unit_test(test_no_glass_no_refraction_and_no_nan),
+        cmocka_unit_test(test_one_sided_emitter),
+        cmocka_unit_test(test_ggx_sampling_matches_its_pdf),
+    };
+    return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);
+}

@@ -1,8 +1,8 @@
 /* bench_accel.c -- what each acceleration structure costs and buys, measured
  * on the same work as the Embree harness in ../shared/anchors/embree_bench.c:
  * the "tori field" mesh (mesh_tori_field, bit-identical to the harness's) and
- * its two ray sets, generated here operation for operation as the harness
- * does:
+ * its two ray sets, generated operation for operation as the harness does
+ * (accel_harness_rays, chapter 03):
  *   coherent   1024 x 1024 pinhole rays in scanline order
  *   incoherent 2^20 rays, origins uniform in the bounds, directions uniform
  * For every structure and mesh size: build time, bytes per triangle, and
@@ -34,58 +34,6 @@ typedef struct {
     int count;
     ray *rays;
 } ray_set;
-
-/* ---- the harness's ray sets ------------------------------------------------ */
-
-static uint64_t splitmix_state;
-
-static double splitmix_uniform(void)
-{
-    uint64_t z = (splitmix_state += 0x9E3779B97F4A7C15ULL);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-    z ^= z >> 31;
-    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
-}
-
-static vec3 unit(vec3 a) { return vec3_scale(a, 1.0f / sqrtf(vec3_dot(a, a))); }
-
-static ray_set rays_coherent(aabb bounds, int width, int height)
-{
-    ray_set set = {width * height, memory_allocate((size_t)width * (size_t)height, sizeof(ray))};
-    vec3 c = vec3_scale(vec3_add(bounds.lo, bounds.hi), 0.5f);
-    vec3 diagonal = vec3_sub(bounds.hi, bounds.lo);
-    float rb = 0.5f * sqrtf(vec3_dot(diagonal, diagonal));
-    vec3 eye = vec3_add(c, vec3_scale(unit(vec3_make(0.3f, 0.4f, 1.0f)), 2.5f * rb));
-    vec3 forward = unit(vec3_sub(c, eye));
-    vec3 right = unit(vec3_cross(forward, vec3_make(0, 1, 0)));
-    vec3 up = vec3_cross(right, forward);
-    float th = 0.3f, tw = th * (float)width / (float)height;
-    for (int y = 0; y < height; y++)
-        for (int x = 0; x < width; x++) {
-            float u = (2 * (x + 0.5f) / (float)width - 1) * tw, v = (1 - 2 * (y + 0.5f) / (float)height) * th;
-            vec3 d = unit(vec3_add(forward, vec3_add(vec3_scale(right, u), vec3_scale(up, v))));
-            set.rays[(size_t)y * (size_t)width + (size_t)x] = ray_make(eye, d);
-        }
-    return set;
-}
-
-static ray_set rays_incoherent(aabb bounds, int count)
-{
-    ray_set set = {count, memory_allocate((size_t)count, sizeof(ray))};
-    splitmix_state = 0xBADC0DE;
-    for (int k = 0; k < count; k++) {
-        vec3 o;
-        o.x = (float)(bounds.lo.x + (bounds.hi.x - bounds.lo.x) * splitmix_uniform());
-        o.y = (float)(bounds.lo.y + (bounds.hi.y - bounds.lo.y) * splitmix_uniform());
-        o.z = (float)(bounds.lo.z + (bounds.hi.z - bounds.lo.z) * splitmix_uniform());
-        float z = (float)(2 * splitmix_uniform() - 1);
-        float phi = (float)(2 * PI * splitmix_uniform());
-        float s = sqrtf(1 - z * z);
-        set.rays[k] = ray_make(o, vec3_make(s * cosf(phi), s * sinf(phi), z));
-    }
-    return set;
-}
 
 /* ---- timing ------------------------------------------------------------------ */
 
@@ -310,8 +258,9 @@ int main(int argc, char **argv)
         mesh_tori_field(&m, sizes[s]);
         triangle_set set;
         triangle_set_from_mesh(&set, &m);
-        ray_set coherent = rays_coherent(set.bounds, 1024, 1024);
-        ray_set incoherent = rays_incoherent(set.bounds, 1 << 20);
+        ray_set coherent, incoherent;
+        coherent.rays = accel_harness_rays(set.bounds, true, &coherent.count);
+        incoherent.rays = accel_harness_rays(set.bounds, false, &incoherent.count);
         const embree_figures *e = embree_find(embree, embree_count, set.count);
 
         for (int k = 0; k < STRUCTURE_COUNT; k++) {

@@ -113,6 +113,13 @@ vec3 accel_view_radiance(const void *view, ray r, pcg32 *rng, ray_counters *coun
  * c + unit(0.3, 0.4, 1) * 2.5 * half-diagonal, looking at the centre c of
  * the bounds, tan(vertical fov / 2) = 0.3. */
 camera accel_view_camera(aabb bounds, int width, int height);
+/* The ray sets of the Embree harness (../shared/anchors/embree_bench.c),
+ * generated operation for operation as it does, for timing on the same work:
+ * coherent, a 1024 x 1024 pinhole image of the bounds in scanline order;
+ * incoherent, 2^20 rays with origins uniform in the bounds and directions
+ * uniform on the sphere (splitmix64 from seed 0xBADC0DE). The caller frees. */
+ray *accel_harness_rays(aabb bounds, bool coherent, int *count);
+
 /* The heat map's colour for cost / max_cost. */
 vec3 accel_heat_colour(float fraction);
 

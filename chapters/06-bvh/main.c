@@ -18,52 +18,7 @@
 
 /* ---- the Embree harness's ray sets, for --bench ----------------------------- */
 
-/* splitmix64, as the harness uses it for its incoherent rays */
-static uint64_t splitmix64_next(uint64_t *state)
-{
-    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
-static double splitmix64_uniform(uint64_t *state)
-{
-    return (double)(splitmix64_next(state) >> 11) * (1.0 / 9007199254740992.0);
-}
-
-enum { BENCH_COHERENT_SIZE = 1024, BENCH_INCOHERENT_RAYS = 1 << 20, BENCH_REPEATS = 3 };
-
-/* coherent: a 1024 x 1024 pinhole image of the bounds, as the harness (and
- * accel_view_camera) sets it up; incoherent: origins uniform in the bounds,
- * directions uniform on the sphere, from the harness's seed. */
-static ray *bench_rays(aabb bounds, bool coherent, int *count)
-{
-    if (coherent) {
-        *count = BENCH_COHERENT_SIZE * BENCH_COHERENT_SIZE;
-        ray *rays = memory_allocate((size_t)*count, sizeof *rays);
-        camera cam = accel_view_camera(bounds, BENCH_COHERENT_SIZE, BENCH_COHERENT_SIZE);
-        for (int y = 0; y < BENCH_COHERENT_SIZE; y++)
-            for (int x = 0; x < BENCH_COHERENT_SIZE; x++)
-                rays[y * BENCH_COHERENT_SIZE + x] = camera_ray(&cam, (float)x + 0.5f, (float)y + 0.5f);
-        return rays;
-    }
-    *count = BENCH_INCOHERENT_RAYS;
-    ray *rays = memory_allocate((size_t)*count, sizeof *rays);
-    uint64_t state = 0xBADC0DE;
-    vec3 lo = bounds.lo, e = aabb_extent(bounds);
-    for (int i = 0; i < *count; i++) {
-        vec3 o;
-        o.x = lo.x + e.x * (float)splitmix64_uniform(&state);
-        o.y = lo.y + e.y * (float)splitmix64_uniform(&state);
-        o.z = lo.z + e.z * (float)splitmix64_uniform(&state);
-        float z = (float)(2.0 * splitmix64_uniform(&state) - 1.0);
-        float phi = (float)(2.0 * PI * splitmix64_uniform(&state));
-        float s = sqrtf(1.0f - z * z);
-        rays[i] = ray_make(o, vec3_make(s * cosf(phi), s * sinf(phi), z));
-    }
-    return rays;
-}
+enum { BENCH_REPEATS = 3 };
 
 /* CPU time of this thread: on a machine shared with other work it counts
  * only the time this thread ran, which the wall clock does not. */
@@ -84,7 +39,7 @@ static int compare_doubles(const void *a, const void *b)
 static void bench(const accel *a, bool coherent)
 {
     int count;
-    ray *rays = bench_rays(a->set->bounds, coherent, &count);
+    ray *rays = accel_harness_rays(a->set->bounds, coherent, &count);
     double closest[BENCH_REPEATS], any[BENCH_REPEATS], closest_cpu[BENCH_REPEATS], any_cpu[BENCH_REPEATS];
     long hits = 0;
     double t_sum = 0.0;

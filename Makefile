@@ -160,7 +160,7 @@ bench: $(BUILD)/bin/bench_accel
 	  done; \
 	else echo "no $(SHARED)/anchors/embree_bench.c: timing without Embree"; fi
 	$(BUILD)/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS) \
-	  --out $(BUILD)/data/accel.csv $(if $(wildcard $(SHARED)/anchors/embree_bench.c),--embree $(BUILD)/data/embree.txt)
+	  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv $(if $(wildcard $(SHARED)/anchors/embree_bench.c),--embree $(BUILD)/data/embree.txt)
 
 # ---------------------------------------------------------------- plots --
 # Every figure is drawn by a gnuplot script in plots/ from CSV that a program

@@ -177,16 +177,90 @@ static const embree_figures *embree_find(const embree_figures *e, int n, int tri
     return NULL;
 }
 
+/* ---- the teapot in a stadium ----------------------------------------------------
+ * The uniform grid's failure case (lecture 14): a dense mesh (the "teapot",
+ * 81920 triangles of a unit sphere) in a huge, nearly empty scene (the
+ * stadium, 10 triangles 200 x 50 x 200 units). Cells sized for the average
+ * density are enormous beside the teapot, so the teapot falls into one or a
+ * few cells and every ray that reaches it tests thousands of triangles. The
+ * tori field of about the same size, where triangles are spread evenly, is
+ * the control. Rays are aimed at random triangles (accel_aimed_rays), so
+ * almost all of them go to the teapot. The grid is run at several cell
+ * densities C: a finer grid helps only slowly, and costs memory. */
+static void stadium_study(const char *path, int reps)
+{
+    FILE *csv = fopen(path, "w");
+    if (csv == NULL) {
+        fprintf(stderr, "bench_accel: cannot write '%s'\n", path);
+        exit(1);
+    }
+    fprintf(csv, "mesh,structure,density,triangles,build_ms,bytes_per_triangle,boxes_per_ray,triangles_per_ray,"
+                 "mrays\n");
+    printf("\nteapot in a stadium: rays aimed at random triangles, closest hit, 1 thread\n");
+    printf("%-8s %-10s %7s %9s %9s %9s %12s %12s %9s\n", "mesh", "structure", "C", "triangles", "build ms", "B/tri",
+           "boxes/ray", "tris/ray", "Mrays/s");
+    static const float densities[] = {1, 3, 9, GRID_DEFAULT_DENSITY, 81, 243};
+    enum { DENSITIES = sizeof densities / sizeof densities[0], RAYS = 1 << 13 };
+    for (int which = 0; which < 2; which++) {
+        const char *mesh_name = which == 0 ? "tori" : "stadium";
+        mesh m;
+        mesh_init(&m);
+        if (which == 0)
+            mesh_tori_field(&m, 81920);
+        else
+            mesh_teapot_in_stadium(&m, 6, 200.0f);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        ray_set rays = {RAYS, accel_aimed_rays(&set, RAYS, 2026)};
+        /* the grid at every density, then the hierarchies at their defaults */
+        for (int k = 0; k < DENSITIES + STRUCTURE_COUNT; k++) {
+            accel *a;
+            float density = 0.0f;
+            const char *name;
+            if (k < DENSITIES) {
+                density = densities[k];
+                a = grid_build(&set, density);
+                name = "grid";
+            } else {
+                const structure *st = &structures[k - DENSITIES];
+                if (strcmp(st->name, "brute") == 0 || strcmp(st->name, "grid") == 0)
+                    continue;
+                a = st->build(&set);
+                name = st->name;
+            }
+            trace(a, &rays, rays.count, true, 1); /* warm-up */
+            trace_result r = trace_median(a, &rays, rays.count, true, 1, reps);
+            double boxes = (double)r.counters.box_tests / rays.count;
+            double tris = (double)r.counters.primitive_tests / rays.count;
+            double mrays = rays.count / r.seconds * 1e-6;
+            double bytes = (double)a->stats.bytes / set.count;
+            printf("%-8s %-10s %7.0f %9d %9.1f %9.1f %12.1f %12.1f %9.3f\n", mesh_name, name, (double)density,
+                   set.count, a->stats.build_seconds * 1e3, bytes, boxes, tris, mrays);
+            fprintf(csv, "%s,%s,%g,%d,%.3f,%.2f,%.3f,%.3f,%.5f\n", mesh_name, name, (double)density, set.count,
+                    a->stats.build_seconds * 1e3, bytes, boxes, tris, mrays);
+            fflush(stdout);
+            accel_destroy(a);
+        }
+        free(rays.rays);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    fclose(csv);
+    printf("wrote %s\n", path);
+}
+
 /* ---- main ---------------------------------------------------------------------- */
 
 static void usage(void)
 {
     printf("usage: bench_accel [--sizes 1024,10240,102400,1048576] [--only NAME,...] [--reps N]\n"
-           "                   [--threads N] [--out FILE.csv] [--embree FILE]\n\n"
+           "                   [--threads N] [--out FILE.csv] [--embree FILE] [--stadium FILE.csv]\n\n"
            "Times every acceleration structure on the tori field of ../shared/anchors/embree_bench.c,\n"
            "with the harness's coherent and incoherent ray sets: build ms, bytes per triangle, and\n"
            "Mrays/s for closest hit and any hit, on one thread and on all. --embree reads the\n"
            "harness's output ('embree_bench embree N medium 1 R' lines) and prints ratios.\n"
+           "--stadium also runs the teapot in a stadium (the grid at several C, every hierarchy)\n"
+           "and writes its figures to FILE.csv.\n"
            "structures: brute grid kdtree bvh-median bvh-sah\n");
 }
 
@@ -194,7 +268,7 @@ int main(int argc, char **argv)
 {
     long sizes[8] = {1024, 10240, 102400, 1048576};
     int size_count = 4, reps = 3, threads = 1;
-    const char *out_path = "build/data/accel.csv", *embree_path = NULL, *only = NULL;
+    const char *out_path = "build/data/accel.csv", *embree_path = NULL, *only = NULL, *stadium_path = NULL;
 #ifdef _OPENMP
     threads = omp_get_max_threads();
 #endif
@@ -221,6 +295,9 @@ int main(int argc, char **argv)
             i++;
         } else if (strcmp(argv[i], "--out") == 0 && value) {
             out_path = value;
+            i++;
+        } else if (strcmp(argv[i], "--stadium") == 0 && value) {
+            stadium_path = value;
             i++;
         } else if (strcmp(argv[i], "--embree") == 0 && value) {
             embree_path = value;
@@ -329,5 +406,7 @@ int main(int argc, char **argv)
     }
     fclose(csv);
     printf("wrote %s\n", out_path);
+    if (stadium_path != NULL)
+        stadium_study(stadium_path, reps);
     return 0;
 }

@@ -196,3 +196,18 @@ ray *accel_harness_rays(aabb bounds, bool coherent, int *count)
     }
     return rays;
 }
+
+ray *accel_aimed_rays(const triangle_set *set, int count, uint64_t seed)
+{
+    ray *rays = memory_allocate((size_t)count, sizeof *rays);
+    pcg32 rng = pcg32_for_pixel(seed, 0x9120);
+    vec3 lo = set->bounds.lo, e = aabb_extent(set->bounds);
+    for (int i = 0; i < count; i++) {
+        vec3 o = vec3_make(lo.x + e.x * pcg32_float(&rng), lo.y + e.y * pcg32_float(&rng),
+                           lo.z + e.z * pcg32_float(&rng));
+        const triangle *t = &set->triangles[pcg32_bounded(&rng, (uint32_t)set->count)];
+        vec3 target = vec3_scale(vec3_add(vec3_add(t->p0, t->p1), t->p2), 1.0f / 3.0f);
+        rays[i] = ray_make(o, vec3_normalize(vec3_sub(target, o)));
+    }
+    return rays;
+}

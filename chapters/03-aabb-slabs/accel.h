@@ -120,6 +120,12 @@ camera accel_view_camera(aabb bounds, int width, int height);
  * uniform on the sphere (splitmix64 from seed 0xBADC0DE). The caller frees. */
 ray *accel_harness_rays(aabb bounds, bool coherent, int *count);
 
+/* Rays aimed at the mesh itself, whatever a camera sees: origins uniform in
+ * the bounds, each aimed at the centroid of a triangle picked uniformly, so
+ * a mesh's dense parts get their share of the rays (the teapot, not the
+ * empty stadium). Seeded PCG32; the caller frees. */
+ray *accel_aimed_rays(const triangle_set *set, int count, uint64_t seed);
+
 /* The heat map's colour for cost / max_cost. */
 vec3 accel_heat_colour(float fraction);
 

@@ -23,23 +23,11 @@ static void usage_error(const char *message, const char *value)
     exit(2);
 }
 
-/* The cost of rays aimed at the mesh itself, whatever the camera sees: from
- * points uniform in the bounds, each towards the centroid of a triangle
- * picked uniformly (so a mesh's dense parts get their share of the rays).
- * One thread, timed. */
+/* The cost of rays aimed at the mesh itself (accel_aimed_rays), one thread,
+ * timed. */
 static void probe(const accel *a, int count, uint64_t seed)
 {
-    const triangle_set *set = a->set;
-    ray *rays = memory_allocate((size_t)count, sizeof *rays);
-    pcg32 rng = pcg32_for_pixel(seed, 0x9120);
-    vec3 lo = set->bounds.lo, e = aabb_extent(set->bounds);
-    for (int i = 0; i < count; i++) {
-        vec3 o = vec3_make(lo.x + e.x * pcg32_float(&rng), lo.y + e.y * pcg32_float(&rng),
-                           lo.z + e.z * pcg32_float(&rng));
-        const triangle *t = &set->triangles[pcg32_bounded(&rng, (uint32_t)set->count)];
-        vec3 target = vec3_scale(vec3_add(vec3_add(t->p0, t->p1), t->p2), 1.0f / 3.0f);
-        rays[i] = ray_make(o, vec3_normalize(vec3_sub(target, o)));
-    }
+    ray *rays = accel_aimed_rays(a->set, count, seed);
     ray_counters counters = {0};
     long hits = 0;
     double start = timer_seconds();

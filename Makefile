@@ -212,6 +212,10 @@ DOC_ROOT = $(shell realpath -m --relative-to=$(DOCS) .)
 DOC_PANDOC = pandoc --fail-if-warnings --mathml --standalone --template docs/template.html \
   --lua-filter docs/weave.lua -M chapters="$(CHAPTERS)" -M build=$(BUILD) -M docs=$(DOCS) \
   -M root=$(DOC_ROOT) -M figures=docs/figures.txt -M lectures=docs/lectures.md -M plots="$(PLOT_SCRIPTS)"
+# $(call docs_check,DIR,PAGES): tests/docs_check.html's report on DIR's pages (comma-separated).
+docs_check = $(CHROMIUM) --allow-file-access-from-files --virtual-time-budget=60000 --dump-dom \
+  "file://$(abspath tests/docs_check.html)?dir=file://$(1)/&pages=$(2)" 2>> $(DOCS_TEST)/chromium.log \
+  | sed -n '/<pre id="report">/,/<\/pre>/p' | sed 's/<[^>]*>//g; /^$$/d'
 CHROMIUM = chromium --headless --no-sandbox --disable-gpu --hide-scrollbars \
   --user-data-dir=$(abspath $(DOCS_TEST))/profile
 
@@ -256,10 +260,12 @@ test-docs: docs | docs-deps
 	  grep -qF "$$want" $(DOCS_TEST)/bad.log || { cat $(DOCS_TEST)/bad.log; echo "FAIL: $$bad: no '$$want'"; exit 1; }; \
 	  echo "ok: $$bad is refused: $$want"; \
 	done
+	@$(call docs_check,$(abspath tests/docs),bad_page.html) > $(DOCS_TEST)/bad_page.txt; \
+	grep -q '^RESULT: FAIL (1 pages, 3 problems)' $(DOCS_TEST)/bad_page.txt \
+	  || { cat $(DOCS_TEST)/bad_page.txt; echo "FAIL: the browser check missed a fault of tests/docs/bad_page.html"; exit 1; }; \
+	echo "ok: the browser check finds the three faults of tests/docs/bad_page.html"
 	@pages=$$(cd $(DOCS) && ls *.html | tr '\n' ',' | sed 's/,$$//'); \
-	$(CHROMIUM) --allow-file-access-from-files --virtual-time-budget=60000 --dump-dom \
-	  "file://$(abspath tests/docs_check.html)?dir=file://$(abspath $(DOCS))/&pages=$$pages" \
-	  2> $(DOCS_TEST)/chromium.log | sed -n '/<pre id="report">/,/<\/pre>/p' | sed 's/<[^>]*>//g; /^$$/d' > $(DOCS_TEST)/report.txt; \
+	$(call docs_check,$(abspath $(DOCS)),$$pages) > $(DOCS_TEST)/report.txt; \
 	cat $(DOCS_TEST)/report.txt; grep -q '^RESULT: PASS' $(DOCS_TEST)/report.txt
 	@$(CHROMIUM) --window-size=1100,1500 --screenshot=$(abspath $(DOCS))/index-screenshot.png \
 	  file://$(abspath $(DOCS))/index.html 2>> $(DOCS_TEST)/chromium.log

@@ -721,6 +721,13 @@ function Pandoc(doc)
   div = pandoc.walk_block(div, {
     Para = function(p) return weave_image_para(p) end,
   })
+  -- images outside a paragraph of their own (in a table): copied, no caption
+  div = pandoc.walk_block(div, {
+    Image = function(img)
+      if not img.src:match("^img/") then weave_image(img) return img end
+      return nil
+    end,
+  })
   div = pandoc.walk_block(div, {
     Link = function(l) return weave_link(l) end,
     Code = function(c)

@@ -106,8 +106,15 @@ $(COMMON_TESTS): $(BUILD)/tests/%: $(BUILD)/obj/tests/%.o $(COMMON_LIB)
 CHAPTER_TESTS := $(patsubst tests/%.c,$(BUILD)/tests/%,$(sort $(wildcard tests/test_ch[0-9][0-9].c)))
 TESTS := $(COMMON_TESTS) $(CHAPTER_TESTS)
 
+# Programs that only draw the book's figures (docs/figures/*.c), linked like a
+# benchmark; built by `make all` too, so a change that breaks them shows at once.
+DOC_PROGRAMS := $(patsubst docs/figures/%.c,$(BUILD)/bin/%,$(sort $(wildcard docs/figures/*.c)))
+$(DOC_PROGRAMS): $(BUILD)/bin/%: $(BUILD)/obj/docs/figures/%.o $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+
 # ---------------------------------------------------------------- targets --
-all: $(PROGRAMS) $(TESTS)
+all: $(PROGRAMS) $(TESTS) $(DOC_PROGRAMS)
 
 demo: $(PROGRAMS)
 	@$(MAKE) --no-print-directory $(DEMOS)
@@ -223,7 +230,7 @@ docs: $(DOC_PAGES)
 	@echo "The book is in $(DOCS)/: open $(DOCS)/index.html"
 
 # Each figure by the command docs/figures.txt gives it (build/ there means $(BUILD)).
-$(DOC_FIGURES): $(BUILD)/%.png: docs/figures.txt $(PROGRAMS)
+$(DOC_FIGURES): $(BUILD)/%.png: docs/figures.txt $(PROGRAMS) $(DOC_PROGRAMS)
 	@mkdir -p $(dir $@)
 	@cmd=$$(awk -v f='$*.png' '$$1 == f { $$1 = ""; print }' docs/figures.txt | sed 's|build/|$(BUILD)/|g'); \
 	echo "$$cmd"; $$cmd --quiet

@@ -690,6 +690,18 @@ function Pandoc(doc)
     end
   end
 
+  -- Every chapter's exercises say how to do them.
+  for i, b in ipairs(doc.blocks) do
+    if chapter and b.t == "Header" and b.level == 2 and stringify(b.content):lower():match("^exercises") then
+      local following = doc.blocks[i + 1]
+      if not (following and stringify(following):lower():match("predict")) then
+        table.insert(doc.blocks, i + 1, pandoc.Para({ pandoc.Emph({ pandoc.Str(
+          "Each one: change one thing, predict what will change, run, compare.") }) }))
+      end
+      break
+    end
+  end
+
   local blocks = {}
   local head_done = false
   if chapter then check_sections(doc, chapter) end

@@ -22,13 +22,15 @@ What it does to a page:
     where the README does not show it, and the page must have its "Hard
     cases" and "Exercises" sections.
   * docs/coverage.md: every file, function, test and figure the table names
-    must exist (see check_coverage); one that does not stops the build.
+    must exist (see check_coverage); one that does not stops the build. On
+    that page a function links to the chapter page whose excerpt shows it.
 
 Metadata it reads (pandoc -M): page (chapter|index|coverage), chapter
 (NN-name), chapters (all of them, in order), files (the chapter's sources),
 build (the build directory, from the repository's root), docs (the output
 directory, likewise), root (the repository's root, seen from the output
-directory), figures, lectures.
+directory), figures, lectures (the two files named above), plots (the
+gnuplot scripts: a chapter must show each of its plots).
 ]]
 
 local stringify = pandoc.utils.stringify
@@ -188,6 +190,10 @@ local function find_definition(lines, name)
       while lines[last]:match("\\%s*$") and last < #lines do last = last + 1 end
       return comment_start(lines, i), last
     end
+    -- enum { NAME = 4 };  a constant in a one-line enum
+    if line:match("^enum%s*{[^}]*%f[%w_]" .. n .. "%s*=") then
+      return comment_start(lines, i), i
+    end
     -- } name;  closing a typedef of a struct, union or enum
     if line:match("^}%s*" .. n .. "%s*;") then
       local j = i
@@ -231,12 +237,14 @@ local function find_definition(lines, name)
   return nil
 end
 
--- `source_root` is the repository's root as seen from the output page.
-local function source_link(path, line)
-  return M.root .. "/" .. path .. (line and ("#L" .. line) or "")
+-- A link to a file of the repository, from the output page (M.root is the
+-- repository's root as seen from there).
+local function source_link(path)
+  return M.root .. "/" .. path
 end
 
 local definitions_cache = {}
+local excerpt_ids = {}
 
 local function excerpt_blocks(block)
   local out = {}
@@ -263,8 +271,11 @@ local function excerpt_blocks(block)
             made_link({ pandoc.Code(path) }, source_link(path)),
             pandoc.Str(", lines " .. first .. "–" .. last),
           })
+          local id = "excerpt-" .. name
+          if excerpt_ids[id] then id = "" end -- the first excerpt of a name is the one linked to
+          excerpt_ids[id] = true
           table.insert(out, pandoc.Div({ label, pandoc.CodeBlock(code, pandoc.Attr("", { "c" })) },
-                                       pandoc.Attr("", { "excerpt" })))
+                                       pandoc.Attr(id, { "excerpt" })))
         end
       end
     end
@@ -487,9 +498,40 @@ local function check_coverage()
   if rows == 0 then fail(source_file, "the coverage table has no rows") end
 end
 
--- In the coverage page, files become links to the source, figures thumbnails.
+-- Where each function is shown: "FILE NAME" -> the page and anchor of the
+-- first excerpt of it in a chapter's text.
+local excerpt_pages = nil
+local function find_excerpt(file, name)
+  if not excerpt_pages then
+    excerpt_pages = {}
+    for _, c in ipairs(split_words(M.chapters or "")) do
+      local text = read_file("chapters/" .. c .. "/README.md") or ""
+      local inside = false
+      for _, line in ipairs(lines_of(text)) do
+        if line:match("^```excerpt%s*$") then
+          inside = true
+        elseif inside and line:match("^```") then
+          inside = false
+        elseif inside then
+          local w = split_words(line)
+          if #w == 2 and not excerpt_pages[line] then excerpt_pages[w[1] .. " " .. w[2]] = c .. ".html#excerpt-" .. w[2] end
+        end
+      end
+    end
+  end
+  return excerpt_pages[file .. " " .. name]
+end
+
+local coverage_file = nil -- the file cell of the row being woven
+
+-- In the coverage page, files become links to the source, figures
+-- thumbnails, and functions links to the chapter page that shows them.
 local function weave_coverage_cell_code(code)
   local t = code.text
+  if coverage_file and t:match("^[%a_][%w_]*$") then
+    local target = find_excerpt(coverage_file, t)
+    if target then return made_link({ pandoc.Code(t) }, target) end
+  end
   if t:match("^out/.+%.png$") or t:match("^plots/.+%.png$") then
     local name = t:gsub("/", "_")
     copy_file(M.build .. "/" .. t, M.docs .. "/img/" .. name)
@@ -497,6 +539,7 @@ local function weave_coverage_cell_code(code)
                        "img/" .. name)
   end
   if t:match("^[%w_-]+/.+%.[ch]$") or t:match("^tests/.+%.c$") then
+    if not t:match("^tests/") then coverage_file = t end
     return made_link({ pandoc.Code(t) }, source_link(t))
   end
   return nil

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "06-bvh/bvh.h"
+#include "09-path-tracing/small_bvh.h"
 #include "memory.h"
 
 void pt_scene_init(pt_scene *sc)
@@ -77,10 +78,25 @@ void pt_scene_add_point_light(pt_scene *sc, vec3 position, vec3 intensity)
     sc->point_lights[sc->point_light_count++] = (pt_point_light){position, intensity};
 }
 
+/* Up to this many triangles, the BVH is built by small_bvh.c (every split
+ * position tried; a few milliseconds at this size); above, by chapter 06's
+ * binned SAH. */
+enum { SMALL_SCENE_TRIANGLES = 10000 };
+
+/* The one place the path tracer chooses and builds its acceleration
+ * structure; pt_scene_intersect() and pt_scene_occluded() are the only
+ * places that use it. */
+static accel *build_accel(const triangle_set *set)
+{
+    if (set->count <= SMALL_SCENE_TRIANGLES)
+        return small_bvh_build(set);
+    return bvh_build(set, BVH_SPLIT_SAH);
+}
+
 void pt_scene_finish(pt_scene *sc)
 {
     triangle_set_from_mesh(&sc->triangles, &sc->geometry);
-    sc->bvh = bvh_build(&sc->triangles, BVH_SPLIT_SAH);
+    sc->bvh = build_accel(&sc->triangles);
     /* The emitter table: every triangle whose material emits, with the
      * running sum of areas, to pick one in proportion to its area. */
     sc->emitter_count = 0;

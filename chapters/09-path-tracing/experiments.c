@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "timer.h"
@@ -269,4 +270,88 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
         estimate_image_free(&e);
     }
     return close_csv(csv, path, err, err_size);
+}
+
+/* ---- speed ------------------------------------------------------------------------
+ * Seconds per million camera samples on the Cornell box, for each rung, on 1
+ * and 2 threads. Wall time is what the issue's reference points measure;
+ * CPU time (all threads together) is printed beside it because on a shared
+ * machine the wall time of 2 threads depends on what else runs. */
+static double cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+typedef struct {
+    pt_integrator integrator;
+    pt_russian_roulette rr;
+    int rr_start_depth;
+    const char *label;
+} speed_case;
+
+/* Every case counts at most SPEED_MAX_DEPTH bounces, Ray Tracing: The Rest of
+ * Your Life's max_depth for its Cornell box. The last two are the
+ * comparisons: Russian roulette only after 5 bounces, on the throughput
+ * (smallpt continues with probability max(albedo) after depth 5), and no
+ * roulette at all, the full 50 bounces (RTROWL). */
+enum { SPEED_MAX_DEPTH = 50 };
+static const speed_case speed_cases[] = {
+    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8"},
+    {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8"},
+    {PT_MIS, RR_FIXED, 0, "mis, P_RR 0.8"},
+    {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput after 5 (smallpt)"},
+    {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)"},
+};
+
+bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size)
+{
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    camera cam = pt_scene_camera(&sc, size, size);
+    double million_samples = (double)size * (double)size * (double)spp * 1e-6;
+    FILE *csv = NULL;
+    if (csv_path != NULL && (csv = fopen(csv_path, "w")) == NULL) {
+        snprintf(err, err_size, "%s: %s", csv_path, strerror(errno));
+        pt_scene_free(&sc);
+        return false;
+    }
+    if (csv != NULL)
+        fprintf(csv, "case,threads,wall_s_per_msample,cpu_s_per_msample,rays_per_sample,scaling\n");
+    printf("Cornell box %dx%d, %d spp (%.2f M camera samples), max depth %d, best of %d runs\n", size, size, spp,
+           million_samples, SPEED_MAX_DEPTH, repeats);
+    printf("%-42s %7s %12s %12s %10s %8s\n", "case", "threads", "s/M (wall)", "s/M (CPU)", "rays/spl", "scaling");
+    const int n_cases = (int)(sizeof speed_cases / sizeof speed_cases[0]);
+    for (int k = 0; k < n_cases; k++) {
+        path_tracer pt = path_tracer_defaults(&sc);
+        pt.integrator = speed_cases[k].integrator;
+        pt.russian_roulette = speed_cases[k].rr;
+        pt.max_depth = SPEED_MAX_DEPTH;
+        if (speed_cases[k].rr_start_depth > 0)
+            pt.rr_start_depth = speed_cases[k].rr_start_depth;
+        double one_thread = 0.0;
+        for (int threads = 1; threads <= 2; threads++) {
+            double best_wall = INFINITY, best_cpu = INFINITY, rays = 0.0;
+            for (int r = 0; r < repeats; r++) {
+                double cpu_start = cpu_seconds();
+                estimate_image e = render_estimate(&pt, &cam, spp, 1, threads);
+                double cpu = cpu_seconds() - cpu_start;
+                best_wall = fmin(best_wall, e.seconds);
+                best_cpu = fmin(best_cpu, cpu);
+                rays = (double)counters_total_rays(&e.counters) / (million_samples * 1e6);
+                estimate_image_free(&e);
+            }
+            double wall = best_wall / million_samples, cpu = best_cpu / million_samples;
+            if (threads == 1)
+                one_thread = wall;
+            double scaling = one_thread / wall;
+            printf("%-42s %7d %12.3f %12.3f %10.2f %7.2fx\n", speed_cases[k].label, threads, wall, cpu, rays, scaling);
+            if (csv != NULL)
+                fprintf(csv, "\"%s\",%d,%.4f,%.4f,%.3f,%.3f\n", speed_cases[k].label, threads, wall, cpu, rays, scaling);
+            fflush(stdout);
+        }
+    }
+    pt_scene_free(&sc);
+    return csv == NULL || close_csv(csv, csv_path, err, err_size);
 }

@@ -7,6 +7,8 @@
  *                            of seconds (CSV for plots/ch09_*.gp)
  *   experiment_russian_roulette()  variance, time and efficiency for a
  *                            range of P_RR
+ *   experiment_speed()       seconds per million camera samples, per rung,
+ *                            on 1 and 2 threads
  *   render_progressive()     passes of doubling sample counts until a time
  *                            budget or a target error (estimated from the
  *                            per-pixel variance) is reached
@@ -60,5 +62,10 @@ bool experiment_convergence(const pt_scene *sc, const camera *cam, const estimat
 /* Writes DIR/ch09_russian_roulette.csv. */
 bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp,
                                  int threads, const char *dir, char *err, size_t err_size);
+
+/* Prints seconds per million camera samples on the Cornell box (size x size,
+ * spp samples, the best of `repeats` runs) for each rung on 1 and 2 threads,
+ * and the 1 -> 2 thread scaling; writes them to csv_path too (if not NULL). */
+bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size);
 
 #endif

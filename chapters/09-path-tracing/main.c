@@ -37,6 +37,8 @@ int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch09.exr", 512, 512, 16);
     const char *integrator = "lecture", *rr = "fixed", *scene_name = "cornell", *obj = NULL, *data = NULL;
+    const char *bench_csv = NULL;
+    bool bench = false;
     float rr_probability = 0.8f, time_budget = 0.0f, target_error = 0.0f;
     int max_depth = 64, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
     const cli_flag extras[] = {
@@ -54,6 +56,10 @@ int main(int argc, char **argv)
         {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 96)", 8, 1024},
         {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached reference (default 4096)", 16, 1 << 20},
         {"--experiment-spp", CLI_INT, &experiment_spp, "N", "largest spp of the experiments (default 256)", 1, 1 << 16},
+        {"--bench", CLI_BOOL, &bench, NULL,
+         "print seconds per million camera samples on the Cornell box for every rung, 1 and 2 threads "
+         "(--width x --width pixels, --spp samples; best of 3)", 0, 0},
+        {"--bench-csv", CLI_STRING, &bench_csv, "FILE", "with --bench: also write the figures as CSV", 0, 0},
     };
     cli_spec spec = {"09-path-tracing",
                      "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"
@@ -94,7 +100,12 @@ int main(int argc, char **argv)
     pt.max_depth = max_depth;
 
     int status = 0;
-    if (data != NULL) {
+    if (bench) {
+        if (!experiment_speed(opts.width, opts.spp, 3, bench_csv, err, sizeof err)) {
+            fprintf(stderr, "09-path-tracing: %s\n", err);
+            status = 1;
+        }
+    } else if (data != NULL) {
         /* The experiments: a cached reference, then every rung at doubling
          * sample counts, then the Russian roulette sweep. */
         camera cam = pt_scene_camera(&sc, experiment_size, experiment_size);

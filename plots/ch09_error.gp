@@ -1,10 +1,10 @@
 # What accuracy costs in time: relMSE of each rung of the path tracer against
 # the cached reference, as a function of samples per pixel and of seconds.
-# Data: build/bin/09-path-tracing --data DIR  ->  DIR/ch09_convergence.csv
+# Data: build/bin/09-path-tracing --data DIR  ->  DIR/ch09_convergence_cornell.csv
 set datafile separator ","
 set terminal pngcairo size 1000,450 font ",10"
 set output plot_dir."/ch09_error.png"
-file = data_dir."/ch09_convergence.csv"
+file = data_dir."/ch09_convergence_cornell.csv"
 set multiplot layout 1,2 title "Path tracing the Cornell box: error against samples and against time"
 set logscale xy
 set grid

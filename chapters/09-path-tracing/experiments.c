@@ -183,14 +183,40 @@ static const rung rungs[] = {
 };
 enum { RUNG_COUNT = sizeof rungs / sizeof rungs[0] };
 
-bool experiment_convergence(const pt_scene *sc, const camera *cam, const estimate_image *reference, int max_spp,
-                            int threads, double target_relmse, const char *dir, char *err, size_t err_size)
+/* The errors the time-to-error table is read at. */
+static const double TARGET_RELMSE[] = {0.1, 0.03, 0.01};
+enum { TARGET_COUNT = sizeof TARGET_RELMSE / sizeof TARGET_RELMSE[0], MAX_POINTS = 32 };
+
+/* The time at which relMSE falls to `target`, from renders at doubling spp:
+ * log(relMSE) interpolated linearly in log(seconds) between the two renders
+ * either side of it. -1 if no render reached it; *spp_out = the first spp
+ * that did. */
+static double time_to_reach(const double *seconds, const double *relmse, const int *spp, int n, double target,
+                            int *spp_out)
 {
-    char path[4096], time_path[4096];
-    FILE *csv = open_csv(dir, "ch09_convergence.csv", path, sizeof path, err, err_size);
+    *spp_out = 0;
+    for (int i = 0; i < n; i++) {
+        if (!(relmse[i] <= target && relmse[i] > 0.0))
+            continue;
+        *spp_out = spp[i];
+        if (i == 0 || !(relmse[i - 1] > target) || !(seconds[i - 1] > 0.0))
+            return seconds[i];
+        double f = log(relmse[i - 1] / target) / log(relmse[i - 1] / relmse[i]);
+        return exp(log(seconds[i - 1]) + f * log(seconds[i] / seconds[i - 1]));
+    }
+    return -1.0;
+}
+
+bool experiment_convergence(const pt_scene *sc, const char *name, const camera *cam, const estimate_image *reference,
+                            int max_spp, int threads, const char *dir, char *err, size_t err_size)
+{
+    char path[4096], time_path[4096], file[256];
+    snprintf(file, sizeof file, "ch09_convergence_%s.csv", name);
+    FILE *csv = open_csv(dir, file, path, sizeof path, err, err_size);
     if (csv == NULL)
         return false;
-    FILE *time_csv = open_csv(dir, "ch09_time_to_error.csv", time_path, sizeof time_path, err, err_size);
+    snprintf(file, sizeof file, "ch09_time_to_error_%s.csv", name);
+    FILE *time_csv = open_csv(dir, file, time_path, sizeof time_path, err, err_size);
     if (time_csv == NULL) {
         fclose(csv);
         return false;
@@ -198,13 +224,15 @@ bool experiment_convergence(const pt_scene *sc, const camera *cam, const estimat
     fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample\n");
     fprintf(time_csv, "rung,label,target_relmse,seconds,spp\n");
     printf("\n%-42s %6s %9s %10s %10s\n", "rung", "spp", "seconds", "RMSE", "relMSE");
+    double reached[RUNG_COUNT][TARGET_COUNT];
+    int reached_spp[RUNG_COUNT][TARGET_COUNT], last_spp = 0;
     for (int k = 0; k < RUNG_COUNT; k++) {
         path_tracer pt = path_tracer_defaults(sc);
         pt.integrator = rungs[k].integrator;
         pt.russian_roulette = rungs[k].rr;
-        double previous_seconds = 0.0, previous_relmse = 0.0, reached_seconds = -1.0;
-        int reached_spp = 0;
-        for (int spp = 1; spp <= max_spp; spp *= 2) {
+        double seconds[MAX_POINTS], relmses[MAX_POINTS];
+        int spps[MAX_POINTS], n = 0;
+        for (int spp = 1; spp <= max_spp && n < MAX_POINTS; spp *= 2, n++) {
             estimate_image e = render_estimate(&pt, cam, spp, 1000 + (uint64_t)spp, threads);
             double rmse, relmse;
             measure_error(&e, reference, &rmse, &relmse);
@@ -212,36 +240,34 @@ bool experiment_convergence(const pt_scene *sc, const camera *cam, const estimat
             fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f\n", k, pt_integrator_name(pt.integrator),
                     pt.russian_roulette == RR_FIXED ? "fixed" : "throughput", spp, e.seconds, rmse, relmse, rays);
             printf("%-42s %6d %9.3f %10.4f %10.5f\n", rungs[k].label, spp, e.seconds, rmse, relmse);
-            /* Time to reach the target: interpolate log(relMSE) against
-             * log(seconds) between the two renders either side of it. */
-            if (reached_seconds < 0.0 && relmse <= target_relmse && relmse > 0.0) {
-                if (previous_relmse > target_relmse && previous_seconds > 0.0) {
-                    double f = log(previous_relmse / target_relmse) / log(previous_relmse / relmse);
-                    reached_seconds = exp(log(previous_seconds) + f * log(e.seconds / previous_seconds));
-                } else {
-                    reached_seconds = e.seconds;
-                }
-                reached_spp = spp;
-            }
-            previous_seconds = e.seconds;
-            previous_relmse = relmse;
+            seconds[n] = e.seconds;
+            relmses[n] = relmse;
+            spps[n] = last_spp = spp;
             estimate_image_free(&e);
         }
-        fprintf(time_csv, "%d,\"%s\",%g,%.6f,%d\n", k, rungs[k].label, target_relmse, reached_seconds, reached_spp);
+        for (int t = 0; t < TARGET_COUNT; t++) {
+            reached[k][t] = time_to_reach(seconds, relmses, spps, n, TARGET_RELMSE[t], &reached_spp[k][t]);
+            fprintf(time_csv, "%d,\"%s\",%g,%.6f,%d\n", k, rungs[k].label, TARGET_RELMSE[t], reached[k][t],
+                    reached_spp[k][t]);
+        }
     }
-    printf("\ntime to reach relMSE %g (%dx%d):\n", target_relmse, cam->width, cam->height);
-    fflush(time_csv);
-    bool ok = close_csv(csv, path, err, err_size) && close_csv(time_csv, time_path, err, err_size);
-    if (ok) {
-        FILE *again = fopen(time_path, "r");
-        char line[512];
-        while (again != NULL && fgets(line, sizeof line, again))
-            if (line[0] != 'r')
-                printf("  %s", line);
-        if (again != NULL)
-            fclose(again);
+    printf("\ntime to reach relMSE (%s, %dx%d; \"-\": not within %d spp):\n%-42s", name, cam->width, cam->height,
+           last_spp, "rung");
+    for (int t = 0; t < TARGET_COUNT; t++)
+        printf(" %14g", TARGET_RELMSE[t]);
+    printf("\n");
+    for (int k = 0; k < RUNG_COUNT; k++) {
+        printf("%-42s", rungs[k].label);
+        for (int t = 0; t < TARGET_COUNT; t++) {
+            if (reached[k][t] < 0.0)
+                printf(" %14s", "-");
+            else
+                printf(" %7.3f s %4d", reached[k][t], reached_spp[k][t]);
+        }
+        printf("\n");
     }
-    return ok;
+    bool ok = close_csv(csv, path, err, err_size);
+    return close_csv(time_csv, time_path, err, err_size) && ok;
 }
 
 bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp,

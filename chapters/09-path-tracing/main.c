@@ -60,7 +60,7 @@ int main(int argc, char **argv)
         {"--experiment-spp", CLI_INT, &experiment_spp, "N", "largest spp of the experiments (default 256)", 1, 1 << 16},
         {"--bench", CLI_BOOL, &bench, NULL,
          "print seconds per million camera samples on the Cornell box for every rung, 1 and 2 threads "
-         "(--width x --width pixels, --spp samples; best of 3)", 0, 0},
+         "(a square of --width pixels, --spp samples; best of 3)", 0, 0},
         {"--bench-csv", CLI_STRING, &bench_csv, "FILE", "with --bench: also write the figures as CSV", 0, 0},
     };
     cli_spec spec = {"09-path-tracing",

@@ -16,8 +16,8 @@ set format y "10^{%L}"
 titles = "lecture cosine MIS MIS+RR-throughput"
 plot for [k=0:3] file using (column(1)==k ? $4 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1), \
      [1:256] 0.3/x with lines dt 2 lc "gray" title "slope -1"
-set xlabel "seconds (2 threads)"
-plot for [k=0:3] file using (column(1)==k ? $5 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
+set xlabel "CPU seconds (2 threads together)"
+plot for [k=0:3] file using (column(1)==k ? $9 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
 unset multiplot
 set terminal svg size 1000,450
 set output plot_dir."/ch09_error_veach.svg"
@@ -25,6 +25,6 @@ set multiplot layout 1,2 title "Where MIS wins (glossy plates, lights of four si
 set xlabel "samples per pixel"
 plot for [k=0:3] file using (column(1)==k ? $4 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1), \
      [1:256] 0.3/x with lines dt 2 lc "gray" title "slope -1"
-set xlabel "seconds (2 threads)"
-plot for [k=0:3] file using (column(1)==k ? $5 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
+set xlabel "CPU seconds (2 threads together)"
+plot for [k=0:3] file using (column(1)==k ? $9 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
 unset multiplot

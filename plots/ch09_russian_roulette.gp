@@ -19,7 +19,7 @@ do for [t=1:2] {
   unset y2label
   unset y2tics
   set ytics mirror
-  set ylabel "efficiency 1 / (MSE x seconds)"
+  set ylabel "efficiency 1 / (MSE x CPU seconds)"
   plot file using 1:4 skip 1 with linespoints lw 2 pt 7 title "efficiency"
   unset multiplot
 }

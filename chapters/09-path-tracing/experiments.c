@@ -13,6 +13,16 @@
 /* relMSE's guard against dividing by near-black pixels (as image_relmse). */
 static const double RELATIVE_ERROR_EPSILON = 1e-2;
 
+/* CPU time of the whole process (all threads): on a machine shared with
+ * other jobs, it measures the work done; wall time also measures the
+ * neighbours. */
+static double cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 void estimate_image_free(estimate_image *e)
 {
     image_free(&e->mean);
@@ -221,9 +231,9 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
         fclose(csv);
         return false;
     }
-    fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample\n");
-    fprintf(time_csv, "rung,label,target_relmse,seconds,spp\n");
-    printf("\n%-42s %6s %9s %10s %10s\n", "rung", "spp", "seconds", "RMSE", "relMSE");
+    fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample,cpu_seconds\n");
+    fprintf(time_csv, "rung,label,target_relmse,cpu_seconds,spp\n");
+    printf("\n%-42s %6s %9s %9s %10s %10s\n", "rung", "spp", "seconds", "CPU s", "RMSE", "relMSE");
     double reached[RUNG_COUNT][TARGET_COUNT];
     int reached_spp[RUNG_COUNT][TARGET_COUNT], last_spp = 0;
     for (int k = 0; k < RUNG_COUNT; k++) {
@@ -233,14 +243,16 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
         double seconds[MAX_POINTS], relmses[MAX_POINTS];
         int spps[MAX_POINTS], n = 0;
         for (int spp = 1; spp <= max_spp && n < MAX_POINTS; spp *= 2, n++) {
+            double cpu_start = cpu_seconds();
             estimate_image e = render_estimate(&pt, cam, spp, 1000 + (uint64_t)spp, threads);
+            double cpu = cpu_seconds() - cpu_start;
             double rmse, relmse;
             measure_error(&e, reference, &rmse, &relmse);
             double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
-            fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f\n", k, pt_integrator_name(pt.integrator),
-                    pt.russian_roulette == RR_FIXED ? "fixed" : "throughput", spp, e.seconds, rmse, relmse, rays);
-            printf("%-42s %6d %9.3f %10.4f %10.5f\n", rungs[k].label, spp, e.seconds, rmse, relmse);
-            seconds[n] = e.seconds;
+            fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f,%.6f\n", k, pt_integrator_name(pt.integrator),
+                    pt.russian_roulette == RR_FIXED ? "fixed" : "throughput", spp, e.seconds, rmse, relmse, rays, cpu);
+            printf("%-42s %6d %9.3f %9.3f %10.4f %10.5f\n", rungs[k].label, spp, e.seconds, cpu, rmse, relmse);
+            seconds[n] = cpu;
             relmses[n] = relmse;
             spps[n] = last_spp = spp;
             estimate_image_free(&e);
@@ -251,8 +263,8 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
                     reached_spp[k][t]);
         }
     }
-    printf("\ntime to reach relMSE (%s, %dx%d; \"-\": not within %d spp):\n%-42s", name, cam->width, cam->height,
-           last_spp, "rung");
+    printf("\nCPU seconds (all threads) and spp to reach relMSE (%s, %dx%d; \"-\": not within %d spp):\n%-42s", name,
+           cam->width, cam->height, last_spp, "rung");
     for (int t = 0; t < TARGET_COUNT; t++)
         printf(" %14g", TARGET_RELMSE[t]);
     printf("\n");
@@ -278,21 +290,23 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
     if (csv == NULL)
         return false;
     const float probabilities[] = {0.2f, 0.4f, 0.6f, 0.8f, 0.9f, 0.95f};
-    fprintf(csv, "p_rr,seconds,mse,efficiency,rays_per_sample\n");
-    printf("\nRussian roulette (cosine rung, %d spp): P_RR, seconds, MSE, efficiency 1/(MSE x time)\n", spp);
+    fprintf(csv, "p_rr,cpu_seconds,mse,efficiency,rays_per_sample\n");
+    printf("\nRussian roulette (cosine rung, %d spp): P_RR, CPU seconds, MSE, efficiency 1/(MSE x time)\n", spp);
     for (int i = 0; i < 6; i++) {
         path_tracer pt = path_tracer_defaults(sc);
         pt.integrator = PT_COSINE;
         pt.russian_roulette = RR_FIXED;
         pt.rr_probability = probabilities[i];
+        double cpu_start = cpu_seconds();
         estimate_image e = render_estimate(&pt, cam, spp, 77, threads);
+        double cpu = cpu_seconds() - cpu_start;
         double rmse, relmse;
         measure_error(&e, reference, &rmse, &relmse);
         double mse = rmse * rmse;
         double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
-        fprintf(csv, "%.2f,%.6f,%.6e,%.6e,%.3f\n", (double)probabilities[i], e.seconds, mse, 1.0 / (mse * e.seconds), rays);
-        printf("  %.2f %8.3f s  %.4e  %.4e  %.2f rays/sample\n", (double)probabilities[i], e.seconds, mse,
-               1.0 / (mse * e.seconds), rays);
+        fprintf(csv, "%.2f,%.6f,%.6e,%.6e,%.3f\n", (double)probabilities[i], cpu, mse, 1.0 / (mse * cpu), rays);
+        printf("  %.2f %8.3f s  %.4e  %.4e  %.2f rays/sample\n", (double)probabilities[i], cpu, mse, 1.0 / (mse * cpu),
+               rays);
         estimate_image_free(&e);
     }
     return close_csv(csv, path, err, err_size);
@@ -303,12 +317,6 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
  * and 2 threads. Wall time is what the issue's reference points measure;
  * CPU time (all threads together) is printed beside it because on a shared
  * machine the wall time of 2 threads depends on what else runs. */
-static double cpu_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 typedef struct {
     pt_integrator integrator;

@@ -55,8 +55,9 @@ bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int
                           estimate_image *out, char *err, size_t err_size);
 
 /* Writes DIR/ch09_convergence_NAME.csv (RMSE and relMSE of each rung at 1,
- * 2, 4, ... max_spp samples) and DIR/ch09_time_to_error_NAME.csv, and prints
- * a table of the time each rung needs to reach relMSE 0.1, 0.03 and 0.01. */
+ * 2, 4, ... max_spp samples, with wall and CPU seconds) and
+ * DIR/ch09_time_to_error_NAME.csv, and prints a table of the CPU time each
+ * rung needs to reach relMSE 0.1, 0.03 and 0.01. */
 bool experiment_convergence(const pt_scene *sc, const char *name, const camera *cam, const estimate_image *reference,
                             int max_spp, int threads, const char *dir, char *err, size_t err_size);
 

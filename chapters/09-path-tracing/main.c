@@ -134,7 +134,7 @@ int main(int argc, char **argv)
                                       err, sizeof err) ||
                 !experiment_convergence(scene, names[k], &cam, &reference, experiment_spp, opts.threads, data, err,
                                         sizeof err) ||
-                (k == 0 && !experiment_russian_roulette(scene, &cam, &reference, 16, opts.threads, data, err,
+                (k == 0 && !experiment_russian_roulette(scene, &cam, &reference, 64, opts.threads, data, err,
                                                         sizeof err))) {
                 fprintf(stderr, "09-path-tracing: %s\n", err);
                 status = 1;

@@ -5,6 +5,8 @@
  * traversal through bvh_from_nodes(). See small_bvh.h. */
 #include "small_bvh.h"
 
+#include <math.h>
+#include <stdbool.h>
 #include <stdlib.h>
 
 #include "06-bvh/bvh.h"
@@ -38,7 +40,12 @@ static float area(aabb b) { return (float)aabb_surface_area(b); }
 static int compare_keys(const void *a, const void *b)
 {
     const item *p = a, *q = b;
-    if (p->key != q->key)
+    /* NaN (a triangle with a NaN corner) sorts first, so the order stays
+     * a total order, which qsort needs */
+    bool p_nan = isnan(p->key), q_nan = isnan(q->key);
+    if (p_nan != q_nan)
+        return p_nan ? -1 : 1;
+    if (!p_nan && p->key != q->key)
         return p->key < q->key ? -1 : 1;
     return p->index - q->index; /* ties by index: the same tree from every qsort */
 }

@@ -5,7 +5,7 @@
 #   make chNN        build and run chapter NN          (make ch01)
 #   make test-chNN   build and run chapter NN's tests  (make test-ch01)
 #   make sanitize    the test suites under AddressSanitizer + UndefinedBehaviorSanitizer
-#   make bench       time the acceleration structures beside Embree (figures, CSV)
+#   make bench       time the acceleration structures beside Embree, and the path tracer (figures, CSV)
 #   make plots       draw every figure (gnuplot) from data the programs write
 #   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
 #   make valgrind    one small render of each chapter program under valgrind
@@ -158,8 +158,9 @@ $(BUILD)/bin/embree_bench: $(SHARED)/anchors/embree_bench.c | bench-deps
 	@mkdir -p $(dir $@)
 	$(CC) -O2 -std=c99 -Wall $< -o $@ -lembree3 -lm
 
-# Embree and ours, one after the other, on the same machine in one run.
-bench: $(BUILD)/bin/bench_accel
+# Embree and ours, one after the other, on the same machine in one run; then
+# the path tracer's seconds per million camera samples (chapter 09).
+bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/09-path-tracing
 	@mkdir -p $(BUILD)/data
 	@if [ -f $(SHARED)/anchors/embree_bench.c ]; then \
 	  $(MAKE) --no-print-directory $(BUILD)/bin/embree_bench && \
@@ -170,6 +171,7 @@ bench: $(BUILD)/bin/bench_accel
 	else echo "no $(SHARED)/anchors/embree_bench.c: timing without Embree"; fi
 	$(BUILD)/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS) \
 	  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv $(if $(wildcard $(SHARED)/anchors/embree_bench.c),--embree $(BUILD)/data/embree.txt)
+	$(BUILD)/bin/09-path-tracing --bench --width 256 --spp 16 --bench-csv $(BUILD)/data/ch09_speed.csv --out $(BUILD)/data/ch09.exr
 
 # ---------------------------------------------------------------- plots --
 # Every figure is drawn by a gnuplot script in plots/ from CSV that a program

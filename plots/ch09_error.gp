@@ -1,10 +1,10 @@
 # What accuracy costs in time: relMSE of each rung of the path tracer against
 # the cached reference, as a function of samples per pixel and of seconds.
-# Data: build/bin/09-path-tracing --data DIR  ->  DIR/ch09_convergence.csv
+# Data: build/bin/09-path-tracing --data DIR  ->  DIR/ch09_convergence_cornell.csv
 set datafile separator ","
 set terminal pngcairo size 1000,450 font ",10"
 set output plot_dir."/ch09_error.png"
-file = data_dir."/ch09_convergence.csv"
+file = data_dir."/ch09_convergence_cornell.csv"
 set multiplot layout 1,2 title "Path tracing the Cornell box: error against samples and against time"
 set logscale xy
 set grid
@@ -15,8 +15,8 @@ set format y "10^{%L}"
 titles = "lecture cosine MIS MIS+RR-throughput"
 plot for [k=0:3] file using (column(1)==k ? $4 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1), \
      [1:256] 0.3/x with lines dt 2 lc "gray" title "slope -1"
-set xlabel "seconds (2 threads)"
-plot for [k=0:3] file using (column(1)==k ? $5 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
+set xlabel "CPU seconds (2 threads together)"
+plot for [k=0:3] file using (column(1)==k ? $9 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
 unset multiplot
 set terminal svg size 1000,450
 set output plot_dir."/ch09_error.svg"
@@ -24,6 +24,6 @@ set multiplot layout 1,2 title "Path tracing the Cornell box: error against samp
 set xlabel "samples per pixel"
 plot for [k=0:3] file using (column(1)==k ? $4 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1), \
      [1:256] 0.3/x with lines dt 2 lc "gray" title "slope -1"
-set xlabel "seconds (2 threads)"
-plot for [k=0:3] file using (column(1)==k ? $5 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
+set xlabel "CPU seconds (2 threads together)"
+plot for [k=0:3] file using (column(1)==k ? $9 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
 unset multiplot

@@ -6,7 +6,7 @@ file = data_dir."/ch09_russian_roulette.csv"
 do for [t=1:2] {
   if (t == 1) { set terminal pngcairo size 1000,450 font ",10"; set output plot_dir."/ch09_russian_roulette.png" }
   if (t == 2) { set terminal svg size 1000,450; set output plot_dir."/ch09_russian_roulette.svg" }
-  set multiplot layout 1,2 title "Russian roulette with a fixed P_{RR} (cosine rung, 16 spp)"
+  set multiplot layout 1,2 title "Russian roulette with a fixed P_{RR} (cosine rung, 64 spp)"
   set grid
   set key top left
   set xlabel "P_{RR}"
@@ -19,7 +19,7 @@ do for [t=1:2] {
   unset y2label
   unset y2tics
   set ytics mirror
-  set ylabel "efficiency 1 / (MSE x seconds)"
+  set ylabel "efficiency 1 / (MSE x CPU seconds)"
   plot file using 1:4 skip 1 with linespoints lw 2 pt 7 title "efficiency"
   unset multiplot
 }

@@ -13,8 +13,11 @@
 #include <math.h>
 #include <string.h>
 
+#include "06-bvh/bvh.h"
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/path_tracer.h"
+#include "09-path-tracing/small_bvh.h"
+#include "accel_check.h"
 #include "render.h"
 #include "stats.h"
 #include "test_support.h"
@@ -210,6 +213,73 @@ static void test_every_rung_converges_to_the_same_image(void **state)
     pt_scene_free(&sc);
 }
 
+/* Two lights of the same power, one small and 25 times brighter, one large:
+ * a floor lit by both. Light sampling (the first two rungs) and MIS, whose
+ * BSDF-sampled hits on a light are weighted with the light's pdf, must agree
+ * on it; and the light is picked in proportion to power. (The Veach scene
+ * would test the same, but its near-mirror plates make light sampling's
+ * estimates so skewed that 5 standard errors need 65536 spp.) */
+static void build_two_lights(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int floor = pt_scene_add_material(sc, pt_diffuse(vec3_splat(0.5f)));
+    int small = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_splat(25.0f)));
+    int large = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_splat(1.0f)));
+    pt_scene_add_quad(sc, vec3_make(-1, 0, 1), vec3_make(1, 0, 1), vec3_make(1, 0, -1), vec3_make(-1, 0, -1), floor);
+    /* facing down: counter-clockwise seen from below */
+    pt_scene_add_quad(sc, vec3_make(-0.6f, 0.5f, -0.1f), vec3_make(-0.4f, 0.5f, -0.1f), vec3_make(-0.4f, 0.5f, 0.1f),
+                      vec3_make(-0.6f, 0.5f, 0.1f), small); /* area 0.04, power 1 */
+    pt_scene_add_quad(sc, vec3_make(0.0f, 0.8f, -0.5f), vec3_make(1.0f, 0.8f, -0.5f), vec3_make(1.0f, 0.8f, 0.5f),
+                      vec3_make(0.0f, 0.8f, 0.5f), large); /* area 1, power 1 */
+    sc->eye = vec3_make(0, 2.5f, 0.01f);
+    sc->target = vec3_make(0, 0, 0);
+    sc->vertical_fov_degrees = 50.0f;
+    pt_scene_finish(sc);
+}
+
+static void test_lights_are_picked_by_power(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    build_two_lights(&sc);
+    /* 4096 spp: at 256, an MIS that weighs its BSDF hits with 1/(total
+     * area) instead still passed; at 4096 it fails in 21 channels. */
+    check_rungs_agree(&sc, 4096);
+    {
+        /* The twin: light samples with a pdf off by 2 are caught. */
+        path_tracer right = tracer(&sc, PT_MIS, RR_THROUGHPUT);
+        render_result a = render(&right, 8, 8, 4096, 51, 2);
+        pt_scene wrong = sc;
+        wrong.emitter_power *= 0.5;
+        path_tracer biased = tracer(&wrong, PT_COSINE, RR_FIXED);
+        render_result b = render(&biased, 8, 8, 4096, 53, 2);
+        assert_true(count_disagreements(&a, &b) > 0);
+        render_result_free(&a);
+        render_result_free(&b);
+    }
+    /* The small light carries half the power: a binomial count of the
+     * picks within 5 standard deviations of N / 2. Picking by area (the
+     * twin: 0.04 / 1.04 of the picks) is hundreds of deviations away. */
+    enum { PICKS = 100000 };
+    pcg32 rng = pcg32_for_pixel(5, 0);
+    int small_picks = 0;
+    for (int i = 0; i < PICKS; i++) {
+        vec3 point, normal;
+        int material;
+        assert_true(pt_scene_sample_emitter(&sc, pcg32_float(&rng), pcg32_float(&rng), pcg32_float(&rng), &point,
+                                            &normal, &material));
+        small_picks += material == 1;
+        assert_true(normal.y < -0.999f); /* the front faces down */
+    }
+    double sd = sqrt(PICKS * 0.5 * 0.5);
+    assert_true(fabs(small_picks - 0.5 * PICKS) < 5.0 * sd);
+    assert_false(fabs(0.04 / 1.04 * PICKS - 0.5 * PICKS) < 5.0 * sd);
+    /* and the density per unit area that goes with it: P(light) / area */
+    assert_close(pt_scene_emitter_pdf_area(&sc, 1), 0.5 / 0.04, 1e-4);
+    assert_close(pt_scene_emitter_pdf_area(&sc, 2), 0.5 / 1.0, 1e-5);
+    pt_scene_free(&sc);
+}
+
 static void test_russian_roulette_on_and_off_agree_in_mean(void **state)
 {
     (void)state;
@@ -343,6 +413,39 @@ static void test_one_sided_emitter(void **state)
     pt_scene_free(&sc);
 }
 
+/* The small-scene BVH takes chapter 06's differential test: on every mesh
+ * of accel_check.h, closest hits bit for bit brute force's, any-hits
+ * consistent with them. Its tree on the Cornell box gives every wall its own
+ * leaf: no leaf holds more than 2 of the room's 32 triangles (chapter 06's
+ * binned SAH puts 8 in one, README "Speed"). */
+static void test_small_bvh_agrees_with_brute_force(void **state)
+{
+    (void)state;
+    accel_check_all(small_bvh_build, 3000, "small bvh");
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    const bvh *b = (const bvh *)sc.bvh;
+    assert_int_equal(b->triangle_count, 32);
+    for (int i = 0; i < b->node_count; i++)
+        if (bvh_node_is_leaf(&b->nodes[i]))
+            assert_true(bvh_node_triangles(&b->nodes[i]) <= 2);
+    /* the twin: the same check on a tree that is one leaf of everything */
+    bvh_node root = {.box = sc.triangles.bounds, .first = 0, .count_axis = 32u << 2};
+    int order[32];
+    for (int i = 0; i < 32; i++)
+        order[i] = i;
+    accel *one_leaf = bvh_from_nodes(&sc.triangles, &root, 1, order, 32);
+    assert_non_null(one_leaf);
+    const bvh *c = (const bvh *)one_leaf;
+    int largest = 0;
+    for (int i = 0; i < c->node_count; i++)
+        if (bvh_node_is_leaf(&c->nodes[i]) && bvh_node_triangles(&c->nodes[i]) > largest)
+            largest = bvh_node_triangles(&c->nodes[i]);
+    assert_true(largest > 2);
+    accel_destroy(one_leaf);
+    pt_scene_free(&sc);
+}
+
 static void test_ggx_sampling_matches_its_pdf(void **state)
 {
     (void)state;
@@ -384,11 +487,13 @@ int main(void)
         cmocka_unit_test(test_point_light_in_a_sphere_gives_radiance_one),
         cmocka_unit_test(test_white_furnace_diffuse_and_glass),
         cmocka_unit_test(test_every_rung_converges_to_the_same_image),
+        cmocka_unit_test(test_lights_are_picked_by_power),
         cmocka_unit_test(test_russian_roulette_on_and_off_agree_in_mean),
         cmocka_unit_test(test_variance_falls_as_one_over_spp),
         cmocka_unit_test(test_same_image_for_one_and_two_threads),
         cmocka_unit_test(test_no_glass_no_refraction_and_no_nan),
         cmocka_unit_test(test_one_sided_emitter),
+        cmocka_unit_test(test_small_bvh_agrees_with_brute_force),
         cmocka_unit_test(test_ggx_sampling_matches_its_pdf),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);

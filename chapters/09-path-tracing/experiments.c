@@ -5,12 +5,23 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "timer.h"
 
 /* relMSE's guard against dividing by near-black pixels (as image_relmse). */
 static const double RELATIVE_ERROR_EPSILON = 1e-2;
+
+/* CPU time of the whole process (all threads): on a machine shared with
+ * other jobs, it measures the work done; wall time also measures the
+ * neighbours. */
+static double cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 void estimate_image_free(estimate_image *e)
 {
@@ -182,65 +193,93 @@ static const rung rungs[] = {
 };
 enum { RUNG_COUNT = sizeof rungs / sizeof rungs[0] };
 
-bool experiment_convergence(const pt_scene *sc, const camera *cam, const estimate_image *reference, int max_spp,
-                            int threads, double target_relmse, const char *dir, char *err, size_t err_size)
+/* The errors the time-to-error table is read at. */
+static const double TARGET_RELMSE[] = {0.1, 0.03, 0.01};
+enum { TARGET_COUNT = sizeof TARGET_RELMSE / sizeof TARGET_RELMSE[0], MAX_POINTS = 32 };
+
+/* The time at which relMSE falls to `target`, from renders at doubling spp:
+ * log(relMSE) interpolated linearly in log(seconds) between the two renders
+ * either side of it. -1 if no render reached it; *spp_out = the first spp
+ * that did. */
+static double time_to_reach(const double *seconds, const double *relmse, const int *spp, int n, double target,
+                            int *spp_out)
 {
-    char path[4096], time_path[4096];
-    FILE *csv = open_csv(dir, "ch09_convergence.csv", path, sizeof path, err, err_size);
+    *spp_out = 0;
+    for (int i = 0; i < n; i++) {
+        if (!(relmse[i] <= target && relmse[i] > 0.0))
+            continue;
+        *spp_out = spp[i];
+        if (i == 0 || !(relmse[i - 1] > target) || !(seconds[i - 1] > 0.0))
+            return seconds[i];
+        double f = log(relmse[i - 1] / target) / log(relmse[i - 1] / relmse[i]);
+        return exp(log(seconds[i - 1]) + f * log(seconds[i] / seconds[i - 1]));
+    }
+    return -1.0;
+}
+
+bool experiment_convergence(const pt_scene *sc, const char *name, const camera *cam, const estimate_image *reference,
+                            int max_spp, int threads, const char *dir, char *err, size_t err_size)
+{
+    char path[4096], time_path[4096], file[256];
+    snprintf(file, sizeof file, "ch09_convergence_%s.csv", name);
+    FILE *csv = open_csv(dir, file, path, sizeof path, err, err_size);
     if (csv == NULL)
         return false;
-    FILE *time_csv = open_csv(dir, "ch09_time_to_error.csv", time_path, sizeof time_path, err, err_size);
+    snprintf(file, sizeof file, "ch09_time_to_error_%s.csv", name);
+    FILE *time_csv = open_csv(dir, file, time_path, sizeof time_path, err, err_size);
     if (time_csv == NULL) {
         fclose(csv);
         return false;
     }
-    fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample\n");
-    fprintf(time_csv, "rung,label,target_relmse,seconds,spp\n");
-    printf("\n%-42s %6s %9s %10s %10s\n", "rung", "spp", "seconds", "RMSE", "relMSE");
+    fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample,cpu_seconds\n");
+    fprintf(time_csv, "rung,label,target_relmse,cpu_seconds,spp\n");
+    printf("\n%-42s %6s %9s %9s %10s %10s\n", "rung", "spp", "seconds", "CPU s", "RMSE", "relMSE");
+    double reached[RUNG_COUNT][TARGET_COUNT];
+    int reached_spp[RUNG_COUNT][TARGET_COUNT], last_spp = 0;
     for (int k = 0; k < RUNG_COUNT; k++) {
         path_tracer pt = path_tracer_defaults(sc);
         pt.integrator = rungs[k].integrator;
         pt.russian_roulette = rungs[k].rr;
-        double previous_seconds = 0.0, previous_relmse = 0.0, reached_seconds = -1.0;
-        int reached_spp = 0;
-        for (int spp = 1; spp <= max_spp; spp *= 2) {
+        double seconds[MAX_POINTS], relmses[MAX_POINTS];
+        int spps[MAX_POINTS], n = 0;
+        for (int spp = 1; spp <= max_spp && n < MAX_POINTS; spp *= 2, n++) {
+            double cpu_start = cpu_seconds();
             estimate_image e = render_estimate(&pt, cam, spp, 1000 + (uint64_t)spp, threads);
+            double cpu = cpu_seconds() - cpu_start;
             double rmse, relmse;
             measure_error(&e, reference, &rmse, &relmse);
             double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
-            fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f\n", k, pt_integrator_name(pt.integrator),
-                    pt.russian_roulette == RR_FIXED ? "fixed" : "throughput", spp, e.seconds, rmse, relmse, rays);
-            printf("%-42s %6d %9.3f %10.4f %10.5f\n", rungs[k].label, spp, e.seconds, rmse, relmse);
-            /* Time to reach the target: interpolate log(relMSE) against
-             * log(seconds) between the two renders either side of it. */
-            if (reached_seconds < 0.0 && relmse <= target_relmse && relmse > 0.0) {
-                if (previous_relmse > target_relmse && previous_seconds > 0.0) {
-                    double f = log(previous_relmse / target_relmse) / log(previous_relmse / relmse);
-                    reached_seconds = exp(log(previous_seconds) + f * log(e.seconds / previous_seconds));
-                } else {
-                    reached_seconds = e.seconds;
-                }
-                reached_spp = spp;
-            }
-            previous_seconds = e.seconds;
-            previous_relmse = relmse;
+            fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f,%.6f\n", k, pt_integrator_name(pt.integrator),
+                    pt.russian_roulette == RR_FIXED ? "fixed" : "throughput", spp, e.seconds, rmse, relmse, rays, cpu);
+            printf("%-42s %6d %9.3f %9.3f %10.4f %10.5f\n", rungs[k].label, spp, e.seconds, cpu, rmse, relmse);
+            seconds[n] = cpu;
+            relmses[n] = relmse;
+            spps[n] = last_spp = spp;
             estimate_image_free(&e);
         }
-        fprintf(time_csv, "%d,\"%s\",%g,%.6f,%d\n", k, rungs[k].label, target_relmse, reached_seconds, reached_spp);
+        for (int t = 0; t < TARGET_COUNT; t++) {
+            reached[k][t] = time_to_reach(seconds, relmses, spps, n, TARGET_RELMSE[t], &reached_spp[k][t]);
+            fprintf(time_csv, "%d,\"%s\",%g,%.6f,%d\n", k, rungs[k].label, TARGET_RELMSE[t], reached[k][t],
+                    reached_spp[k][t]);
+        }
     }
-    printf("\ntime to reach relMSE %g (%dx%d):\n", target_relmse, cam->width, cam->height);
-    fflush(time_csv);
-    bool ok = close_csv(csv, path, err, err_size) && close_csv(time_csv, time_path, err, err_size);
-    if (ok) {
-        FILE *again = fopen(time_path, "r");
-        char line[512];
-        while (again != NULL && fgets(line, sizeof line, again))
-            if (line[0] != 'r')
-                printf("  %s", line);
-        if (again != NULL)
-            fclose(again);
+    printf("\nCPU seconds (all threads) and spp to reach relMSE (%s, %dx%d; \"-\": not within %d spp):\n%-42s", name,
+           cam->width, cam->height, last_spp, "rung");
+    for (int t = 0; t < TARGET_COUNT; t++)
+        printf(" %14g", TARGET_RELMSE[t]);
+    printf("\n");
+    for (int k = 0; k < RUNG_COUNT; k++) {
+        printf("%-42s", rungs[k].label);
+        for (int t = 0; t < TARGET_COUNT; t++) {
+            if (reached[k][t] < 0.0)
+                printf(" %14s", "-");
+            else
+                printf(" %7.3f s %4d", reached[k][t], reached_spp[k][t]);
+        }
+        printf("\n");
     }
-    return ok;
+    bool ok = close_csv(csv, path, err, err_size);
+    return close_csv(time_csv, time_path, err, err_size) && ok;
 }
 
 bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp,
@@ -251,22 +290,102 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
     if (csv == NULL)
         return false;
     const float probabilities[] = {0.2f, 0.4f, 0.6f, 0.8f, 0.9f, 0.95f};
-    fprintf(csv, "p_rr,seconds,mse,efficiency,rays_per_sample\n");
-    printf("\nRussian roulette (cosine rung, %d spp): P_RR, seconds, MSE, efficiency 1/(MSE x time)\n", spp);
+    fprintf(csv, "p_rr,cpu_seconds,mse,efficiency,rays_per_sample\n");
+    printf("\nRussian roulette (cosine rung, %d spp): P_RR, CPU seconds, MSE, efficiency 1/(MSE x time)\n", spp);
     for (int i = 0; i < 6; i++) {
         path_tracer pt = path_tracer_defaults(sc);
         pt.integrator = PT_COSINE;
         pt.russian_roulette = RR_FIXED;
         pt.rr_probability = probabilities[i];
+        double cpu_start = cpu_seconds();
         estimate_image e = render_estimate(&pt, cam, spp, 77, threads);
+        double cpu = cpu_seconds() - cpu_start;
         double rmse, relmse;
         measure_error(&e, reference, &rmse, &relmse);
         double mse = rmse * rmse;
         double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
-        fprintf(csv, "%.2f,%.6f,%.6e,%.6e,%.3f\n", (double)probabilities[i], e.seconds, mse, 1.0 / (mse * e.seconds), rays);
-        printf("  %.2f %8.3f s  %.4e  %.4e  %.2f rays/sample\n", (double)probabilities[i], e.seconds, mse,
-               1.0 / (mse * e.seconds), rays);
+        fprintf(csv, "%.2f,%.6f,%.6e,%.6e,%.3f\n", (double)probabilities[i], cpu, mse, 1.0 / (mse * cpu), rays);
+        printf("  %.2f %8.3f s  %.4e  %.4e  %.2f rays/sample\n", (double)probabilities[i], cpu, mse, 1.0 / (mse * cpu),
+               rays);
         estimate_image_free(&e);
     }
     return close_csv(csv, path, err, err_size);
+}
+
+/* ---- speed ------------------------------------------------------------------------
+ * Seconds per million camera samples on the Cornell box, for each rung, on 1
+ * and 2 threads. Wall time is what the issue's reference points measure;
+ * CPU time (all threads together) is printed beside it because on a shared
+ * machine the wall time of 2 threads depends on what else runs. */
+
+typedef struct {
+    pt_integrator integrator;
+    pt_russian_roulette rr;
+    int rr_start_depth;
+    const char *label;
+} speed_case;
+
+/* Every case counts at most SPEED_MAX_DEPTH bounces, Ray Tracing: The Rest of
+ * Your Life's max_depth for its Cornell box. The last two are the
+ * comparisons: Russian roulette only after 5 bounces, on the throughput
+ * (smallpt continues with probability max(albedo) after depth 5), and no
+ * roulette at all, the full 50 bounces (RTROWL). */
+enum { SPEED_MAX_DEPTH = 50 };
+static const speed_case speed_cases[] = {
+    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8"},
+    {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8"},
+    {PT_MIS, RR_FIXED, 0, "mis, P_RR 0.8"},
+    {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput after 5 (smallpt)"},
+    {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)"},
+};
+
+bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size)
+{
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    camera cam = pt_scene_camera(&sc, size, size);
+    double million_samples = (double)size * (double)size * (double)spp * 1e-6;
+    FILE *csv = NULL;
+    if (csv_path != NULL && (csv = fopen(csv_path, "w")) == NULL) {
+        snprintf(err, err_size, "%s: %s", csv_path, strerror(errno));
+        pt_scene_free(&sc);
+        return false;
+    }
+    if (csv != NULL)
+        fprintf(csv, "case,threads,wall_s_per_msample,cpu_s_per_msample,rays_per_sample,scaling\n");
+    printf("Cornell box %dx%d, %d spp (%.2f M camera samples), max depth %d, best of %d runs\n", size, size, spp,
+           million_samples, SPEED_MAX_DEPTH, repeats);
+    printf("%-42s %7s %12s %12s %10s %8s\n", "case", "threads", "s/M (wall)", "s/M (CPU)", "rays/spl", "scaling");
+    const int n_cases = (int)(sizeof speed_cases / sizeof speed_cases[0]);
+    for (int k = 0; k < n_cases; k++) {
+        path_tracer pt = path_tracer_defaults(&sc);
+        pt.integrator = speed_cases[k].integrator;
+        pt.russian_roulette = speed_cases[k].rr;
+        pt.max_depth = SPEED_MAX_DEPTH;
+        if (speed_cases[k].rr_start_depth > 0)
+            pt.rr_start_depth = speed_cases[k].rr_start_depth;
+        double one_thread = 0.0;
+        for (int threads = 1; threads <= 2; threads++) {
+            double best_wall = INFINITY, best_cpu = INFINITY, rays = 0.0;
+            for (int r = 0; r < repeats; r++) {
+                double cpu_start = cpu_seconds();
+                estimate_image e = render_estimate(&pt, &cam, spp, 1, threads);
+                double cpu = cpu_seconds() - cpu_start;
+                best_wall = fmin(best_wall, e.seconds);
+                best_cpu = fmin(best_cpu, cpu);
+                rays = (double)counters_total_rays(&e.counters) / (million_samples * 1e6);
+                estimate_image_free(&e);
+            }
+            double wall = best_wall / million_samples, cpu = best_cpu / million_samples;
+            if (threads == 1)
+                one_thread = wall;
+            double scaling = one_thread / wall;
+            printf("%-42s %7d %12.3f %12.3f %10.2f %7.2fx\n", speed_cases[k].label, threads, wall, cpu, rays, scaling);
+            if (csv != NULL)
+                fprintf(csv, "\"%s\",%d,%.4f,%.4f,%.3f,%.3f\n", speed_cases[k].label, threads, wall, cpu, rays, scaling);
+            fflush(stdout);
+        }
+    }
+    pt_scene_free(&sc);
+    return csv == NULL || close_csv(csv, csv_path, err, err_size);
 }

@@ -7,6 +7,8 @@
  *                            of seconds (CSV for plots/ch09_*.gp)
  *   experiment_russian_roulette()  variance, time and efficiency for a
  *                            range of P_RR
+ *   experiment_speed()       seconds per million camera samples, per rung,
+ *                            on 1 and 2 threads
  *   render_progressive()     passes of doubling sample counts until a time
  *                            budget or a target error (estimated from the
  *                            per-pixel variance) is reached
@@ -52,13 +54,20 @@ estimate_image render_progressive(const path_tracer *pt, const camera *cam, uint
 bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int threads, const char *path,
                           estimate_image *out, char *err, size_t err_size);
 
-/* Writes DIR/ch09_convergence.csv and DIR/ch09_time_to_error.csv, prints a
- * table of the time each rung needs to reach `target_relmse`. */
-bool experiment_convergence(const pt_scene *sc, const camera *cam, const estimate_image *reference, int max_spp,
-                            int threads, double target_relmse, const char *dir, char *err, size_t err_size);
+/* Writes DIR/ch09_convergence_NAME.csv (RMSE and relMSE of each rung at 1,
+ * 2, 4, ... max_spp samples, with wall and CPU seconds) and
+ * DIR/ch09_time_to_error_NAME.csv, and prints a table of the CPU time each
+ * rung needs to reach relMSE 0.1, 0.03 and 0.01. */
+bool experiment_convergence(const pt_scene *sc, const char *name, const camera *cam, const estimate_image *reference,
+                            int max_spp, int threads, const char *dir, char *err, size_t err_size);
 
 /* Writes DIR/ch09_russian_roulette.csv. */
 bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp,
                                  int threads, const char *dir, char *err, size_t err_size);
+
+/* Prints seconds per million camera samples on the Cornell box (size x size,
+ * spp samples, the best of `repeats` runs) for each rung on 1 and 2 threads,
+ * and the 1 -> 2 thread scaling; writes them to csv_path too (if not NULL). */
+bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size);
 
 #endif

@@ -17,6 +17,8 @@ static bool build_scene(pt_scene *sc, const char *name, const char *obj, char *e
         pt_scene_build_cornell_box(sc);
     else if (strcmp(name, "materials") == 0)
         pt_scene_build_cornell_box_materials(sc);
+    else if (strcmp(name, "veach") == 0)
+        pt_scene_build_veach(sc);
     else if (strcmp(name, "furnace") == 0)
         pt_scene_build_furnace(sc, 0.5f, 0.5f);
     else if (strcmp(name, "white-furnace") == 0)
@@ -26,8 +28,8 @@ static bool build_scene(pt_scene *sc, const char *name, const char *obj, char *e
     else if (strcmp(name, "point-in-sphere") == 0)
         pt_scene_build_point_in_sphere(sc, 0.5f, (float)PI);
     else {
-        snprintf(err, err_size, "--scene: unknown scene '%s' (cornell, materials, furnace, white-furnace, "
-                                "glass-furnace, point-in-sphere)", name);
+        snprintf(err, err_size, "--scene: unknown scene '%s' (cornell, materials, veach, furnace, "
+                                "white-furnace, glass-furnace, point-in-sphere)", name);
         return false;
     }
     return true;
@@ -37,6 +39,8 @@ int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch09.exr", 512, 512, 16);
     const char *integrator = "lecture", *rr = "fixed", *scene_name = "cornell", *obj = NULL, *data = NULL;
+    const char *bench_csv = NULL;
+    bool bench = false;
     float rr_probability = 0.8f, time_budget = 0.0f, target_error = 0.0f;
     int max_depth = 64, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
     const cli_flag extras[] = {
@@ -45,7 +49,7 @@ int main(int argc, char **argv)
         {"--rr-probability", CLI_FLOAT, &rr_probability, "P", "P_RR for --rr fixed (default 0.8)", 0.01, 1.0},
         {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
         {"--scene", CLI_STRING, &scene_name, "NAME",
-         "cornell (default), materials (glossy metal, glass), furnace, white-furnace, glass-furnace, point-in-sphere", 0, 0},
+         "cornell (default), materials (glossy metal, glass), veach (glossy plates, lights of 4 sizes), furnace, white-furnace, glass-furnace, point-in-sphere", 0, 0},
         {"--obj", CLI_STRING, &obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
         {"--time-budget", CLI_FLOAT, &time_budget, "SECONDS", "progressive: passes until this much time is spent", 0.0, 1e6},
         {"--target-error", CLI_FLOAT, &target_error, "E",
@@ -54,6 +58,10 @@ int main(int argc, char **argv)
         {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 96)", 8, 1024},
         {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached reference (default 4096)", 16, 1 << 20},
         {"--experiment-spp", CLI_INT, &experiment_spp, "N", "largest spp of the experiments (default 256)", 1, 1 << 16},
+        {"--bench", CLI_BOOL, &bench, NULL,
+         "print seconds per million camera samples on the Cornell box for every rung, 1 and 2 threads "
+         "(a square of --width pixels, --spp samples; best of 3)", 0, 0},
+        {"--bench-csv", CLI_STRING, &bench_csv, "FILE", "with --bench: also write the figures as CSV", 0, 0},
     };
     cli_spec spec = {"09-path-tracing",
                      "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"
@@ -94,21 +102,47 @@ int main(int argc, char **argv)
     pt.max_depth = max_depth;
 
     int status = 0;
-    if (data != NULL) {
-        /* The experiments: a cached reference, then every rung at doubling
-         * sample counts, then the Russian roulette sweep. */
-        camera cam = pt_scene_camera(&sc, experiment_size, experiment_size);
-        char reference_path[4096];
-        snprintf(reference_path, sizeof reference_path, "%s/ch09_reference_%s_%d.exr", data, obj ? "obj" : scene_name,
-                 experiment_size);
-        estimate_image reference;
-        if (!experiment_reference(&pt, &cam, reference_spp, opts.threads, reference_path, &reference, err, sizeof err) ||
-            !experiment_convergence(&sc, &cam, &reference, experiment_spp, opts.threads, 1e-2, data, err, sizeof err) ||
-            !experiment_russian_roulette(&sc, &cam, &reference, 16, opts.threads, data, err, sizeof err)) {
+    if (bench) {
+        if (!experiment_speed(opts.width, opts.spp, 3, bench_csv, err, sizeof err)) {
             fprintf(stderr, "09-path-tracing: %s\n", err);
             status = 1;
         }
-        estimate_image_free(&reference);
+    } else if (data != NULL) {
+        /* The experiments, on the chosen scene: a cached reference, then
+         * every rung at doubling sample counts, then (on the first scene)
+         * the Russian roulette sweep. The Cornell box, all diffuse, is
+         * where MIS gains least; by default the Veach scene, where it gains
+         * most, is measured after it. */
+        const char *names[2] = {obj ? "obj" : scene_name, "veach"};
+        int scene_count = obj == NULL && strcmp(scene_name, "cornell") == 0 ? 2 : 1;
+        for (int k = 0; k < scene_count && status == 0; k++) {
+            pt_scene other;
+            const pt_scene *scene = &sc;
+            if (k > 0) {
+                build_scene(&other, names[k], NULL, err, sizeof err);
+                scene = &other;
+            }
+            path_tracer experiment_pt = pt;
+            experiment_pt.scene = scene;
+            camera cam = pt_scene_camera(scene, experiment_size, experiment_size);
+            char reference_path[4096];
+            snprintf(reference_path, sizeof reference_path, "%s/ch09_reference_%s_%d.exr", data, names[k],
+                     experiment_size);
+            estimate_image reference;
+            printf("\n== scene %s\n", names[k]);
+            if (!experiment_reference(&experiment_pt, &cam, reference_spp, opts.threads, reference_path, &reference,
+                                      err, sizeof err) ||
+                !experiment_convergence(scene, names[k], &cam, &reference, experiment_spp, opts.threads, data, err,
+                                        sizeof err) ||
+                (k == 0 && !experiment_russian_roulette(scene, &cam, &reference, 64, opts.threads, data, err,
+                                                        sizeof err))) {
+                fprintf(stderr, "09-path-tracing: %s\n", err);
+                status = 1;
+            }
+            estimate_image_free(&reference);
+            if (k > 0)
+                pt_scene_free(&other);
+        }
     } else if (time_budget > 0.0f || target_error > 0.0f) {
         camera cam = pt_scene_camera(&sc, opts.width, opts.height);
         estimate_image e = render_progressive(&pt, &cam, opts.seed, opts.threads, time_budget, target_error,

@@ -88,8 +88,10 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
                 ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, x_light, n_light);
                 counters->shadow_rays++;
                 if (!pt_scene_occluded(sc, shadow, counters)) {
-                    /* pdf 1/A per unit area is distance^2 / (cos' A) per unit solid angle */
-                    float pdf_light = distance2 / (cos_theta_light * (float)sc->emitter_area);
+                    /* pdf 1/A per unit area is distance^2 / (cos' A) per unit solid angle
+                     * (with several lights, 1/A is the density of picking x'
+                     * among all of them: scene_pt.h) */
+                    float pdf_light = distance2 * pt_scene_emitter_pdf_area(sc, light_material) / cos_theta_light;
                     float weight = with_mis ? power_heuristic(pdf_light, bsdf_pdf(m, n, wo, wi)) : 1.0f;
                     vec3 le = sc->materials[light_material].emission;
                     radiance = vec3_add(radiance, vec3_scale(vec3_mul(le, f), cos_theta / pdf_light * weight));
@@ -240,7 +242,7 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pcg32 *rng, ray_counte
             } else if (mis) {
                 float distance2 = vec3_length_squared(vec3_sub(hit.point, previous_point));
                 float cos_light = fabsf(vec3_dot(hit.normal_geometric, wo));
-                float pdf_light = distance2 / (cos_light * (float)sc->emitter_area);
+                float pdf_light = distance2 * pt_scene_emitter_pdf_area(sc, hit.material_id) / cos_light;
                 radiance = vec3_add(radiance, vec3_scale(vec3_mul(throughput, le), power_heuristic(previous_pdf, pdf_light)));
             }
         }

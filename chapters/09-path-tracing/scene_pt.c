@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "06-bvh/bvh.h"
+#include "09-path-tracing/small_bvh.h"
 #include "memory.h"
 
 void pt_scene_init(pt_scene *sc)
@@ -25,6 +26,7 @@ void pt_scene_free(pt_scene *sc)
     free(sc->materials);
     free(sc->point_lights);
     free(sc->emitters);
+    free(sc->emitter_normals);
     free(sc->emitter_cdf);
     memset(sc, 0, sizeof *sc);
 }
@@ -77,36 +79,53 @@ void pt_scene_add_point_light(pt_scene *sc, vec3 position, vec3 intensity)
     sc->point_lights[sc->point_light_count++] = (pt_point_light){position, intensity};
 }
 
+/* Up to this many triangles, the BVH is built by small_bvh.c (every split
+ * position tried; a few milliseconds at this size); above, by chapter 06's
+ * binned SAH. */
+enum { SMALL_SCENE_TRIANGLES = 10000 };
+
+/* The one place the path tracer chooses and builds its acceleration
+ * structure; pt_scene_intersect() and pt_scene_occluded() are the only
+ * places that use it. */
+static accel *build_accel(const triangle_set *set)
+{
+    if (set->count <= SMALL_SCENE_TRIANGLES)
+        return small_bvh_build(set);
+    return bvh_build(set, BVH_SPLIT_SAH);
+}
+
+/* How bright an emitter is, for choosing which light to sample: the mean of
+ * L_e's channels (positive whenever any channel is). */
+static double emitter_weight(vec3 le) { return ((double)le.x + (double)le.y + (double)le.z) / 3.0; }
+
 void pt_scene_finish(pt_scene *sc)
 {
     triangle_set_from_mesh(&sc->triangles, &sc->geometry);
-    sc->bvh = bvh_build(&sc->triangles, BVH_SPLIT_SAH);
+    sc->bvh = build_accel(&sc->triangles);
     /* The emitter table: every triangle whose material emits, with the
-     * running sum of areas, to pick one in proportion to its area. */
+     * running sum of powers, to pick one in proportion to its power. */
+    int n = 0;
+    for (int i = 0; i < sc->geometry.face_count; i++)
+        n += vec3_max_component(sc->materials[sc->geometry.faces[i].material].emission) > 0.0f;
+    sc->emitters = memory_allocate((size_t)(n > 0 ? n : 1), sizeof(int));
+    sc->emitter_normals = memory_allocate((size_t)(n > 0 ? n : 1), sizeof(vec3));
+    sc->emitter_cdf = memory_allocate((size_t)(n > 0 ? n : 1), sizeof(double));
     sc->emitter_count = 0;
     sc->emitter_area = 0.0;
-    for (int pass = 0; pass < 2; pass++) {
-        int n = 0;
-        double area = 0.0;
-        for (int i = 0; i < sc->geometry.face_count; i++) {
-            const pt_material *m = &sc->materials[sc->geometry.faces[i].material];
-            if (vec3_max_component(m->emission) <= 0.0f)
-                continue;
-            if (pass == 1) {
-                const triangle *t = &sc->triangles.triangles[i];
-                area += 0.5 * (double)vec3_length(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
-                sc->emitters[n] = i;
-                sc->emitter_cdf[n] = area;
-            }
-            n++;
-        }
-        if (pass == 0) {
-            sc->emitters = memory_allocate((size_t)n, sizeof(int));
-            sc->emitter_cdf = memory_allocate((size_t)n, sizeof(double));
-        } else {
-            sc->emitter_count = n;
-            sc->emitter_area = area;
-        }
+    sc->emitter_power = 0.0;
+    for (int i = 0; i < sc->geometry.face_count; i++) {
+        vec3 le = sc->materials[sc->geometry.faces[i].material].emission;
+        if (vec3_max_component(le) <= 0.0f)
+            continue;
+        const triangle *t = &sc->triangles.triangles[i];
+        vec3 cross = vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0));
+        double area = 0.5 * (double)vec3_length(cross);
+        sc->emitter_area += area;
+        sc->emitter_power += area * emitter_weight(le);
+        sc->emitters[sc->emitter_count] = i;
+        sc->emitter_normals[sc->emitter_count] = vec3_normalize(cross);
+        sc->emitter_cdf[sc->emitter_count] = sc->emitter_power;
+        sc->emitter_count++;
     }
 }
 
@@ -154,10 +173,9 @@ bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u
 {
     if (sc->emitter_count == 0)
         return false;
-    /* Pick a triangle with probability area / total area (binary search in
-     * the running sum), then a uniform point on it: together, a uniform
-     * point on all the emitting area, pdf = 1 / emitter_area. */
-    double target = (double)u_pick * sc->emitter_area;
+    /* Pick a triangle with probability power / total power (binary search
+     * in the running sum), then a uniform point on it. */
+    double target = (double)u_pick * sc->emitter_power;
     int lo = 0, hi = sc->emitter_count - 1;
     while (lo < hi) {
         int mid = (lo + hi) / 2;
@@ -172,9 +190,15 @@ bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u
     float s = sqrtf(u1);
     float b1 = (1.0f - u2) * s, b2 = u2 * s;
     *point = vec3_add(vec3_add(vec3_scale(t->p0, 1.0f - b1 - b2), vec3_scale(t->p1, b1)), vec3_scale(t->p2, b2));
-    *normal = vec3_normalize(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
+    *normal = sc->emitter_normals[lo];
     *material = sc->geometry.faces[index].material;
     return true;
+}
+
+float pt_scene_emitter_pdf_area(const pt_scene *sc, int material)
+{
+    /* P(triangle) / its area = area x weight / power / area */
+    return (float)(emitter_weight(sc->materials[material].emission) / sc->emitter_power);
 }
 
 camera pt_scene_camera(const pt_scene *sc, int width, int height)
@@ -253,6 +277,56 @@ void pt_scene_build_cornell_box_materials(pt_scene *sc)
     cornell_room(sc, white, red, green, light);
     cornell_tall_block(sc, metal);
     pt_scene_add_sphere(sc, v(185, 90, 170), 90, glass, false);
+    pt_scene_finish(sc);
+}
+
+/* A rectangle centred at c with unit axes a and b (half-sizes ha, hb),
+ * counter-clockwise seen from the side a x b points to. */
+static void add_rectangle(pt_scene *sc, vec3 c, vec3 a, float ha, vec3 b, float hb, int material)
+{
+    vec3 da = vec3_scale(a, ha), db = vec3_scale(b, hb);
+    pt_scene_add_quad(sc, vec3_sub(vec3_sub(c, da), db), vec3_sub(vec3_add(c, da), db),
+                      vec3_add(vec3_add(c, da), db), vec3_add(vec3_sub(c, da), db), material);
+}
+
+void pt_scene_build_veach(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    sc->eye = v(0, 2.2f, 7.5f);
+    sc->target = v(0, 0.7f, 0);
+    sc->vertical_fov_degrees = 38.0f;
+    /* Nothing else: a black world, so that all the light in the image is
+     * the lights' own, reflected once (the estimators differ only there). */
+
+    /* Four lights in a row behind the plates, each 9 times the area of the
+     * last and emitting 1/9 as much per unit area: the same power. */
+    const vec3 light_row = v(0, 2.6f, -1.8f);
+    const float half_size[4] = {0.03f, 0.09f, 0.27f, 0.81f};
+    const float light_x[4] = {-2.1f, -1.05f, 0.15f, 1.9f};
+    const vec3 colour[4] = {{1.0f, 0.35f, 0.2f}, {1.0f, 0.9f, 0.3f}, {0.3f, 1.0f, 0.4f}, {0.3f, 0.5f, 1.0f}};
+    for (int i = 0; i < 4; i++) {
+        float le = 0.6f / (half_size[i] * half_size[i]); /* power 2.4 per colour unit */
+        int m = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_scale(colour[i], le)));
+        vec3 c = v(light_x[i], light_row.y, light_row.z);
+        /* facing the plates: its normal points at the middle of them */
+        vec3 n = vec3_normalize(vec3_sub(v(light_x[i], 0.3f, 1.0f), c));
+        vec3 a = v(1, 0, 0), b = vec3_normalize(vec3_cross(n, a));
+        add_rectangle(sc, c, a, half_size[i], b, half_size[i], m);
+    }
+
+    /* Four plates, the sharpest at the back, each tilted so that the eye
+     * sees the row of lights reflected in it: its normal halves the angle
+     * between the directions to the eye and to the lights. */
+    const float roughness[4] = {0.3f, 0.12f, 0.05f, 0.015f};
+    const vec3 plate_centre[4] = {{0, 0.0f, 2.2f}, {0, 0.3f, 1.2f}, {0, 0.62f, 0.25f}, {0, 0.98f, -0.65f}};
+    for (int i = 0; i < 4; i++) {
+        int m = pt_scene_add_material(sc, pt_glossy(vec3_splat(0.8f), roughness[i]));
+        vec3 c = plate_centre[i];
+        vec3 to_eye = vec3_normalize(vec3_sub(sc->eye, c)), to_light = vec3_normalize(vec3_sub(light_row, c));
+        vec3 n = vec3_normalize(vec3_add(to_eye, to_light));
+        vec3 a = v(1, 0, 0), b = vec3_normalize(vec3_cross(n, a));
+        add_rectangle(sc, c, a, 2.6f, b, 0.42f, m);
+    }
     pt_scene_finish(sc);
 }
 

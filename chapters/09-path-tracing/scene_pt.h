@@ -62,11 +62,15 @@ typedef struct {
     int material_count, material_capacity;
     pt_point_light *point_lights;
     int point_light_count, point_light_capacity;
-    /* The emitting triangles, for sampling a point on a light by area. */
-    int *emitters;        /* triangle indices */
-    double *emitter_cdf;  /* running sum of areas, emitter_cdf[emitter_count - 1] = emitter_area */
+    /* The emitting triangles, for sampling a point on a light: a triangle
+     * is picked in proportion to its power (area x mean of L_e's channels),
+     * then a point on it uniformly by area. */
+    int *emitters;          /* triangle indices */
+    vec3 *emitter_normals;  /* their front normals */
+    double *emitter_cdf;    /* running sum of powers, emitter_cdf[emitter_count - 1] = emitter_power */
     int emitter_count;
-    double emitter_area;
+    double emitter_area;    /* of all emitting triangles */
+    double emitter_power;   /* sum of area x mean(L_e) */
     vec3 environment; /* radiance arriving from every direction that escapes */
     vec3 eye, target, up;
     float vertical_fov_degrees;
@@ -92,10 +96,14 @@ pt_material pt_mirror(vec3 albedo);
 bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters);
 bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters);
 
-/* A point on the emitting triangles, uniform by area (pdf 1 / emitter_area),
- * with the emitter's front normal and material. False if there are none. */
+/* A point on the emitting triangles, with the emitter's front normal and
+ * material. Picked by power: the density per unit area at a point of an
+ * emitter of radiance L_e is pt_scene_emitter_pdf_area(), mean(L_e) /
+ * emitter_power -- for lights that all have the same L_e (the Cornell box)
+ * that is the lecture's 1 / A. False if there are none. */
 bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u2, vec3 *point, vec3 *normal,
                              int *material);
+float pt_scene_emitter_pdf_area(const pt_scene *sc, int material);
 
 camera pt_scene_camera(const pt_scene *sc, int width, int height);
 
@@ -107,6 +115,13 @@ void pt_scene_build_cornell_box(pt_scene *sc);
 /* The Cornell box with the tall block made a GGX metal and the short block
  * replaced by a glass sphere: the materials of the later rungs. */
 void pt_scene_build_cornell_box_materials(pt_scene *sc);
+/* Where multiple importance sampling wins (after Veach's thesis, fig. 9.2):
+ * four glossy GGX plates, from rough (alpha 0.3, in front) to nearly a
+ * mirror (alpha 0.015, at the back), reflecting four lights of the same
+ * power whose sizes grow by 3 in each direction. Light sampling is best for
+ * small lights on rough plates, BSDF sampling for large lights on sharp
+ * plates; MIS keeps the better of both everywhere. */
+void pt_scene_build_veach(pt_scene *sc);
 /* The camera inside a closed sphere (an icosphere of triangles, normals
  * inwards) that reflects albedo and emits `emission` everywhere: radiance is
  * emission / (1 - albedo) in every direction. */

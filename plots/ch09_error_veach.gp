@@ -1,0 +1,30 @@
+# Where multiple importance sampling wins: the same measurement as
+# ch09_error.gp on the Veach scene (--scene veach): glossy GGX plates of four
+# roughnesses lit by four lights of four sizes.
+# Data: build/bin/09-path-tracing --data DIR  ->  DIR/ch09_convergence_veach.csv
+set datafile separator ","
+set terminal pngcairo size 1000,450 font ",10"
+set output plot_dir."/ch09_error_veach.png"
+file = data_dir."/ch09_convergence_veach.csv"
+set multiplot layout 1,2 title "Where MIS wins (glossy plates, lights of four sizes): error against samples and time"
+set logscale xy
+set grid
+set key bottom left
+set xlabel "samples per pixel"
+set ylabel "relMSE against the reference"
+set format y "10^{%L}"
+titles = "lecture cosine MIS MIS+RR-throughput"
+plot for [k=0:3] file using (column(1)==k ? $4 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1), \
+     [1:256] 0.3/x with lines dt 2 lc "gray" title "slope -1"
+set xlabel "CPU seconds (2 threads together)"
+plot for [k=0:3] file using (column(1)==k ? $9 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
+unset multiplot
+set terminal svg size 1000,450
+set output plot_dir."/ch09_error_veach.svg"
+set multiplot layout 1,2 title "Where MIS wins (glossy plates, lights of four sizes): error against samples and time"
+set xlabel "samples per pixel"
+plot for [k=0:3] file using (column(1)==k ? $4 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1), \
+     [1:256] 0.3/x with lines dt 2 lc "gray" title "slope -1"
+set xlabel "CPU seconds (2 threads together)"
+plot for [k=0:3] file using (column(1)==k ? $9 : 1/0):7 with linespoints lw 2 pt 7 title word(titles, k+1)
+unset multiplot

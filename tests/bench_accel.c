@@ -26,6 +26,7 @@
 #include "04-uniform-grid/grid.h"
 #include "05-kd-tree/kdtree.h"
 #include "06-bvh/bvh.h"
+#include "06-bvh/bvh4.h"
 #include "memory.h"
 #include "mesh.h"
 #include "timer.h"
@@ -110,6 +111,7 @@ static accel *build_grid(const triangle_set *s) { return grid_build(s, GRID_DEFA
 static accel *build_kdtree(const triangle_set *s) { return kdtree_build(s); }
 static accel *build_bvh_median(const triangle_set *s) { return bvh_build(s, BVH_SPLIT_MEDIAN); }
 static accel *build_bvh_sah(const triangle_set *s) { return bvh_build(s, BVH_SPLIT_SAH); }
+static accel *build_bvh4_sah(const triangle_set *s) { return bvh4_build(s, BVH_SPLIT_SAH); }
 
 static const structure structures[] = {
     {"brute", build_brute, 10240, 1 << 14},
@@ -117,6 +119,7 @@ static const structure structures[] = {
     {"kdtree", build_kdtree, 1L << 30, 1 << 20},
     {"bvh-median", build_bvh_median, 1L << 30, 1 << 20},
     {"bvh-sah", build_bvh_sah, 1L << 30, 1 << 20},
+    {"bvh4-sah", build_bvh4_sah, 1L << 30, 1 << 20},
 };
 enum { STRUCTURE_COUNT = sizeof structures / sizeof structures[0] };
 
@@ -187,7 +190,7 @@ static void usage(void)
            "with the harness's coherent and incoherent ray sets: build ms, bytes per triangle, and\n"
            "Mrays/s for closest hit and any hit, on one thread and on all. --embree reads the\n"
            "harness's output ('embree_bench embree N medium 1 R' lines) and prints ratios.\n"
-           "structures: brute grid kdtree bvh-median bvh-sah\n");
+           "structures: brute grid kdtree bvh-median bvh-sah bvh4-sah\n");
 }
 
 int main(int argc, char **argv)

@@ -681,7 +681,7 @@ static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth,
             int lane = 4 * first + i;
             assert_true(lane < 4 * b->packet_count);
             const bvh4_packet *p = &b->packets[first + i / 4];
-            int t = b->triangle_index[lane];
+            int t = p->index[i % 4];
             if (i >= count) {
                 assert_int_equal(t, -1);
                 assert_true(p->e1[0][i % 4] == 0.0f && p->e2[2][i % 4] == 0.0f);

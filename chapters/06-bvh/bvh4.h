@@ -59,23 +59,28 @@ static inline bool bvh4_is_leaf(uint32_t ref) { return (ref & BVH4_LEAF) != 0; }
 static inline int bvh4_leaf_triangles(uint32_t ref) { return (int)((ref >> BVH4_PACKET_SHIFT) & 0xFFu); }
 static inline int bvh4_leaf_first_packet(uint32_t ref) { return (int)(ref & ((1u << BVH4_PACKET_SHIFT) - 1u)); }
 
-/* One node, 112 bytes: the boxes of its four children, by plane then by
+/* One node, 128 bytes: the boxes of its four children, by plane then by
  * child (bounds[0][k] is child k's lo.x; 0..2 lo x, y, z, 3..5 hi x, y, z,
  * the order of bvh_node.bounds), and the four child references. Children
- * come first, empty slots last. */
+ * come first, empty slots last. 112 bytes would do, but then half the
+ * nodes would straddle three cache lines instead of two. */
 typedef struct {
-    _Alignas(16) float bounds[6][4]; /* 16-byte aligned: one SSE load per plane */
+    _Alignas(64) float bounds[6][4]; /* one SSE load per plane; a node is two whole cache lines */
     uint32_t child[4];
+    uint32_t unused[4];
 } bvh4_node;
 
-_Static_assert(sizeof(bvh4_node) == 112, "a 4-wide node is 112 bytes");
+_Static_assert(sizeof(bvh4_node) == 128, "a 4-wide node is two cache lines");
 
 /* Four triangles as the 4-lane Moller-Trumbore reads them: P0, E1 = P1 - P0
- * and E2 = P2 - P0, by coordinate then by lane (p0[1][k] is lane k's P0.y).
- * An empty lane is all zeros: its determinant is 0, so it never hits. */
+ * and E2 = P2 - P0, by coordinate then by lane (p0[1][k] is lane k's P0.y),
+ * and which triangle of the set each lane is (right there, in the cache
+ * lines just read, when a hit needs it). An empty lane is all zeros, with
+ * index -1: its determinant is 0, so it never hits. 160 bytes. */
 typedef struct {
     _Alignas(16) float p0[3][4];
     float e1[3][4], e2[3][4];
+    int32_t index[4];
 } bvh4_packet;
 
 /* Which code tests boxes and triangles: the SSE intrinsics, or a plain C
@@ -86,8 +91,7 @@ typedef struct {
     accel base;
     bvh4_node *nodes; /* nodes[0] is the root */
     int node_count;
-    bvh4_packet *packets;
-    int *triangle_index; /* lane k of packet p is set->triangles[triangle_index[4 p + k]], -1 if empty */
+    bvh4_packet *packets; /* a leaf's packets are consecutive */
     int packet_count;
     int triangle_count;
     bvh4_kernel kernel;

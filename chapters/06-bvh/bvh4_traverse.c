@@ -225,6 +225,15 @@ int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4]
 
 /* ---- traversal ------------------------------------------------------------------- */
 
+/* traverse4() and test_leaf4() are inlined into each of the four callers,
+ * so that `sse` and `stop_at_first` are constants there and the compiler
+ * drops the branches on them. */
+#if defined(__GNUC__)
+#define ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define ALWAYS_INLINE inline
+#endif
+
 /* What a traversal found: the closest triangle so far (4 packet + lane). */
 typedef struct {
     int lane; /* -1: none */
@@ -238,10 +247,53 @@ typedef struct {
 
 static inline int lowest_bit(unsigned mask) { return __builtin_ctz(mask); }
 
+/* Ask for a child's memory before it is needed: a node's two cache lines,
+ * or a leaf's packets (160 bytes each). The children hit at a node are all
+ * fetched at once, in parallel, instead of one after the other as the
+ * traversal reaches them. */
+static inline void prefetch_child(const bvh4 *b, uint32_t ref)
+{
+#if defined(__GNUC__)
+    if (!bvh4_is_leaf(ref)) {
+        const char *p = (const char *)&b->nodes[ref];
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + 64);
+        return;
+    }
+    const char *p = (const char *)&b->packets[bvh4_leaf_first_packet(ref)];
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + 64);
+    __builtin_prefetch(p + 128);
+    if (bvh4_leaf_triangles(ref) > 4) {
+        __builtin_prefetch(p + 192);
+        __builtin_prefetch(p + 256);
+    }
+#else
+    (void)b;
+    (void)ref;
+#endif
+}
+
+/* A hit will be turned into a hit record from the set's copy of the
+ * triangle and the mesh's face: ask for them as soon as a hit is found, so
+ * they are in the cache by the end of the traversal (usually the first hit
+ * found is the closest). */
+static inline void prefetch_hit(const bvh4 *b, int index)
+{
+#if defined(__GNUC__)
+    __builtin_prefetch(&b->base.set->triangles[index]);
+    if (b->base.set->source != NULL)
+        __builtin_prefetch(&b->base.set->source->faces[index]);
+#else
+    (void)b;
+    (void)index;
+#endif
+}
+
 /* The leaf's packets against (t_min, found->t). The lanes hit in a packet
  * all lie before found->t; the closest of them, the first among equals,
  * wins: what testing the triangles one by one in lane order gives. */
-static inline bool test_leaf4(const bvh4 *b, uint32_t ref, const bvh4_ray *r4, const ray *r, bvh4_found *found,
+static ALWAYS_INLINE bool test_leaf4(const bvh4 *b, uint32_t ref, const bvh4_ray *r4, const ray *r, bvh4_found *found,
                               bool stop_at_first, bool sse, uint64_t *primitive_tests)
 {
     int count = bvh4_leaf_triangles(ref), first = bvh4_leaf_first_packet(ref);
@@ -258,14 +310,17 @@ static inline bool test_leaf4(const bvh4 *b, uint32_t ref, const bvh4_ray *r4, c
         (void)sse;
         (void)r4;
         *primitive_tests += (uint64_t)(count - 4 * p < 4 ? count - 4 * p : 4);
+        if (mask == 0)
+            continue;
         while (mask != 0) {
             int k = lowest_bit((unsigned)mask);
             mask &= mask - 1;
             if (t[k] < found->t)
                 *found = (bvh4_found){4 * (first + p) + k, t[k], b1[k], b2[k]};
         }
-        if (stop_at_first && found->lane >= 0)
+        if (stop_at_first)
             return true;
+        prefetch_hit(b, packet->index[found->lane % 4]);
     }
     return false;
 }
@@ -276,7 +331,7 @@ static inline int child_count(const bvh4_node *node)
     return 1 + (node->child[1] != BVH4_EMPTY) + (node->child[2] != BVH4_EMPTY) + (node->child[3] != BVH4_EMPTY);
 }
 
-static inline bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_first, bool sse, ray_counters *counters)
+static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_first, bool sse, ray_counters *counters)
 {
     bvh4_found found = {-1, r->t_max, 0.0f, 0.0f};
     if (b->node_count == 0)
@@ -307,15 +362,29 @@ static inline bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_fir
                     current = node->child[k];
                     continue;
                 }
-                /* Several: sort them by t_enter, nearest last (insertion
-                 * sort of at most 4), push all but the nearest, visit it. */
+                int k2 = lowest_bit((unsigned)mask);
+                mask &= mask - 1;
+                if (mask == 0) {
+                    /* two (the commonest case): one comparison orders them */
+                    bool second_first = t_enter[k2] < t_enter[k];
+                    int near = second_first ? k2 : k, far = second_first ? k : k2;
+                    prefetch_child(b, node->child[far]);
+                    stack[top++] = (bvh4_entry){node->child[far], t_enter[far]};
+                    current = node->child[near];
+                    continue;
+                }
+                mask |= 1 << k2;
+                /* Three or four: sort them by t_enter, nearest last
+                 * (insertion sort), push all but the nearest, visit it. */
                 bvh4_entry hits[4];
                 int n = 0;
                 hits[n++] = (bvh4_entry){node->child[k], t_enter[k]};
+                prefetch_child(b, node->child[k]);
                 while (mask != 0) {
                     k = lowest_bit((unsigned)mask);
                     mask &= mask - 1;
                     bvh4_entry e = {node->child[k], t_enter[k]};
+                    prefetch_child(b, e.ref);
                     int j = n++;
                     while (j > 0 && hits[j - 1].t_enter < e.t_enter) {
                         hits[j] = hits[j - 1];
@@ -351,7 +420,7 @@ static bool finish_closest(const bvh4 *b, const bvh4_found *found, const ray *r,
 {
     if (found->lane < 0)
         return false;
-    triangle_set_fill_hit(b->base.set, b->triangle_index[found->lane], *r, found->t, found->b1, found->b2, record);
+    triangle_set_fill_hit(b->base.set, b->packets[found->lane / 4].index[found->lane % 4], *r, found->t, found->b1, found->b2, record);
     return true;
 }
 
@@ -384,7 +453,6 @@ static void bvh4_destroy(accel *a)
     bvh4 *b = (bvh4 *)a;
     free(b->nodes);
     free(b->packets);
-    free(b->triangle_index);
     free(b);
 }
 

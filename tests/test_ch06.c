@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "06-bvh/bvh.h"
+#include "06-bvh/bvh4.h"
 #include "accel_check.h"
 #include "test_support.h"
 
@@ -640,6 +641,339 @@ static void test_empty_set_builds_and_misses(void **state)
     mesh_free(&m);
 }
 
+/* ---- the 4-wide BVH ------------------------------------------------------------ */
+
+static accel *build_bvh4_sah(const triangle_set *set) { return bvh4_build(set, BVH_SPLIT_SAH); }
+static accel *build_bvh4_median(const triangle_set *set) { return bvh4_build(set, BVH_SPLIT_MEDIAN); }
+static accel *build_bvh4_sah_scalar(const triangle_set *set)
+{
+    accel *a = bvh4_build(set, BVH_SPLIT_SAH);
+    assert_true(bvh4_set_kernel(a, BVH4_KERNEL_SCALAR));
+    return a;
+}
+
+static void test_bvh4_agrees_with_brute_force(void **state)
+{
+    (void)state;
+    accel_check_all(build_bvh4_sah, 15000, "bvh4 sah");
+    accel_check_all(build_bvh4_median, 3000, "bvh4 median");
+}
+
+/* The plain C loops, the path a machine without SSE takes. */
+static void test_bvh4_scalar_kernel_agrees_with_brute_force(void **state)
+{
+    (void)state;
+    accel_check_all(build_bvh4_sah_scalar, 5000, "bvh4 sah, scalar kernel");
+}
+
+/* Walks the 4-wide tree: each child box contains the boxes below it and its
+ * triangles' boxes, empty slots come last and have the empty box, each
+ * triangle is in exactly one lane, with its own P0 and edges. */
+static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth, int *seen, int *leaves,
+                               int *nodes_seen)
+{
+    assert_true(depth < BVH4_STACK_SIZE / 3);
+    if (bvh4_is_leaf(ref)) {
+        int count = bvh4_leaf_triangles(ref), first = bvh4_leaf_first_packet(ref);
+        assert_true(count >= 1);
+        (*leaves)++;
+        for (int i = 0; i < 4 * ((count + 3) / 4); i++) {
+            int lane = 4 * first + i;
+            assert_true(lane < 4 * b->packet_count);
+            const bvh4_packet *p = &b->packets[first + i / 4];
+            int t = p->index[i % 4];
+            if (i >= count) {
+                assert_int_equal(t, -1);
+                assert_true(p->e1[0][i % 4] == 0.0f && p->e2[2][i % 4] == 0.0f);
+                continue;
+            }
+            assert_true(t >= 0 && t < b->triangle_count);
+            seen[t]++;
+            assert_true(box_contains(box, b->base.set->boxes[t]));
+            const triangle *tri = &b->base.set->triangles[t];
+            assert_true(p->p0[0][i % 4] == tri->p0.x && p->e1[1][i % 4] == tri->p1.y - tri->p0.y &&
+                        p->e2[2][i % 4] == tri->p2.z - tri->p0.z);
+        }
+        return;
+    }
+    assert_true(ref < (uint32_t)b->node_count);
+    (*nodes_seen)++;
+    const bvh4_node *node = &b->nodes[ref];
+    bool empty_seen = false;
+    for (int k = 0; k < 4; k++) {
+        aabb child = {vec3_make(node->bounds[0][k], node->bounds[1][k], node->bounds[2][k]),
+                      vec3_make(node->bounds[3][k], node->bounds[4][k], node->bounds[5][k])};
+        if (node->child[k] == BVH4_EMPTY) {
+            assert_true(k > 0);
+            assert_true(child.lo.x == INFINITY && child.hi.x == -INFINITY);
+            empty_seen = true;
+            continue;
+        }
+        assert_false(empty_seen); /* children first, empty slots last */
+        assert_true(box_contains(box, child));
+        check_bvh4_subtree(b, node->child[k], child, depth + 1, seen, leaves, nodes_seen);
+    }
+}
+
+static void check_bvh4_structure(const accel *a)
+{
+    const bvh4 *b = (const bvh4 *)a;
+    int n = a->set->count;
+    int *seen = calloc((size_t)n + 1, sizeof *seen);
+    int leaves = 0, nodes_seen = 0;
+    if (b->node_count > 0)
+        check_bvh4_subtree(b, 0, a->set->bounds, 0, seen, &leaves, &nodes_seen);
+    for (int t = 0; t < n; t++)
+        assert_int_equal(seen[t], 1);
+    assert_int_equal(leaves, a->stats.leaves);
+    assert_int_equal(nodes_seen, b->node_count);
+    free(seen);
+}
+
+static void test_bvh4_every_triangle_in_exactly_one_lane_and_boxes_nest(void **state)
+{
+    (void)state;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        for (int split = 0; split < 2; split++) {
+            accel *a = bvh4_build(&set, split ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN);
+            check_bvh4_structure(a);
+            accel_destroy(a);
+        }
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+}
+
+/* More coincident triangles than a leaf reference can count (255): the
+ * leaf is split into a node over smaller leaves with the same box, and the
+ * closest hit is still found, at the same t as brute force's. */
+static void test_bvh4_more_coincident_triangles_than_a_leaf_holds(void **state)
+{
+    (void)state;
+    mesh m;
+    mesh_init(&m);
+    mesh_coincident(&m, 1000);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = bvh4_build(&set, BVH_SPLIT_SAH), *brute = brute_force_build(&set);
+    check_bvh4_structure(a);
+    assert_true(((const bvh4 *)a)->node_count >= 2); /* the root, and the node splitting the leaf */
+    for (int kernel = 0; kernel < 2; kernel++) {
+        bvh4_set_kernel(a, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+        pcg32 rng = pcg32_for_pixel(6, 4);
+        int hits = 0;
+        for (int i = 0; i < 2000; i++) {
+            ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+            hit_record want, got;
+            ray_counters counters = {0};
+            bool want_hit = accel_closest_hit(brute, r, &want, &counters);
+            assert_int_equal(accel_closest_hit(a, r, &got, &counters), want_hit);
+            assert_int_equal(accel_any_hit(a, r, &counters), want_hit);
+            if (want_hit) {
+                assert_true(got.t == want.t); /* any of the coincident triangles: they tie */
+                hits++;
+            }
+        }
+        assert_true(hits > 100);
+    }
+    accel_destroy(brute);
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* The SSE and the scalar kernel: the same hits, the same floats, the same
+ * counters, ray by ray, on the tori field. */
+static void test_bvh4_kernels_give_identical_answers(void **state)
+{
+    (void)state;
+    if (!BVH4_HAVE_SSE)
+        skip();
+    mesh m;
+    accel_check_make_mesh(&m, MESH_TORI_FIELD);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+    pcg32 rng = pcg32_for_pixel(6, 44);
+    int hits = 0;
+    for (int i = 0; i < 20000; i++) {
+        ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+        hit_record sse_hit, scalar_hit;
+        ray_counters sse = {0}, scalar = {0};
+        assert_true(bvh4_set_kernel(a, BVH4_KERNEL_SSE));
+        bool sse_found = accel_closest_hit(a, r, &sse_hit, &sse);
+        bool sse_any = accel_any_hit(a, r, &sse);
+        bvh4_set_kernel(a, BVH4_KERNEL_SCALAR);
+        bool scalar_found = accel_closest_hit(a, r, &scalar_hit, &scalar);
+        bool scalar_any = accel_any_hit(a, r, &scalar);
+        assert_int_equal(sse_found, scalar_found);
+        assert_int_equal(sse_any, scalar_any);
+        assert_int_equal(sse.box_tests, scalar.box_tests);
+        assert_int_equal(sse.primitive_tests, scalar.primitive_tests);
+        if (sse_found) {
+            hits++;
+            assert_true(sse_hit.t == scalar_hit.t && sse_hit.u == scalar_hit.u && sse_hit.v == scalar_hit.v);
+            assert_int_equal(sse_hit.shape_id, scalar_hit.shape_id);
+        }
+    }
+    assert_true(hits > 5000);
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* The slab test of chapter 03, four boxes at once, both kernels: the IEEE
+ * cases of test_slab_test_matches_chapter_03 (zero direction components of
+ * both signs, origins exactly on a plane: 0 * inf = NaN, flat boxes), each
+ * lane the same answer and t_enter as aabb_slab_test(), bit for bit. */
+static void test_bvh4_slab_test_matches_chapter_03(void **state)
+{
+    (void)state;
+    pcg32 rng = pcg32_for_pixel(606, 4);
+    int nan_cases = 0, hits = 0;
+    for (int i = 0; i < 50000; i++) {
+        bvh4_node node;
+        memset(&node, 0, sizeof node);
+        aabb boxes[4];
+        for (int k = 0; k < 4; k++) {
+            vec3 a = vec3_make(pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2);
+            vec3 b = vec3_make(pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2);
+            boxes[k] = (aabb){vec3_min(a, b), vec3_max(a, b)};
+            if (pcg32_bounded(&rng, 5) == 0)
+                boxes[k].hi.y = boxes[k].lo.y; /* flat */
+            for (int axis = 0; axis < 3; axis++) {
+                node.bounds[axis][k] = vec3_axis(boxes[k].lo, axis);
+                node.bounds[3 + axis][k] = vec3_axis(boxes[k].hi, axis);
+            }
+        }
+        /* the origin on a plane of box 0 or 1 (alternately), direction
+         * components zero of both signs */
+        const aabb *on_box = &boxes[i % 2];
+        float o[3], d[3];
+        for (int k = 0; k < 3; k++) {
+            o[k] = pcg32_float(&rng) * 6 - 3;
+            d[k] = pcg32_float(&rng) * 2 - 1;
+            uint32_t pick = pcg32_bounded(&rng, 8);
+            if (pick == 0)
+                d[k] = 0.0f;
+            else if (pick == 1)
+                d[k] = -0.0f;
+            uint32_t on = pcg32_bounded(&rng, 6);
+            if (on == 0)
+                o[k] = vec3_axis(on_box->lo, k);
+            else if (on == 1)
+                o[k] = vec3_axis(on_box->hi, k);
+            nan_cases += d[k] == 0.0f && on < 2;
+        }
+        ray r = ray_from(o[0], o[1], o[2], d[0], d[1], d[2]);
+        r.t_max = (i % 3 == 0) ? INFINITY : 5.0f;
+        slab_ray sr = slab_ray_make(r);
+        for (int kernel = 0; kernel < 2; kernel++) {
+            float enter4[4];
+            int mask = bvh4_slab_test(&node, r, r.t_min, r.t_max, enter4, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+            for (int k = 0; k < 4; k++) {
+                float enter03 = 0.0f, exit03 = 0.0f;
+                bool hit03 = aabb_slab_test(&boxes[k], &sr, r.t_min, r.t_max, &enter03, &exit03);
+                bool hit4 = mask >> k & 1;
+                if (hit03 != hit4 || (hit03 && enter03 != enter4[k]))
+                    fail_msg("ray %d box %d kernel %d: chapter 03 %d t_enter %g, bvh4 %d t_enter %g", i, k, kernel,
+                             hit03, (double)enter03, hit4, (double)enter4[k]);
+                hits += hit03 && kernel == 0;
+            }
+        }
+        /* an empty slot's box is missed by every ray */
+        bvh4_node empty;
+        for (int k = 0; k < 4; k++)
+            for (int axis = 0; axis < 3; axis++) {
+                empty.bounds[axis][k] = INFINITY;
+                empty.bounds[3 + axis][k] = -INFINITY;
+            }
+        float enter4[4];
+        assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SSE), 0);
+        assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SCALAR), 0);
+    }
+    print_message("bvh4 slab tests: 200000 boxes, %d hit, %d axes with 0 * inf\n", hits, nan_cases);
+    assert_true(hits > 10000 && nan_cases > 3000);
+}
+
+/* The 4-lane Moller-Trumbore, both kernels, against chapter 01's
+ * triangle_intersect_barycentric(): the same hit or miss, and the same t,
+ * b1, b2 bit for bit, on rays aimed at vertices and edges (the near-ties)
+ * and with degenerate lanes (zero area, and the empty lane). */
+static void test_bvh4_triangle_test_matches_chapter_01(void **state)
+{
+    (void)state;
+    pcg32 rng = pcg32_for_pixel(607, 4);
+    int hits = 0;
+    for (int i = 0; i < 50000; i++) {
+        triangle tris[4];
+        bvh4_packet packet;
+        memset(&packet, 0, sizeof packet);
+        for (int k = 0; k < 4; k++) {
+            vec3 p[3];
+            for (int j = 0; j < 3; j++)
+                p[j] = vec3_make(pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1);
+            if (k == 3 && i % 4 == 0)
+                p[2] = p[1]; /* zero area */
+            tris[k] = (triangle){p[0], p[1], p[2]};
+            vec3 e1 = vec3_sub(p[1], p[0]), e2 = vec3_sub(p[2], p[0]);
+            for (int axis = 0; axis < 3; axis++) {
+                packet.p0[axis][k] = vec3_axis(p[0], axis);
+                packet.e1[axis][k] = vec3_axis(e1, axis);
+                packet.e2[axis][k] = vec3_axis(e2, axis);
+            }
+        }
+        bool empty_lane = i % 4 == 1; /* lane 3 left as an empty lane */
+        if (empty_lane)
+            for (int axis = 0; axis < 3; axis++)
+                packet.p0[axis][3] = packet.e1[axis][3] = packet.e2[axis][3] = 0.0f;
+        /* aim at a vertex or an edge midpoint of lane i % 3's triangle */
+        const triangle *aim = &tris[i % 3];
+        vec3 target = i % 2 ? aim->p1 : vec3_scale(vec3_add(aim->p0, aim->p2), 0.5f);
+        vec3 o = vec3_make(pcg32_float(&rng) * 6 - 3, pcg32_float(&rng) * 6 - 3, pcg32_float(&rng) * 6 - 3);
+        ray r = ray_make(o, vec3_sub(target, o));
+        float t_max = i % 5 == 0 ? 0.9f : INFINITY;
+        for (int kernel = 0; kernel < 2; kernel++) {
+            float t[4] = {0}, b1[4] = {0}, b2[4] = {0};
+            int mask = bvh4_triangle_test(&packet, r, t_max, t, b1, b2, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+            for (int k = 0; k < 4; k++) {
+                float want_t = 0.0f, want_b1 = 0.0f, want_b2 = 0.0f;
+                bool want = !(k == 3 && empty_lane) &&
+                            triangle_intersect_barycentric(&tris[k], &r, &want_t, &want_b1, &want_b2) &&
+                            want_t < t_max;
+                bool got = mask >> k & 1;
+                if (want != got || (want && (t[k] != want_t || b1[k] != want_b1 || b2[k] != want_b2)))
+                    fail_msg("case %d lane %d kernel %d: chapter 01 %d t %a, bvh4 %d t %a", i, k, kernel, want,
+                             (double)want_t, got, (double)t[k]);
+                hits += want && kernel == 0;
+            }
+        }
+    }
+    print_message("bvh4 triangle tests: 200000 lanes, %d hit\n", hits);
+    assert_true(hits > 20000);
+}
+
+static void test_bvh4_empty_set_builds_and_misses(void **state)
+{
+    (void)state;
+    mesh m;
+    mesh_init(&m);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+    hit_record hit;
+    ray_counters counters = {0};
+    assert_false(accel_closest_hit(a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
+    assert_false(accel_any_hit(a, ray_from(0, 0, 0, 0, 0, 1), &counters));
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -659,6 +993,14 @@ int main(void)
         cmocka_unit_test(test_exponentially_spaced_triangles_make_a_chain),
         cmocka_unit_test(test_slab_test_matches_chapter_03),
         cmocka_unit_test(test_empty_set_builds_and_misses),
+        cmocka_unit_test(test_bvh4_agrees_with_brute_force),
+        cmocka_unit_test(test_bvh4_scalar_kernel_agrees_with_brute_force),
+        cmocka_unit_test(test_bvh4_every_triangle_in_exactly_one_lane_and_boxes_nest),
+        cmocka_unit_test(test_bvh4_more_coincident_triangles_than_a_leaf_holds),
+        cmocka_unit_test(test_bvh4_kernels_give_identical_answers),
+        cmocka_unit_test(test_bvh4_slab_test_matches_chapter_03),
+        cmocka_unit_test(test_bvh4_triangle_test_matches_chapter_01),
+        cmocka_unit_test(test_bvh4_empty_set_builds_and_misses),
     };
     return cmocka_run_group_tests_name("ch06 bvh", tests, NULL, NULL);
 }

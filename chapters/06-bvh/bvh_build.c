@@ -61,7 +61,15 @@ typedef struct {
     int leaves;
     int max_depth;
     bvh_split split;
+    bvh_sah_params sah;
 } builder;
+
+/* The SAH counts a leaf's triangles in blocks of sah.leaf_block: a 4-wide
+ * triangle test (bvh4.c) costs the same for 1 to 4 triangles. */
+static inline float sah_blocks(const builder *b, int n)
+{
+    return (float)((n + b->sah.leaf_block - 1) / b->sah.leaf_block);
+}
 
 /* The box's centroid along one axis, computed the same way everywhere. */
 static inline float centroid(const build_triangle *t, int axis) { return 0.5f * (t->lo[axis] + t->hi[axis]); }
@@ -273,9 +281,9 @@ static bool split_sah(builder *b, int begin, int end, const box3 *box, const box
                 n += bins[axis][k].count;
                 if (n == 0 || right_count[k + 1] == 0)
                     continue; /* one side empty: not a split */
-                float cost = BVH_SAH_TRAVERSAL_COST * node_area +
-                             BVH_SAH_INTERSECTION_COST * (box3_area(&left) * (float)n +
-                                                          right_area[k + 1] * (float)right_count[k + 1]);
+                float cost = b->sah.traversal_cost * node_area +
+                             BVH_SAH_INTERSECTION_COST * (box3_area(&left) * sah_blocks(b, n) +
+                                                          right_area[k + 1] * sah_blocks(b, right_count[k + 1]));
                 if (cost < best_cost) {
                     best_cost = cost;
                     best_axis = axis;
@@ -286,8 +294,8 @@ static bool split_sah(builder *b, int begin, int end, const box3 *box, const box
     }
 
     /* Stop when necessary: when a leaf is cheaper, and small enough */
-    float leaf_cost = BVH_SAH_INTERSECTION_COST * (float)count * box3_area(box);
-    bool must_split = count > BVH_SAH_MAX_LEAF_SIZE;
+    float leaf_cost = BVH_SAH_INTERSECTION_COST * sah_blocks(b, count) * box3_area(box);
+    bool must_split = count > b->sah.max_leaf_size;
     if (best_axis < 0) {
         /* No binned split (the extents defeat the bins, or the areas
          * overflow): split a set too big for a leaf at the median. */
@@ -414,6 +422,12 @@ static bvh *bvh_alloc(const triangle_set *set)
 
 accel *bvh_build(const triangle_set *set, bvh_split split)
 {
+    bvh_sah_params sah = {BVH_SAH_TRAVERSAL_COST, 1, BVH_SAH_MAX_LEAF_SIZE};
+    return bvh_build_with(set, split, &sah);
+}
+
+accel *bvh_build_with(const triangle_set *set, bvh_split split, const bvh_sah_params *sah)
+{
     double start = timer_seconds();
     bvh *result = bvh_alloc(set);
     result->split = split;
@@ -430,6 +444,7 @@ accel *bvh_build(const triangle_set *set, bvh_split split)
      * one triangle). Whatever is left over is given back at the end. */
     builder b = {0};
     b.split = split;
+    b.sah = *sah;
     b.tris = memory_allocate((size_t)n, sizeof *b.tris);
     b.nodes = bvh_nodes_allocate(2 * n - 1);
     for (int i = 0; i < n; i++) {

@@ -52,8 +52,8 @@ static inline bool bvh_triangle_intersect(const bvh_triangle *tri, const ray *r,
  * 6.2e-4 relative (at grazing angles; 37 hits above 2^-15). So boxes are
  * culled against the closest hit times 1 + 2^-9 (1.95e-3, three times the
  * worst seen); the triangle tests still use the closest hit itself, so the
- * answer is exactly brute force's whenever the slack changes nothing. */
-static const float BVH_CULL_SLACK = 1.0f + 0x1.0p-9f;
+ * answer is exactly brute force's whenever the slack changes nothing.
+ * (BVH_CULL_SLACK is in bvh_internal.h: the 4-wide BVH culls with it too.) */
 
 /* What a traversal found: the closest triangle so far (in leaf order). */
 typedef struct {

@@ -1,0 +1,124 @@
+/* bvh4.h -- what production kernels do: a 4-wide BVH (the last section of
+ * this chapter's README). The lecture's binary BVH answers every question a
+ * ray asks of it with one box at a time: fetch a node, test its box, decide
+ * which way to go. Each decision waits for the fetch before it, and the
+ * "which way" is a branch the processor guesses wrong about half the time
+ * on incoherent rays. A 4-wide BVH asks four questions at once: a node holds
+ * the boxes of up to four children side by side (structure of arrays), one
+ * SSE slab test checks all four, and the children hit are visited nearest
+ * first. Half as many levels, so half as many dependent fetches, and the
+ * four answers come back as one 4-bit mask instead of four branches.
+ *
+ * Built by collapsing the binary SAH tree (bvh_build.c): each 4-wide node
+ * takes a binary node and pulls up grandchildren, the one with the largest
+ * surface area first, until it has four children. Leaves hold triangles in
+ * packets of four, also structure of arrays, tested by a 4-lane
+ * Moller-Trumbore that does, per lane, exactly the scalar test's
+ * arithmetic: the same t, bit for bit.
+ *
+ * Usage:
+ *   accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+ *   if (accel_closest_hit(a, r, &hit, &counters)) ...   same as any accel
+ *   bvh4_set_kernel(a, BVH4_KERNEL_SCALAR);              the plain C path (tests)
+ *   accel_destroy(a);
+ *
+ * Counters: box_tests counts the child boxes slab-tested (2 to 4 per node
+ * visited: the real children, not the empty slots of a node with fewer);
+ * primitive_tests the triangles tested (not the empty lanes of a packet).
+ * Both are therefore comparable with the binary BVH's; the number of nodes
+ * fetched is about box_tests / 3.5.
+ */
+#ifndef BVH4_H
+#define BVH4_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "06-bvh/bvh.h"
+
+/* Is the SSE path compiled in? (x86-64 always has SSE2.) Without it, only
+ * the plain C loops exist; both give the same answers. */
+#if defined(__SSE2__) && !defined(BVH4_NO_SIMD)
+#define BVH4_HAVE_SSE 1
+#else
+#define BVH4_HAVE_SSE 0
+#endif
+
+/* A child reference, 32 bits:
+ *   bit 31 clear   an interior node: the index of the node
+ *   bit 31 set     a leaf: bits 23..30 its triangle count (0..255), bits
+ *                  0..22 the index of its first packet; its triangles fill
+ *                  packets first, first + 1, ... in order
+ * An empty slot is a leaf with no triangles (BVH4_EMPTY), under a box
+ * (lo = +inf, hi = -inf) that no ray hits. */
+#define BVH4_LEAF 0x80000000u
+#define BVH4_EMPTY BVH4_LEAF
+enum { BVH4_LEAF_MAX = 255, BVH4_PACKET_SHIFT = 23 };
+
+static inline bool bvh4_is_leaf(uint32_t ref) { return (ref & BVH4_LEAF) != 0; }
+static inline int bvh4_leaf_triangles(uint32_t ref) { return (int)((ref >> BVH4_PACKET_SHIFT) & 0xFFu); }
+static inline int bvh4_leaf_first_packet(uint32_t ref) { return (int)(ref & ((1u << BVH4_PACKET_SHIFT) - 1u)); }
+
+/* One node, 128 bytes: the boxes of its four children, by plane then by
+ * child (bounds[0][k] is child k's lo.x; 0..2 lo x, y, z, 3..5 hi x, y, z,
+ * the order of bvh_node.bounds), and the four child references. Children
+ * come first, empty slots last. 112 bytes would do, but then half the
+ * nodes would straddle three cache lines instead of two. */
+typedef struct {
+    _Alignas(64) float bounds[6][4]; /* one SSE load per plane; a node is two whole cache lines */
+    uint32_t child[4];
+    uint32_t unused[4];
+} bvh4_node;
+
+_Static_assert(sizeof(bvh4_node) == 128, "a 4-wide node is two cache lines");
+
+/* Four triangles as the 4-lane Moller-Trumbore reads them: P0, E1 = P1 - P0
+ * and E2 = P2 - P0, by coordinate then by lane (p0[1][k] is lane k's P0.y),
+ * and which triangle of the set each lane is (right there, in the cache
+ * lines just read, when a hit needs it). An empty lane is all zeros, with
+ * index -1: its determinant is 0, so it never hits. 160 bytes. */
+typedef struct {
+    _Alignas(16) float p0[3][4];
+    float e1[3][4], e2[3][4];
+    int32_t index[4];
+} bvh4_packet;
+
+/* Which code tests boxes and triangles: the SSE intrinsics, or a plain C
+ * loop over the four lanes with the same arithmetic (the same answers). */
+typedef enum { BVH4_KERNEL_SSE, BVH4_KERNEL_SCALAR } bvh4_kernel;
+
+typedef struct {
+    accel base;
+    bvh4_node *nodes; /* nodes[0] is the root */
+    int node_count;
+    bvh4_packet *packets; /* a leaf's packets are consecutive */
+    int packet_count;
+    int triangle_count;
+    bvh4_kernel kernel;
+} bvh4;
+
+/* Build the binary tree with `split` (for BVH_SPLIT_SAH with leaf costs in
+ * blocks of four triangles, what a packet costs), then collapse it. The
+ * build time in stats includes both. */
+accel *bvh4_build(const triangle_set *set, bvh_split split);
+
+/* Switch the kernel of a built bvh4; returns false (and changes nothing)
+ * for BVH4_KERNEL_SSE when it is not compiled in. The default is SSE where
+ * compiled in. */
+bool bvh4_set_kernel(accel *a, bvh4_kernel kernel);
+
+/* The two tests the traversal runs, on their own (for the tests): the slab
+ * test of a node's four boxes, as bvh_slab_test() does for one, returning
+ * the mask of boxes hit and their t_enter; and Moller-Trumbore on a packet's
+ * four lanes in (r.t_min, t_max), as the scalar test, returning the mask of
+ * lanes hit and their t, b1, b2 (lanes not hit are left as they were). */
+int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float t_enter[4], bvh4_kernel kernel);
+int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
+                       bvh4_kernel kernel);
+
+/* The traversal's stack: each 4-wide node pushes at most 3 entries, and the
+ * 4-wide tree is no deeper than the binary one plus the levels that split
+ * leaves of more than BVH4_LEAF_MAX triangles. */
+enum { BVH4_STACK_SIZE = 3 * BVH_STACK_SIZE + 64 };
+
+#endif

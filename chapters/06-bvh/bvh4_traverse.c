@@ -1,0 +1,488 @@
+/* bvh4_traverse.c -- a ray through a 4-wide BVH: at each node, slab-test
+ * the four children's boxes at once, go on with the nearest child hit and
+ * put the others on the stack, farthest deepest; in a leaf, test its
+ * triangles four at a time. Both tests exist twice, with SSE intrinsics and
+ * as a plain C loop over the lanes; the two do the same float operations in
+ * the same order, so they give the same answers (test_ch06 runs both). */
+#include <stdlib.h>
+
+#include "bvh4.h"
+#include "bvh_internal.h"
+
+#if BVH4_HAVE_SSE
+#include <immintrin.h>
+#endif
+
+/* ---- the ray, prepared once ---------------------------------------------------- */
+
+typedef struct {
+    bvh_ray scalar; /* origin, 1/d, and which plane of each axis is met first */
+    int far_x, far_y, far_z;
+#if BVH4_HAVE_SSE
+    __m128 origin[3], inverse_direction[3], direction[3];
+#endif
+} bvh4_ray;
+
+static inline bvh4_ray bvh4_ray_make(const ray *r)
+{
+    bvh4_ray b;
+    b.scalar = bvh_ray_make(r);
+    b.far_x = 3 - b.scalar.near_x;
+    b.far_y = 5 - b.scalar.near_y;
+    b.far_z = 7 - b.scalar.near_z;
+#if BVH4_HAVE_SSE
+    b.origin[0] = _mm_set1_ps(r->origin.x);
+    b.origin[1] = _mm_set1_ps(r->origin.y);
+    b.origin[2] = _mm_set1_ps(r->origin.z);
+    b.inverse_direction[0] = _mm_set1_ps(b.scalar.inverse_direction.x);
+    b.inverse_direction[1] = _mm_set1_ps(b.scalar.inverse_direction.y);
+    b.inverse_direction[2] = _mm_set1_ps(b.scalar.inverse_direction.z);
+    b.direction[0] = _mm_set1_ps(r->direction.x);
+    b.direction[1] = _mm_set1_ps(r->direction.y);
+    b.direction[2] = _mm_set1_ps(r->direction.z);
+#endif
+    return b;
+}
+
+/* ---- four slab tests ---------------------------------------------------------------
+ * bvh_slab_test() (bvh.h) for the four children: the same operations in the
+ * same order, so the same answer for every box, including its IEEE rules
+ * (NaN from 0 * inf leaves t_enter and t_exit as they are; the flat-box pad
+ * on t_exit). Returns a 4-bit mask of the boxes hit, with their t_enter. */
+
+static inline int slab_test4_scalar(const bvh4_node *node, const bvh4_ray *r, float t_min, float t_max,
+                                    float t_enter[4])
+{
+    const bvh_ray *s = &r->scalar;
+    int mask = 0;
+    for (int k = 0; k < 4; k++) {
+        float near_x = (node->bounds[s->near_x][k] - s->origin.x) * s->inverse_direction.x;
+        float far_x = (node->bounds[r->far_x][k] - s->origin.x) * s->inverse_direction.x;
+        float near_y = (node->bounds[s->near_y][k] - s->origin.y) * s->inverse_direction.y;
+        float far_y = (node->bounds[r->far_y][k] - s->origin.y) * s->inverse_direction.y;
+        float near_z = (node->bounds[s->near_z][k] - s->origin.z) * s->inverse_direction.z;
+        float far_z = (node->bounds[r->far_z][k] - s->origin.z) * s->inverse_direction.z;
+        float enter = t_min, exit = INFINITY;
+        enter = near_x > enter ? near_x : enter;
+        enter = near_y > enter ? near_y : enter;
+        enter = near_z > enter ? near_z : enter;
+        exit = far_x < exit ? far_x : exit;
+        exit = far_y < exit ? far_y : exit;
+        exit = far_z < exit ? far_z : exit;
+        exit *= BVH_SLAB_ROUNDING_PAD;
+        exit = t_max < exit ? t_max : exit;
+        t_enter[k] = enter;
+        mask |= (enter <= exit) << k;
+    }
+    return mask;
+}
+
+#if BVH4_HAVE_SSE
+/* _mm_max_ps(a, b) is a > b ? a : b and _mm_min_ps(a, b) is a < b ? a : b,
+ * operand order included (with a NaN, they return b): exactly the scalar
+ * selections above. */
+static inline int slab_test4_sse(const bvh4_node *node, const bvh4_ray *r, float t_min, float t_max,
+                                 float t_enter[4])
+{
+    const bvh_ray *s = &r->scalar;
+    __m128 near_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[s->near_x]), r->origin[0]), r->inverse_direction[0]);
+    __m128 far_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[r->far_x]), r->origin[0]), r->inverse_direction[0]);
+    __m128 near_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[s->near_y]), r->origin[1]), r->inverse_direction[1]);
+    __m128 far_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[r->far_y]), r->origin[1]), r->inverse_direction[1]);
+    __m128 near_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[s->near_z]), r->origin[2]), r->inverse_direction[2]);
+    __m128 far_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[r->far_z]), r->origin[2]), r->inverse_direction[2]);
+    __m128 enter = _mm_set1_ps(t_min), exit = _mm_set1_ps(INFINITY);
+    enter = _mm_max_ps(near_x, enter);
+    enter = _mm_max_ps(near_y, enter);
+    enter = _mm_max_ps(near_z, enter);
+    exit = _mm_min_ps(far_x, exit);
+    exit = _mm_min_ps(far_y, exit);
+    exit = _mm_min_ps(far_z, exit);
+    exit = _mm_mul_ps(exit, _mm_set1_ps(BVH_SLAB_ROUNDING_PAD));
+    exit = _mm_min_ps(_mm_set1_ps(t_max), exit);
+    _mm_storeu_ps(t_enter, enter);
+    return _mm_movemask_ps(_mm_cmple_ps(enter, exit));
+}
+#endif
+
+/* ---- four triangle tests --------------------------------------------------------------
+ * bvh_triangle_intersect() (bvh_traverse.c) on each lane: the same products
+ * in the same order (vec3_cross, vec3_dot: (x + y) + z), so the same t, b1,
+ * b2, bit for bit, and the same rules: a determinant of exactly 0 is refused,
+ * every comparison is false for NaN. Returns the mask of lanes hit in
+ * (t_min, t_max). */
+
+static inline int triangle_test4_scalar(const bvh4_packet *p, const ray *r, float t_max, float t[4], float b1[4],
+                                        float b2[4])
+{
+    int mask = 0;
+    for (int k = 0; k < 4; k++) {
+        vec3 p0 = vec3_make(p->p0[0][k], p->p0[1][k], p->p0[2][k]);
+        vec3 e1 = vec3_make(p->e1[0][k], p->e1[1][k], p->e1[2][k]);
+        vec3 e2 = vec3_make(p->e2[0][k], p->e2[1][k], p->e2[2][k]);
+        vec3 s1 = vec3_cross(r->direction, e2);
+        float determinant = vec3_dot(s1, e1);
+        if (determinant == 0.0f)
+            continue;
+        float inverse = 1.0f / determinant;
+        vec3 s = vec3_sub(r->origin, p0);
+        float u = vec3_dot(s1, s) * inverse;
+        if (!(u >= 0.0f && u <= 1.0f))
+            continue;
+        vec3 s2 = vec3_cross(s, e1);
+        float v = vec3_dot(s2, r->direction) * inverse;
+        if (!(v >= 0.0f && u + v <= 1.0f))
+            continue;
+        float distance = vec3_dot(s2, e2) * inverse;
+        if (!(distance > r->t_min && distance < t_max))
+            continue;
+        t[k] = distance;
+        b1[k] = u;
+        b2[k] = v;
+        mask |= 1 << k;
+    }
+    return mask;
+}
+
+#if BVH4_HAVE_SSE
+/* The scalar test stops at the first failed condition; here every lane
+ * runs to the end and the conditions are and-ed. A lane the scalar test
+ * leaves early (determinant 0) computes 1/0 = inf and NaN on the way, which
+ * fail its remaining comparisons: the mask is the same. */
+static inline int triangle_test4_sse(const bvh4_packet *p, const bvh4_ray *r4, const ray *r, float t_max, float t[4],
+                                     float b1[4], float b2[4])
+{
+    const __m128 *d = r4->direction;
+    __m128 e1x = _mm_load_ps(p->e1[0]), e1y = _mm_load_ps(p->e1[1]), e1z = _mm_load_ps(p->e1[2]);
+    __m128 e2x = _mm_load_ps(p->e2[0]), e2y = _mm_load_ps(p->e2[1]), e2z = _mm_load_ps(p->e2[2]);
+    /* S1 = D x E2 */
+    __m128 s1x = _mm_sub_ps(_mm_mul_ps(d[1], e2z), _mm_mul_ps(d[2], e2y));
+    __m128 s1y = _mm_sub_ps(_mm_mul_ps(d[2], e2x), _mm_mul_ps(d[0], e2z));
+    __m128 s1z = _mm_sub_ps(_mm_mul_ps(d[0], e2y), _mm_mul_ps(d[1], e2x));
+    __m128 determinant = _mm_add_ps(_mm_add_ps(_mm_mul_ps(s1x, e1x), _mm_mul_ps(s1y, e1y)), _mm_mul_ps(s1z, e1z));
+    __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+    __m128 ok = _mm_cmpneq_ps(determinant, zero);
+    __m128 inverse = _mm_div_ps(one, determinant);
+    /* S = O - P0 */
+    __m128 sx = _mm_sub_ps(r4->origin[0], _mm_load_ps(p->p0[0]));
+    __m128 sy = _mm_sub_ps(r4->origin[1], _mm_load_ps(p->p0[1]));
+    __m128 sz = _mm_sub_ps(r4->origin[2], _mm_load_ps(p->p0[2]));
+    __m128 u = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(s1x, sx), _mm_mul_ps(s1y, sy)), _mm_mul_ps(s1z, sz)), inverse);
+    ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpge_ps(u, zero), _mm_cmple_ps(u, one)));
+    /* S2 = S x E1 */
+    __m128 s2x = _mm_sub_ps(_mm_mul_ps(sy, e1z), _mm_mul_ps(sz, e1y));
+    __m128 s2y = _mm_sub_ps(_mm_mul_ps(sz, e1x), _mm_mul_ps(sx, e1z));
+    __m128 s2z = _mm_sub_ps(_mm_mul_ps(sx, e1y), _mm_mul_ps(sy, e1x));
+    __m128 v = _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(s2x, d[0]), _mm_mul_ps(s2y, d[1])), _mm_mul_ps(s2z, d[2])), inverse);
+    ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpge_ps(v, zero), _mm_cmple_ps(_mm_add_ps(u, v), one)));
+    __m128 distance =
+        _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(s2x, e2x), _mm_mul_ps(s2y, e2y)), _mm_mul_ps(s2z, e2z)), inverse);
+    ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpgt_ps(distance, _mm_set1_ps(r->t_min)),
+                                   _mm_cmplt_ps(distance, _mm_set1_ps(t_max))));
+    int mask = _mm_movemask_ps(ok);
+    if (mask != 0) { /* all four lanes: the caller reads only those hit */
+        _mm_storeu_ps(t, distance);
+        _mm_storeu_ps(b1, u);
+        _mm_storeu_ps(b2, v);
+    }
+    return mask;
+}
+#endif
+
+int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float t_enter[4], bvh4_kernel kernel)
+{
+    bvh4_ray r4 = bvh4_ray_make(&r);
+#if BVH4_HAVE_SSE
+    if (kernel == BVH4_KERNEL_SSE)
+        return slab_test4_sse(node, &r4, t_min, t_max, t_enter);
+#endif
+    (void)kernel;
+    return slab_test4_scalar(node, &r4, t_min, t_max, t_enter);
+}
+
+int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
+                       bvh4_kernel kernel)
+{
+    bvh4_ray r4 = bvh4_ray_make(&r);
+    float lane_t[4], lane_b1[4], lane_b2[4];
+    int mask;
+#if BVH4_HAVE_SSE
+    if (kernel == BVH4_KERNEL_SSE)
+        mask = triangle_test4_sse(packet, &r4, &r, t_max, lane_t, lane_b1, lane_b2);
+    else
+#endif
+        mask = triangle_test4_scalar(packet, &r, t_max, lane_t, lane_b1, lane_b2);
+    (void)kernel;
+    (void)r4;
+    for (int k = 0; k < 4; k++) /* lanes not hit keep what they had */
+        if (mask >> k & 1) {
+            t[k] = lane_t[k];
+            b1[k] = lane_b1[k];
+            b2[k] = lane_b2[k];
+        }
+    return mask;
+}
+
+/* ---- traversal ------------------------------------------------------------------- */
+
+/* traverse4() and test_leaf4() are inlined into each of the four callers,
+ * so that `sse` and `stop_at_first` are constants there and the compiler
+ * drops the branches on them. */
+#if defined(__GNUC__)
+#define ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define ALWAYS_INLINE inline
+#endif
+
+/* What a traversal found: the closest triangle so far (4 packet + lane). */
+typedef struct {
+    int lane; /* -1: none */
+    float t, b1, b2;
+} bvh4_found;
+
+typedef struct {
+    uint32_t ref;
+    float t_enter;
+} bvh4_entry;
+
+static inline int lowest_bit(unsigned mask) { return __builtin_ctz(mask); }
+
+/* Ask for a child's memory before it is needed: a node's two cache lines,
+ * or a leaf's packets (160 bytes each). The children hit at a node are all
+ * fetched at once, in parallel, instead of one after the other as the
+ * traversal reaches them. */
+static inline void prefetch_child(const bvh4 *b, uint32_t ref)
+{
+#if defined(__GNUC__)
+    if (!bvh4_is_leaf(ref)) {
+        const char *p = (const char *)&b->nodes[ref];
+        __builtin_prefetch(p);
+        __builtin_prefetch(p + 64);
+        return;
+    }
+    const char *p = (const char *)&b->packets[bvh4_leaf_first_packet(ref)];
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + 64);
+    __builtin_prefetch(p + 128);
+    if (bvh4_leaf_triangles(ref) > 4) {
+        __builtin_prefetch(p + 192);
+        __builtin_prefetch(p + 256);
+    }
+#else
+    (void)b;
+    (void)ref;
+#endif
+}
+
+/* A hit will be turned into a hit record from the set's copy of the
+ * triangle and the mesh's face: ask for them as soon as a hit is found, so
+ * they are in the cache by the end of the traversal (usually the first hit
+ * found is the closest). */
+static inline void prefetch_hit(const bvh4 *b, int index)
+{
+#if defined(__GNUC__)
+    __builtin_prefetch(&b->base.set->triangles[index]);
+    if (b->base.set->source != NULL)
+        __builtin_prefetch(&b->base.set->source->faces[index]);
+#else
+    (void)b;
+    (void)index;
+#endif
+}
+
+/* The leaf's packets against (t_min, found->t). The lanes hit in a packet
+ * all lie before found->t; the closest of them, the first among equals,
+ * wins: what testing the triangles one by one in lane order gives. */
+static ALWAYS_INLINE bool test_leaf4(const bvh4 *b, uint32_t ref, const bvh4_ray *r4, const ray *r, bvh4_found *found,
+                              bool stop_at_first, bool sse, uint64_t *primitive_tests)
+{
+    int count = bvh4_leaf_triangles(ref), first = bvh4_leaf_first_packet(ref);
+    for (int p = 0; p * 4 < count; p++) {
+        float t[4], b1[4], b2[4];
+        const bvh4_packet *packet = &b->packets[first + p];
+        int mask;
+#if BVH4_HAVE_SSE
+        if (sse)
+            mask = triangle_test4_sse(packet, r4, r, found->t, t, b1, b2);
+        else
+#endif
+            mask = triangle_test4_scalar(packet, r, found->t, t, b1, b2);
+        (void)sse;
+        (void)r4;
+        *primitive_tests += (uint64_t)(count - 4 * p < 4 ? count - 4 * p : 4);
+        if (mask == 0)
+            continue;
+        while (mask != 0) {
+            int k = lowest_bit((unsigned)mask);
+            mask &= mask - 1;
+            if (t[k] < found->t)
+                *found = (bvh4_found){4 * (first + p) + k, t[k], b1[k], b2[k]};
+        }
+        if (stop_at_first)
+            return true;
+        prefetch_hit(b, packet->index[found->lane % 4]);
+    }
+    return false;
+}
+
+/* Real children of a node (the empty slots come last). */
+static inline int child_count(const bvh4_node *node)
+{
+    return 1 + (node->child[1] != BVH4_EMPTY) + (node->child[2] != BVH4_EMPTY) + (node->child[3] != BVH4_EMPTY);
+}
+
+static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_first, bool sse, ray_counters *counters)
+{
+    bvh4_found found = {-1, r->t_max, 0.0f, 0.0f};
+    if (b->node_count == 0)
+        return found;
+    bvh4_ray r4 = bvh4_ray_make(r);
+    bvh4_entry stack[BVH4_STACK_SIZE];
+    int top = 0;
+    uint32_t current = 0; /* the root */
+    uint64_t box_tests = 0, primitive_tests = 0;
+    for (;;) {
+        if (!bvh4_is_leaf(current)) {
+            const bvh4_node *node = &b->nodes[current];
+            float t_enter[4];
+            float cull = found.t * BVH_CULL_SLACK;
+            int mask;
+#if BVH4_HAVE_SSE
+            if (sse)
+                mask = slab_test4_sse(node, &r4, r->t_min, cull, t_enter);
+            else
+#endif
+                mask = slab_test4_scalar(node, &r4, r->t_min, cull, t_enter);
+            box_tests += (uint64_t)child_count(node);
+            if (mask != 0) {
+                int k = lowest_bit((unsigned)mask);
+                mask &= mask - 1;
+                if (mask == 0) {
+                    /* one child hit: no order to decide */
+                    current = node->child[k];
+                    continue;
+                }
+                int k2 = lowest_bit((unsigned)mask);
+                mask &= mask - 1;
+                if (mask == 0) {
+                    /* two (the commonest case): one comparison orders them */
+                    bool second_first = t_enter[k2] < t_enter[k];
+                    int near = second_first ? k2 : k, far = second_first ? k : k2;
+                    prefetch_child(b, node->child[far]);
+                    stack[top++] = (bvh4_entry){node->child[far], t_enter[far]};
+                    current = node->child[near];
+                    continue;
+                }
+                mask |= 1 << k2;
+                /* Three or four: sort them by t_enter, nearest last
+                 * (insertion sort), push all but the nearest, visit it. */
+                bvh4_entry hits[4];
+                int n = 0;
+                hits[n++] = (bvh4_entry){node->child[k], t_enter[k]};
+                prefetch_child(b, node->child[k]);
+                while (mask != 0) {
+                    k = lowest_bit((unsigned)mask);
+                    mask &= mask - 1;
+                    bvh4_entry e = {node->child[k], t_enter[k]};
+                    prefetch_child(b, e.ref);
+                    int j = n++;
+                    while (j > 0 && hits[j - 1].t_enter < e.t_enter) {
+                        hits[j] = hits[j - 1];
+                        j--;
+                    }
+                    hits[j] = e;
+                }
+                for (int j = 0; j < n - 1; j++)
+                    stack[top++] = hits[j];
+                current = hits[n - 1].ref;
+                continue;
+            }
+        } else if (test_leaf4(b, current, &r4, r, &found, stop_at_first, sse, &primitive_tests)) {
+            break;
+        }
+        /* Next from the stack, skipping entries that begin beyond the
+         * closest hit (their box test would fail now). */
+        float cull = found.t * BVH_CULL_SLACK;
+        while (top > 0 && stack[top - 1].t_enter > cull)
+            top--;
+        if (top == 0)
+            break;
+        current = stack[--top].ref;
+    }
+    counters->box_tests += box_tests;
+    counters->primitive_tests += primitive_tests;
+    return found;
+}
+
+/* ---- the accel interface ------------------------------------------------------------- */
+
+static bool finish_closest(const bvh4 *b, const bvh4_found *found, const ray *r, hit_record *record)
+{
+    if (found->lane < 0)
+        return false;
+    triangle_set_fill_hit(b->base.set, b->packets[found->lane / 4].index[found->lane % 4], *r, found->t, found->b1, found->b2, record);
+    return true;
+}
+
+static bool closest_hit_scalar(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    bvh4_found found = traverse4((const bvh4 *)a, &r, false, false, counters);
+    return finish_closest((const bvh4 *)a, &found, &r, hit);
+}
+
+static bool any_hit_scalar(const accel *a, ray r, ray_counters *counters)
+{
+    return traverse4((const bvh4 *)a, &r, true, false, counters).lane >= 0;
+}
+
+#if BVH4_HAVE_SSE
+static bool closest_hit_sse(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    bvh4_found found = traverse4((const bvh4 *)a, &r, false, true, counters);
+    return finish_closest((const bvh4 *)a, &found, &r, hit);
+}
+
+static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
+{
+    return traverse4((const bvh4 *)a, &r, true, true, counters).lane >= 0;
+}
+#endif
+
+static void bvh4_destroy(accel *a)
+{
+    bvh4 *b = (bvh4 *)a;
+    free(b->nodes);
+    free(b->packets);
+    free(b);
+}
+
+static const accel_ops bvh4_ops_scalar = {closest_hit_scalar, any_hit_scalar, bvh4_destroy};
+#if BVH4_HAVE_SSE
+static const accel_ops bvh4_ops_sse = {closest_hit_sse, any_hit_sse, bvh4_destroy};
+#endif
+
+const accel_ops *bvh4_default_ops(void)
+{
+#if BVH4_HAVE_SSE
+    return &bvh4_ops_sse;
+#else
+    return &bvh4_ops_scalar;
+#endif
+}
+
+bool bvh4_set_kernel(accel *a, bvh4_kernel kernel)
+{
+    bvh4 *b = (bvh4 *)a;
+    if (kernel == BVH4_KERNEL_SCALAR) {
+        b->kernel = kernel;
+        b->base.ops = &bvh4_ops_scalar;
+        return true;
+    }
+#if BVH4_HAVE_SSE
+    b->kernel = kernel;
+    b->base.ops = &bvh4_ops_sse;
+    return true;
+#else
+    return false;
+#endif
+}

@@ -13,11 +13,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "06-bvh/bvh.h"
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/path_tracer.h"
-#include "09-path-tracing/small_bvh.h"
-#include "accel_check.h"
 #include "render.h"
 #include "stats.h"
 #include "test_support.h"
@@ -413,39 +410,6 @@ static void test_one_sided_emitter(void **state)
     pt_scene_free(&sc);
 }
 
-/* The small-scene BVH takes chapter 06's differential test: on every mesh
- * of accel_check.h, closest hits bit for bit brute force's, any-hits
- * consistent with them. Its tree on the Cornell box gives every wall its own
- * leaf: no leaf holds more than 2 of the room's 32 triangles (chapter 06's
- * binned SAH puts 8 in one, README "Speed"). */
-static void test_small_bvh_agrees_with_brute_force(void **state)
-{
-    (void)state;
-    accel_check_all(small_bvh_build, 3000, "small bvh");
-    pt_scene sc;
-    pt_scene_build_cornell_box(&sc);
-    const bvh *b = (const bvh *)sc.bvh;
-    assert_int_equal(b->triangle_count, 32);
-    for (int i = 0; i < b->node_count; i++)
-        if (bvh_node_is_leaf(&b->nodes[i]))
-            assert_true(bvh_node_triangles(&b->nodes[i]) <= 2);
-    /* the twin: the same check on a tree that is one leaf of everything */
-    bvh_node root = {.box = sc.triangles.bounds, .first = 0, .count_axis = 32u << 2};
-    int order[32];
-    for (int i = 0; i < 32; i++)
-        order[i] = i;
-    accel *one_leaf = bvh_from_nodes(&sc.triangles, &root, 1, order, 32);
-    assert_non_null(one_leaf);
-    const bvh *c = (const bvh *)one_leaf;
-    int largest = 0;
-    for (int i = 0; i < c->node_count; i++)
-        if (bvh_node_is_leaf(&c->nodes[i]) && bvh_node_triangles(&c->nodes[i]) > largest)
-            largest = bvh_node_triangles(&c->nodes[i]);
-    assert_true(largest > 2);
-    accel_destroy(one_leaf);
-    pt_scene_free(&sc);
-}
-
 static void test_ggx_sampling_matches_its_pdf(void **state)
 {
     (void)state;
@@ -493,7 +457,6 @@ int main(void)
         cmocka_unit_test(test_same_image_for_one_and_two_threads),
         cmocka_unit_test(test_no_glass_no_refraction_and_no_nan),
         cmocka_unit_test(test_one_sided_emitter),
-        cmocka_unit_test(test_small_bvh_agrees_with_brute_force),
         cmocka_unit_test(test_ggx_sampling_matches_its_pdf),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);

@@ -5,6 +5,7 @@
 #   make chNN        build and run chapter NN          (make ch01)
 #   make test-chNN   build and run chapter NN's tests  (make test-ch01)
 #   make sanitize    the test suites under AddressSanitizer + UndefinedBehaviorSanitizer
+#   make test-seeds  every random test over 200 seeds: how many runs fail
 #   make bench       time the acceleration structures beside Embree (figures, CSV)
 #   make plots       draw every figure (gnuplot) from data the programs write
 #   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
@@ -111,8 +112,10 @@ demo: $(PROGRAMS)
 	@$(MAKE) --no-print-directory $(DEMOS)
 	@echo "Images are in $(BUILD)/out/: open the .png previews, or the .exr files in an EXR viewer."
 
-# Runs every suite even when one fails, then prints one summary line.
-test: $(TESTS)
+# Runs every suite even when one fails, then the checks that are scripts:
+# the programs fed bad input (tests/bad_input.sh) and the hard-case catalog
+# naming only tests that exist (tests/check_catalog.sh). One summary line.
+test: $(TESTS) $(PROGRAMS)
 	@passed=0; failed=0; bad=""; \
 	for t in $(TESTS); do \
 	  echo "== $$t"; \
@@ -122,8 +125,25 @@ test: $(TESTS)
 	  passed=$$((passed + $${p:-0})); failed=$$((failed + $${f:-0})); \
 	  if [ $$status -ne 0 ]; then bad="$$bad $$t"; [ -n "$$f" ] || failed=$$((failed + 1)); fi; \
 	done; \
+	for s in $(TEST_SCRIPTS); do \
+	  echo "== $$s"; \
+	  if $$s $(BUILD); then passed=$$((passed + 1)); else failed=$$((failed + 1)); bad="$$bad $$s"; fi; \
+	done; \
 	echo; echo "$$passed passed, $$failed failed"; \
 	if [ -n "$$bad" ]; then echo "failing suites:$$bad"; exit 1; fi
+
+# Checks that are shell scripts, each given the build directory.
+TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh)
+
+# Every random test (those that take their seed from test_seed() in
+# tests/test_support.h) over SEEDS other seeds, JOBS at a time: how many of
+# the runs fail, per test. Not part of `make test` (about 40 minutes on
+# two busy cores for 200 seeds).
+SEEDS ?= 200
+JOBS ?= 2
+.PHONY: test-seeds
+test-seeds: $(TESTS)
+	@tests/test_seeds.sh $(BUILD) $(SEEDS) $(JOBS)
 
 # The same suites built with AddressSanitizer and UndefinedBehaviorSanitizer,
 # in a build directory of their own. Any report fails the run.
@@ -247,7 +267,7 @@ deps:
 	echo "installed:$$missing"
 
 help:
-	@sed -n '3,13p' Makefile | sed 's/^# \{0,1\}//'
+	@sed -n '3,14p' Makefile | sed 's/^# \{0,1\}//'
 	@echo "chapters: $(CHAPTERS)"
 
 clean:

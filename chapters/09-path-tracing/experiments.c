@@ -150,19 +150,51 @@ static void measure_error(const estimate_image *e, const estimate_image *ref, do
     *relmse = fmax(0.0, sum_relative / (double)n);
 }
 
+/* A CSV is written as "<path>.tmp" and renamed into place only when every
+ * write succeeded: a full disk or a killed run leaves the old table (or
+ * none), never half of one that a plot would draw without complaint. */
+static void csv_temp_path(const char *path, char *temp, size_t size) { snprintf(temp, size, "%s.tmp", path); }
+
 static FILE *open_csv(const char *dir, const char *name, char *path, size_t path_size, char *err, size_t err_size)
 {
+    char temp[4200];
     snprintf(path, path_size, "%s/%s", dir, name);
-    FILE *f = fopen(path, "w");
+    csv_temp_path(path, temp, sizeof temp);
+    FILE *f = fopen(temp, "w");
     if (f == NULL)
         snprintf(err, err_size, "%s: %s", path, strerror(errno));
     return f;
 }
 
+/* Closes without keeping anything: for a run that failed elsewhere. */
+static void discard_csv(FILE *f, const char *path)
+{
+    char temp[4200];
+    csv_temp_path(path, temp, sizeof temp);
+    fclose(f);
+    unlink(temp);
+}
+
 static bool close_csv(FILE *f, const char *path, char *err, size_t err_size)
 {
-    if (ferror(f) | (fclose(f) != 0)) {
-        snprintf(err, err_size, "%s: write failed", path);
+    char temp[4200];
+    csv_temp_path(path, temp, sizeof temp);
+    /* An earlier fprintf may have failed (ferror); the final flush and close
+     * may fail too (a full disk shows up there). */
+    bool written = !ferror(f) && fflush(f) == 0;
+    int reason = errno;
+    if (fclose(f) != 0 && written) {
+        written = false;
+        reason = errno;
+    }
+    if (!written) {
+        snprintf(err, err_size, "%s: write failed (%s)", path, reason != 0 ? strerror(reason) : "stream error");
+        unlink(temp);
+        return false;
+    }
+    if (rename(temp, path) != 0) {
+        snprintf(err, err_size, "%s: %s", path, strerror(errno));
+        unlink(temp);
         return false;
     }
     return true;
@@ -191,7 +223,7 @@ bool experiment_convergence(const pt_scene *sc, const camera *cam, const estimat
         return false;
     FILE *time_csv = open_csv(dir, "ch09_time_to_error.csv", time_path, sizeof time_path, err, err_size);
     if (time_csv == NULL) {
-        fclose(csv);
+        discard_csv(csv, path);
         return false;
     }
     fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample\n");
@@ -230,7 +262,11 @@ bool experiment_convergence(const pt_scene *sc, const camera *cam, const estimat
     }
     printf("\ntime to reach relMSE %g (%dx%d):\n", target_relmse, cam->width, cam->height);
     fflush(time_csv);
-    bool ok = close_csv(csv, path, err, err_size) && close_csv(time_csv, time_path, err, err_size);
+    bool ok = close_csv(csv, path, err, err_size);
+    if (ok)
+        ok = close_csv(time_csv, time_path, err, err_size);
+    else
+        discard_csv(time_csv, time_path);
     if (ok) {
         FILE *again = fopen(time_path, "r");
         char line[512];

@@ -173,6 +173,7 @@ typedef struct {
     const char *name;
     vec2 (*round_trip)(vec2 u);
     bool azimuth_in_y; /* u.y is an angle: 0 and 1 are the same point */
+    bool collapses_at_u_x_zero; /* the line u.x = 0 maps to one point (a pole, centre or vertex) */
 } round_trip_case;
 
 static vec2 rt_uniform_hemisphere(vec2 u) { return invert_uniform_hemisphere(sample_uniform_hemisphere(u)); }
@@ -205,6 +206,15 @@ static float worst_round_trip_error(const round_trip_case *c, uint64_t seed)
         float dx = fabsf(v.x - u.x), dy = fabsf(v.y - u.y);
         if (c->azimuth_in_y)
             dy = fminf(dy, 1.0f - dy);
+        /* Near u.x = 0 some maps send the line to one point: the pole of the
+         * sphere and the cone, the centre of the polar disk, the vertex p0 of
+         * the triangle. There no inverse can give u.y back. Exactly 0 is one
+         * draw in 2^24; the cone's cos(theta) = 1 - 0.2 u.x also rounds to 1
+         * (the pole) for u.x up to 2^-22. The seed sweep found both (round
+         * trips off by 0.08 to 0.9 in 16 of 200 seeds). Below 2^-20 (one
+         * draw in 10^6) u.y is not checked for those maps; u.x still is. */
+        if (u.x < 0x1p-20f && c->collapses_at_u_x_zero)
+            dy = 0.0f;
         worst = fmaxf(worst, fmaxf(dx, dy));
         if (!(dx == dx && dy == dy))
             return INFINITY; /* a NaN is never close */
@@ -216,10 +226,13 @@ static void test_round_trips(void **state)
 {
     (void)state;
     const round_trip_case cases[] = {
-        {"uniform hemisphere", rt_uniform_hemisphere, true}, {"cosine hemisphere", rt_cosine_hemisphere, false},
-        {"uniform sphere", rt_uniform_sphere, true},         {"concentric disk", rt_disk_concentric, false},
-        {"polar disk", rt_disk_polar, true},                 {"triangle", rt_triangle, false},
-        {"cone", rt_cone, true},
+        {"uniform hemisphere", rt_uniform_hemisphere, true, false},
+        {"cosine hemisphere", rt_cosine_hemisphere, false, false},
+        {"uniform sphere", rt_uniform_sphere, true, true}, /* z = 1 - 2 u.x: the pole */
+        {"concentric disk", rt_disk_concentric, false, false},
+        {"polar disk", rt_disk_polar, true, true}, /* r = sqrt(u.x): the centre */
+        {"triangle", rt_triangle, false, true},    /* b0 = 1 - sqrt(u.x): the vertex p0 */
+        {"cone", rt_cone, true, true},             /* z = 1 - u.x (1 - cos theta_max): the pole */
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         float worst = worst_round_trip_error(&cases[i], 80 + i);
@@ -231,7 +244,7 @@ static void test_round_trips(void **state)
 static void test_round_trip_catches_a_wrong_inverse(void **state)
 {
     (void)state;
-    round_trip_case twin = {"polar disk, inverse without the square", rt_disk_polar_wrong_inverse, true};
+    round_trip_case twin = {"polar disk, inverse without the square", rt_disk_polar_wrong_inverse, true, true};
     assert_true(worst_round_trip_error(&twin, 90) > ROUND_TRIP_TOLERANCE);
 }
 
@@ -678,10 +691,19 @@ static void test_chi_square_lambertian_offset_twins_fail(void **state)
 
 /* -- the disk: s = r, t = phi -- */
 
+/* A point on the rim (u.x = 0 in the concentric map: r = 1 exactly) comes
+ * out as r cos(phi), r sin(phi) in float, whose length may exceed 1 by the
+ * rounding of those products: up to about 2 FLT_EPSILON (measured: 2.9e-8).
+ * That is not a sample outside the disk; farther out is. Found by the seed
+ * sweep (p = 0 in 4 of 200 seeds). Such a point counts in the outer ring. */
+static const double DISK_RIM_ROUNDING = 4.0 * FLT_EPSILON;
+
 static bool draw_disk_point(vec2 p, double *s, double *t)
 {
     *s = sqrt((double)p.x * p.x + (double)p.y * p.y);
     *t = angle_phi(vec3_make(p.x, p.y, 0.0f));
+    if (*s > 1.0 && *s <= 1.0 + DISK_RIM_ROUNDING)
+        *s = 1.0;
     return *s <= 1.0;
 }
 static bool draw_disk_concentric(pcg32 *rng, const void *ctx, double *s, double *t)

@@ -141,9 +141,10 @@ TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh)
 # two busy cores for 200 seeds).
 SEEDS ?= 200
 JOBS ?= 2
+SEED_TESTS ?= .
 .PHONY: test-seeds
 test-seeds: $(TESTS)
-	@tests/test_seeds.sh $(BUILD) $(SEEDS) $(JOBS)
+	@tests/test_seeds.sh $(BUILD) $(SEEDS) $(JOBS) '$(SEED_TESTS)'
 
 # The same suites built with AddressSanitizer and UndefinedBehaviorSanitizer,
 # in a build directory of their own. Any report fails the run.

@@ -1,7 +1,7 @@
 #!/bin/sh
 # test_seeds.sh -- every random test of every suite, over SEEDS other seeds.
 #
-#   tests/test_seeds.sh BUILD_DIR [SEEDS] [JOBS]     (make test-seeds)
+#   tests/test_seeds.sh BUILD_DIR [SEEDS] [JOBS] [PATTERN]     (make test-seeds)
 #
 # A test is "random" if it asks test_seed() (tests/test_support.h) for its
 # seed: one run of each suite with TEST_SEED_TRACE set lists them, so the
@@ -10,11 +10,13 @@
 # test, how many of the SEEDS runs failed. The thresholds are set so that a
 # correct implementation fails a test with probability about 1e-6 or less:
 # over 200 seeds the expected count is 0, and any failure is worth reading.
-# Exit status 1 if any run failed.
+# PATTERN (an extended regular expression) keeps only the tests whose names
+# match it. Exit status 1 if any run failed.
 set -u
 build=${1:?usage: test_seeds.sh BUILD_DIR [SEEDS] [JOBS]}
 seeds=${2:-200}
 jobs=${3:-2}
+pattern=${4:-.}
 work=$build/seeds
 rm -rf "$work"
 mkdir -p "$work"
@@ -28,6 +30,8 @@ for suite in "$build"/tests/test_*; do
         /^\[ RUN      \] / { name = $4 }
         /^test_seed: used/ && name != "" && !(name in seen) { seen[name] = 1; print suite, name }' >> "$work/tests"
 done
+grep -E " ($pattern)" "$work/tests" > "$work/tests.kept"
+mv "$work/tests.kept" "$work/tests"
 count=$(wc -l < "$work/tests")
 echo "$count random tests, $seeds seeds each, $jobs at a time"
 

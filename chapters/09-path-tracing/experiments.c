@@ -128,7 +128,15 @@ bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int
     fflush(stdout);
     *out = render_estimate(&reference, cam, spp, 0x5eedULL, threads);
     printf("reference: %.1f s, estimated relative error %.4f -> %s\n", out->seconds, estimate_relative_error(out), path);
-    return image_write_exr(&out->mean, path, err, err_size) && image_write_exr(&out->standard_error, se_path, err, err_size);
+    if (!image_write_exr(&out->mean, path, err, err_size))
+        return false;
+    /* The cache is the pair: a new mean beside an old standard error (or
+     * none) must not be taken for one next time. */
+    if (!image_write_exr(&out->standard_error, se_path, err, err_size)) {
+        unlink(path);
+        return false;
+    }
+    return true;
 }
 
 /* ---- error against the reference ---------------------------------------------------

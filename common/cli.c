@@ -49,7 +49,8 @@ static bool parse_float(const char *text, double min, double max, float *out)
     char *end;
     errno = 0;
     double v = strtod(text, &end);
-    if (errno != 0 || end == text || *end != '\0' || !(v >= min && v <= max))
+    /* isfinite: an unranged flag's bounds are +-HUGE_VAL, which "inf" would meet. */
+    if (errno != 0 || end == text || *end != '\0' || !isfinite(v) || !(v >= min && v <= max))
         return false;
     *out = (float)v;
     return true;
@@ -74,6 +75,26 @@ static bool has_suffix(const char *s, const char *suffix)
     return n >= m && strcmp(s + n - m, suffix) == 0;
 }
 
+/* Can files be created in `dir`? It must exist, be a directory and be
+ * writable. `flag` and `value` name what the user typed, for the message. */
+static bool check_directory(const char *flag, const char *value, const char *dir, char *err, size_t err_size)
+{
+    if (access(dir, F_OK) != 0) {
+        snprintf(err, err_size, "%s '%s': directory '%s' does not exist", flag, value, dir);
+        return false;
+    }
+    struct stat info;
+    if (stat(dir, &info) != 0 || !S_ISDIR(info.st_mode)) {
+        snprintf(err, err_size, "%s '%s': '%s' is not a directory", flag, value, dir);
+        return false;
+    }
+    if (access(dir, W_OK | X_OK) != 0) {
+        snprintf(err, err_size, "%s '%s': directory '%s' is not writable", flag, value, dir);
+        return false;
+    }
+    return true;
+}
+
 /* Can `path` be created? Its directory must exist and be writable. Checked
  * before rendering, so nobody waits a minute to learn of a typo. */
 static bool check_output_path(const char *path, char *err, size_t err_size)
@@ -90,20 +111,7 @@ static bool check_output_path(const char *path, char *err, size_t err_size)
         snprintf(dir, sizeof dir, "/");
     else
         snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    if (access(dir, F_OK) != 0) {
-        snprintf(err, err_size, "--out '%s': directory '%s' does not exist", path, dir);
-        return false;
-    }
-    struct stat info;
-    if (stat(dir, &info) != 0 || !S_ISDIR(info.st_mode)) {
-        snprintf(err, err_size, "--out '%s': '%s' is not a directory", path, dir);
-        return false;
-    }
-    if (access(dir, W_OK | X_OK) != 0) {
-        snprintf(err, err_size, "--out '%s': directory '%s' is not writable", path, dir);
-        return false;
-    }
-    return true;
+    return check_directory("--out", path, dir, err, err_size);
 }
 
 static bool set_extra(const cli_flag *f, const char *value, char *err, size_t err_size)
@@ -113,7 +121,8 @@ static bool set_extra(const cli_flag *f, const char *value, char *err, size_t er
     case CLI_INT:
         if (!parse_int(value, ranged ? (long)f->min : INT_MIN, ranged ? (long)f->max : INT_MAX, f->value)) {
             if (ranged)
-                snprintf(err, err_size, "%s: expected a whole number from %g to %g, got '%s'", f->name, f->min, f->max, value);
+                snprintf(err, err_size, "%s: expected a whole number from %.0f to %.0f, got '%s'", f->name, f->min, f->max,
+                         value);
             else
                 snprintf(err, err_size, "%s: expected a whole number, got '%s'", f->name, value);
             return false;
@@ -129,6 +138,15 @@ static bool set_extra(const cli_flag *f, const char *value, char *err, size_t er
         }
         return true;
     case CLI_STRING:
+        *(const char **)f->value = value;
+        return true;
+    case CLI_DIR:
+        if (value[0] == '\0') {
+            snprintf(err, err_size, "%s: expected a directory, got ''", f->name);
+            return false;
+        }
+        if (!check_directory(f->name, value, value, err, err_size))
+            return false;
         *(const char **)f->value = value;
         return true;
     case CLI_BOOL:
@@ -235,7 +253,11 @@ static const char *kind_metavar(const cli_flag *f)
 {
     if (f->metavar != NULL)
         return f->metavar;
-    return f->kind == CLI_INT ? "N" : f->kind == CLI_FLOAT ? "X" : f->kind == CLI_STRING ? "TEXT" : "";
+    return f->kind == CLI_INT      ? "N"
+           : f->kind == CLI_FLOAT  ? "X"
+           : f->kind == CLI_STRING ? "TEXT"
+           : f->kind == CLI_DIR    ? "DIR"
+                                   : "";
 }
 
 void cli_print_help(const cli_spec *spec, const cli_options *d)

@@ -35,12 +35,15 @@ typedef struct {
     bool jitter;
 } cli_options;
 
-typedef enum { CLI_INT, CLI_FLOAT, CLI_STRING, CLI_BOOL } cli_kind;
+/* CLI_DIR: a directory that must exist and be writable when the flags are
+ * read (an output directory for data files), so a typo fails at once rather
+ * than after the experiment it was to hold. */
+typedef enum { CLI_INT, CLI_FLOAT, CLI_STRING, CLI_BOOL, CLI_DIR } cli_kind;
 
 typedef struct {
     const char *name;   /* "--max-depth" */
     cli_kind kind;
-    void *value;        /* int *, float *, const char **, bool * */
+    void *value;        /* int *, float *, const char ** (STRING, DIR), bool * */
     const char *metavar;/* "N" in the help text; NULL for CLI_BOOL */
     const char *help;
     double min, max;    /* accepted range for numbers (inclusive); both 0: any */

@@ -184,14 +184,21 @@ static void exr_stream_note(exr_stream *s, const char *message)
         snprintf(s->message, sizeof s->message, "%s", message);
 }
 
+/* The stream of the read or write this thread is doing, for the error
+ * handler. The handler must not ask the context for its user data: a write
+ * context holds its (non-recursive) lock while it writes the header, and a
+ * write that fails there reports the error from inside that lock, so
+ * exr_get_user_data would wait for itself forever. A full disk did exactly
+ * that. Set by exr_initializer, cleared when the context is finished. */
+static _Thread_local exr_stream *exr_current_stream;
+
 /* Installed so OpenEXR never prints on its own: the message is kept for the
  * caller's err line instead. */
 static void exr_error_handler(exr_const_context_t ctxt, exr_result_t code, const char *msg)
 {
-    void *user = NULL;
-    if (exr_get_user_data(ctxt, &user) != EXR_ERR_SUCCESS || user == NULL)
-        return;
-    exr_stream_note(user, msg != NULL ? msg : exr_get_default_error_message(code));
+    (void)ctxt;
+    if (exr_current_stream != NULL)
+        exr_stream_note(exr_current_stream, msg != NULL ? msg : exr_get_default_error_message(code));
 }
 
 /* The reason to show: what the library said, or failing that the generic
@@ -261,6 +268,7 @@ static exr_context_initializer_t exr_initializer(exr_stream *stream)
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = exr_error_handler;
     init.user_data = stream;
+    exr_current_stream = stream;
     init.read_fn = exr_stream_read;
     init.size_fn = exr_stream_size;
     init.write_fn = exr_stream_write;
@@ -386,6 +394,7 @@ bool image_write_exr(const image *img, const char *path, char *err, size_t err_s
         if (rv == EXR_ERR_SUCCESS)
             rv = finished;
     }
+    exr_current_stream = NULL;
     if (rv != EXR_ERR_SUCCESS) {
         set_error(err, err_size, "cannot write '%s': %s", path, exr_stream_reason(&stream, rv));
         pending_abandon(&out);
@@ -537,6 +546,7 @@ bool image_read_exr(image *out, const char *path, char *err, size_t err_size)
         rv = exr_read_rgb(ctxt, &img, why, sizeof why);
     if (ctxt != NULL)
         exr_finish(&ctxt);
+    exr_current_stream = NULL;
     close(stream.fd);
     if (rv != EXR_ERR_SUCCESS) {
         set_error(err, err_size, "cannot read '%s': %s", path,

@@ -166,7 +166,7 @@ static bool refract_inverted_eta(vec3 d, vec3 n, float eta_ratio, vec3 *out)
 static double snell_violation(refract_fn refract, float eta_ratio, uint64_t seed)
 {
     pcg32 rng;
-    pcg32_seed(&rng, seed, 7);
+    pcg32_seed(&rng, test_seed(seed), 7);
     double worst = 0.0;
     for (int i = 0; i < 2000; i++) {
         vec3 d = random_unit(&rng);
@@ -253,7 +253,7 @@ static void test_glass_slab_exits_parallel_to_the_entering_ray(void **state)
     scene_add_plane(&sc, vec3_scale(up, -0.5f), vec3_neg(up), glass);
 
     pcg32 rng;
-    pcg32_seed(&rng, 2024, 1);
+    pcg32_seed(&rng, test_seed(2024), 1);
     int crossed = 0, wrong_differs = 0;
     for (int i = 0; i < 500; i++) {
         vec3 d = random_unit(&rng);

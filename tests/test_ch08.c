@@ -173,6 +173,7 @@ typedef struct {
     const char *name;
     vec2 (*round_trip)(vec2 u);
     bool azimuth_in_y; /* u.y is an angle: 0 and 1 are the same point */
+    bool collapses_at_u_x_zero; /* the line u.x = 0 maps to one point (a pole, centre or vertex) */
 } round_trip_case;
 
 static vec2 rt_uniform_hemisphere(vec2 u) { return invert_uniform_hemisphere(sample_uniform_hemisphere(u)); }
@@ -197,7 +198,7 @@ static vec2 rt_disk_polar_wrong_inverse(vec2 u)
 /* Largest distance between u and its round trip, over many random u. */
 static float worst_round_trip_error(const round_trip_case *c, uint64_t seed)
 {
-    pcg32 rng = pcg32_for_pixel(seed, 0);
+    pcg32 rng = pcg32_for_pixel(test_seed(seed), 0);
     float worst = 0.0f;
     for (int i = 0; i < ROUND_TRIP_SAMPLES; i++) {
         vec2 u = vec2_make(pcg32_float(&rng), pcg32_float(&rng));
@@ -205,6 +206,15 @@ static float worst_round_trip_error(const round_trip_case *c, uint64_t seed)
         float dx = fabsf(v.x - u.x), dy = fabsf(v.y - u.y);
         if (c->azimuth_in_y)
             dy = fminf(dy, 1.0f - dy);
+        /* Near u.x = 0 some maps send the line to one point: the pole of the
+         * sphere and the cone, the centre of the polar disk, the vertex p0 of
+         * the triangle. There no inverse can give u.y back. Exactly 0 is one
+         * draw in 2^24; the cone's cos(theta) = 1 - 0.2 u.x also rounds to 1
+         * (the pole) for u.x up to 2^-22. The seed sweep found both (round
+         * trips off by 0.08 to 0.9 in 16 of 200 seeds). Below 2^-20 (one
+         * draw in 10^6) u.y is not checked for those maps; u.x still is. */
+        if (u.x < 0x1p-20f && c->collapses_at_u_x_zero)
+            dy = 0.0f;
         worst = fmaxf(worst, fmaxf(dx, dy));
         if (!(dx == dx && dy == dy))
             return INFINITY; /* a NaN is never close */
@@ -216,10 +226,13 @@ static void test_round_trips(void **state)
 {
     (void)state;
     const round_trip_case cases[] = {
-        {"uniform hemisphere", rt_uniform_hemisphere, true}, {"cosine hemisphere", rt_cosine_hemisphere, false},
-        {"uniform sphere", rt_uniform_sphere, true},         {"concentric disk", rt_disk_concentric, false},
-        {"polar disk", rt_disk_polar, true},                 {"triangle", rt_triangle, false},
-        {"cone", rt_cone, true},
+        {"uniform hemisphere", rt_uniform_hemisphere, true, false},
+        {"cosine hemisphere", rt_cosine_hemisphere, false, false},
+        {"uniform sphere", rt_uniform_sphere, true, true}, /* z = 1 - 2 u.x: the pole */
+        {"concentric disk", rt_disk_concentric, false, false},
+        {"polar disk", rt_disk_polar, true, true}, /* r = sqrt(u.x): the centre */
+        {"triangle", rt_triangle, false, true},    /* b0 = 1 - sqrt(u.x): the vertex p0 */
+        {"cone", rt_cone, true, true},             /* z = 1 - u.x (1 - cos theta_max): the pole */
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         float worst = worst_round_trip_error(&cases[i], 80 + i);
@@ -231,7 +244,7 @@ static void test_round_trips(void **state)
 static void test_round_trip_catches_a_wrong_inverse(void **state)
 {
     (void)state;
-    round_trip_case twin = {"polar disk, inverse without the square", rt_disk_polar_wrong_inverse, true};
+    round_trip_case twin = {"polar disk, inverse without the square", rt_disk_polar_wrong_inverse, true, true};
     assert_true(worst_round_trip_error(&twin, 90) > ROUND_TRIP_TOLERANCE);
 }
 
@@ -242,7 +255,7 @@ static void test_piecewise_constant_1d_round_trip_and_zero_bins(void **state)
     /* The 1D table is double: the same ten-operation argument gives ~1e-15;
      * 1e-12 leaves room and still catches any wrong bin (>= 1/8 off). */
     const double tolerance = 1e-12;
-    pcg32 rng = pcg32_for_pixel(91, 0);
+    pcg32 rng = pcg32_for_pixel(test_seed(91), 0);
     double width = (TABLE_MAX - TABLE_MIN) / TABLE_BINS;
     for (int i = 0; i < ROUND_TRIP_SAMPLES; i++) {
         double u = pcg32_double(&rng), pdf;
@@ -484,7 +497,7 @@ static double chi_square_sampler_p_value(const chi2_case *c, uint64_t seed)
             }
             expected[i * c->cols + j] = CHI2_SAMPLES * p;
         }
-    pcg32 rng = pcg32_for_pixel(seed, 0);
+    pcg32 rng = pcg32_for_pixel(test_seed(seed), 0);
     bool impossible = false;
     for (int n = 0; n < CHI2_SAMPLES; n++) {
         double s, t;
@@ -678,10 +691,19 @@ static void test_chi_square_lambertian_offset_twins_fail(void **state)
 
 /* -- the disk: s = r, t = phi -- */
 
+/* A point on the rim (u.x = 0 in the concentric map: r = 1 exactly) comes
+ * out as r cos(phi), r sin(phi) in float, whose length may exceed 1 by the
+ * rounding of those products: up to about 2 FLT_EPSILON (measured: 2.9e-8).
+ * That is not a sample outside the disk; farther out is. Found by the seed
+ * sweep (p = 0 in 4 of 200 seeds). Such a point counts in the outer ring. */
+static const double DISK_RIM_ROUNDING = 4.0 * FLT_EPSILON;
+
 static bool draw_disk_point(vec2 p, double *s, double *t)
 {
     *s = sqrt((double)p.x * p.x + (double)p.y * p.y);
     *t = angle_phi(vec3_make(p.x, p.y, 0.0f));
+    if (*s > 1.0 && *s <= 1.0 + DISK_RIM_ROUNDING)
+        *s = 1.0;
     return *s <= 1.0;
 }
 static bool draw_disk_concentric(pcg32 *rng, const void *ctx, double *s, double *t)
@@ -866,7 +888,7 @@ static double estimate_catalogue(const void *ctx, int n, pcg32 *rng)
 static welford run_estimates(estimate_fn fn, const void *ctx, int n, int runs, uint64_t seed)
 {
     welford w = {0};
-    uint64_t stream = experiment_stream_seed(seed, 0, 0, n);
+    uint64_t stream = experiment_stream_seed(test_seed(seed), 0, 0, n);
     for (int r = 0; r < runs; r++) {
         pcg32 rng = pcg32_for_pixel(stream, (uint64_t)r);
         welford_add(&w, fn(ctx, n, &rng));
@@ -1001,7 +1023,7 @@ static void test_p_proportional_to_f_has_zero_variance(void **state)
     (void)state;
     const sampling_strategy cosine = {"cosine", warp_cosine_hemisphere, NULL};
     const sampling_strategy uniform = {"uniform", warp_uniform_hemisphere, NULL};
-    pcg32 rng = pcg32_for_pixel(310, 0);
+    pcg32 rng = pcg32_for_pixel(test_seed(310), 0);
     double worst_cosine = 0.0, worst_uniform = 0.0;
     for (int i = 0; i < 100000; i++) {
         double u[2] = {pcg32_double(&rng), pcg32_double(&rng)};
@@ -1222,7 +1244,7 @@ static void test_n_var_is_the_closed_form_per_sample_variance(void **state)
 static void test_jittered_points_fill_every_stratum_once(void **state)
 {
     (void)state;
-    pcg32 rng = pcg32_for_pixel(600, 0);
+    pcg32 rng = pcg32_for_pixel(test_seed(600), 0);
     const int shapes[][2] = {{1, 1}, {4, 4}, {8, 4}, {3, 7}, {16, 16}};
     for (size_t s = 0; s < sizeof shapes / sizeof shapes[0]; s++) {
         int nx = shapes[s][0], ny = shapes[s][1];
@@ -1269,7 +1291,7 @@ static void test_owen_scrambled_sobol_prefixes_are_nets(void **state)
 {
     (void)state;
     for (int m = 0; m <= 12; m++) {
-        pcg32 rng = pcg32_for_pixel(610, (uint64_t)m);
+        pcg32 rng = pcg32_for_pixel(test_seed(610), (uint64_t)m);
         points_generate(POINTS_SOBOL_OWEN, &rng, 1 << m, 2, scratch);
         assert_true(is_0_m_2_net(scratch, m));
         /* ... and unscrambled, the sequence itself */
@@ -1281,7 +1303,7 @@ static void test_owen_scrambled_sobol_prefixes_are_nets(void **state)
     }
     /* The twins: jittered points are stratified in one grid only, and
      * independent points in none; neither is a net for m = 8. */
-    pcg32 rng = pcg32_for_pixel(611, 0);
+    pcg32 rng = pcg32_for_pixel(test_seed(611), 0);
     points_generate(POINTS_JITTERED, &rng, 256, 2, scratch);
     assert_false(is_0_m_2_net(scratch, 8));
     points_generate(POINTS_INDEPENDENT, &rng, 256, 2, scratch);
@@ -1294,7 +1316,7 @@ static void test_owen_scramble_is_a_permutation_of_nested_boxes(void **state)
     /* Two fractions that share their first k bits still share their first k
      * bits after scrambling (nested boxes go to nested boxes), and different
      * values stay different. */
-    pcg32 rng = pcg32_for_pixel(620, 0);
+    pcg32 rng = pcg32_for_pixel(test_seed(620), 0);
     for (int i = 0; i < 10000; i++) {
         uint32_t seed = pcg32_next(&rng), a = pcg32_next(&rng);
         int k = (int)pcg32_bounded(&rng, 32);

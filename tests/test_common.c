@@ -41,7 +41,7 @@ static void test_pcg32_matches_reference_output(void **state)
 static void test_pcg32_float_is_in_unit_interval_and_uniform(void **state)
 {
     (void)state;
-    pcg32 rng = pcg32_for_pixel(7, 0);
+    pcg32 rng = pcg32_for_pixel(test_seed(7), 0);
     enum { N = 100000, BINS = 10 };
     int count[BINS] = {0};
     for (int i = 0; i < N; i++) {
@@ -81,7 +81,7 @@ static void test_pcg32_pixel_streams_differ(void **state)
 static void test_pcg32_bounded_stays_in_range(void **state)
 {
     (void)state;
-    pcg32 rng = pcg32_for_pixel(3, 3);
+    pcg32 rng = pcg32_for_pixel(test_seed(3), 3);
     int seen[7] = {0};
     for (int i = 0; i < 7000; i++) {
         uint32_t k = pcg32_bounded(&rng, 7);
@@ -380,6 +380,55 @@ static void test_cli_rejects_an_unwritable_directory(void **state)
     expect_error(3, argv, "not writable");
 }
 
+/* A float flag with no range has bounds -HUGE_VAL .. HUGE_VAL, which "inf"
+ * meets: the parser must refuse non-finite values on their own, and NaN
+ * (which compares false with everything) too. */
+static void test_cli_rejects_nan_and_inf_for_an_unranged_float(void **state)
+{
+    (void)state;
+    static float scale = 1.0f;
+    static const cli_flag extras[] = {{"--scale", CLI_FLOAT, &scale, "X", "any finite number", 0, 0}};
+    cli_spec spec = {"test", "a test", extras, 1};
+    const char *bad[] = {"inf", "-inf", "infinity", "nan", "1e999", "0x1p2000", ""};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char err[512] = "";
+        cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
+        char *argv[] = {"p", "--scale", (char *)bad[i]};
+        assert_int_equal(cli_parse(3, argv, &spec, &o, err, sizeof err), CLI_ERROR);
+        if (strstr(err, "--scale") == NULL)
+            fail_msg("error '%s' does not name --scale", err);
+    }
+    char err[512] = "";
+    cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
+    char *argv[] = {"p", "--scale", "-1e30"};
+    assert_int_equal(cli_parse(3, argv, &spec, &o, err, sizeof err), CLI_OK);
+    assert_float_equal(scale, -1e30f, 0.0f);
+}
+
+/* A data directory is checked when the flags are read, not after the
+ * experiment that fills it. */
+static void test_cli_checks_a_directory_flag_at_once(void **state)
+{
+    (void)state;
+    static const char *data = NULL;
+    static const cli_flag extras[] = {{"--data", CLI_DIR, &data, "DIR", "where the CSV goes", 0, 0}};
+    cli_spec spec = {"test", "a test", extras, 1};
+    const char *bad[][2] = {{"/nonexistent-dir", "does not exist"}, {"/etc/passwd", "is not a directory"}, {"", "--data"}};
+    for (int i = 0; i < 3; i++) {
+        char err[512] = "";
+        cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
+        char *argv[] = {"p", "--data", (char *)bad[i][0]};
+        assert_int_equal(cli_parse(3, argv, &spec, &o, err, sizeof err), CLI_ERROR);
+        if (strstr(err, bad[i][1]) == NULL || strstr(err, "--data") == NULL)
+            fail_msg("error '%s' does not say '%s' about --data", err, bad[i][1]);
+    }
+    char err[512] = "";
+    cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
+    char *argv[] = {"p", "--data", "/tmp"};
+    assert_int_equal(cli_parse(3, argv, &spec, &o, err, sizeof err), CLI_OK);
+    assert_string_equal(data, "/tmp");
+}
+
 static void test_cli_help_and_extras(void **state)
 {
     (void)state;
@@ -414,6 +463,8 @@ int main(void)
         cmocka_unit_test(test_cli_rejects_bad_flags_with_a_clear_message),
         cmocka_unit_test(test_cli_rejects_an_unwritable_directory),
         cmocka_unit_test(test_cli_help_and_extras),
+        cmocka_unit_test(test_cli_rejects_nan_and_inf_for_an_unranged_float),
+        cmocka_unit_test(test_cli_checks_a_directory_flag_at_once),
     };
     return cmocka_run_group_tests_name("common", tests, NULL, NULL);
 }

@@ -33,6 +33,7 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <openexr.h>
@@ -460,6 +461,67 @@ static void test_failed_write_keeps_the_old_file(void **state)
     image_free(&old);
 }
 
+/* A disk that is full from the first byte (file size limit 0): the write
+ * fails inside the EXR header, where OpenEXR holds its context lock while it
+ * reports the error. An error handler that asked the context for its user
+ * data there waited for that lock forever. The write runs in a child
+ * process with an alarm, so a deadlock fails this test instead of hanging
+ * the suite; the child reports through its exit status. */
+enum { FULL_DISK_OK = 0, FULL_DISK_WROTE = 1, FULL_DISK_NO_PATH = 2, FULL_DISK_LEFT_FILES = 3 };
+
+static int write_on_a_full_disk(const char *path, rlim_t limit)
+{
+    image img = varied_image(64, 48);
+    char err[IMAGE_ERROR_SIZE] = "";
+    struct rlimit limited;
+    getrlimit(RLIMIT_FSIZE, &limited);
+    limited.rlim_cur = limit;
+    signal(SIGXFSZ, SIG_IGN); /* get EFBIG, not a signal */
+    setrlimit(RLIMIT_FSIZE, &limited);
+    bool ok = image_write(&img, path, 0.0f, err, sizeof err);
+    image_free(&img);
+    if (ok)
+        return FULL_DISK_WROTE;
+    if (strstr(err, path) == NULL)
+        return FULL_DISK_NO_PATH;
+    return count_temp_files(test_dir) == 0 && !file_exists(path) ? FULL_DISK_OK : FULL_DISK_LEFT_FILES;
+}
+
+static void test_write_to_a_disk_full_from_the_first_byte_fails_cleanly(void **state)
+{
+    (void)state;
+    const char *names[] = {"full.exr", "full.png"};
+    /* Nothing at all; one byte; past the PNG signature but inside the EXR
+     * header; past the EXR header (both files are several KB). */
+    const rlim_t limits[] = {0, 1, 100, 1000};
+    for (int n = 0; n < 2; n++)
+        for (int l = 0; l < 4; l++) {
+            char path[PATH_SIZE];
+            in_dir(path, names[n]);
+            fflush(NULL);
+            pid_t child = fork();
+            assert_true(child >= 0);
+            if (child == 0) {
+                alarm(20); /* a deadlock ends here, as SIGALRM */
+                _exit(write_on_a_full_disk(path, limits[l]));
+            }
+            int status = 0;
+            assert_int_equal(waitpid(child, &status, 0), child);
+            if (WIFSIGNALED(status))
+                fail_msg("%s with a %ld-byte limit: killed by signal %d (%s)", names[n], (long)limits[l],
+                         WTERMSIG(status), WTERMSIG(status) == SIGALRM ? "hung: deadlock" : "crash");
+            if (WEXITSTATUS(status) != FULL_DISK_OK)
+                fail_msg("%s with a %ld-byte limit: %s", names[n], (long)limits[l],
+                         WEXITSTATUS(status) == FULL_DISK_WROTE     ? "the write reported success"
+                         : WEXITSTATUS(status) == FULL_DISK_NO_PATH ? "the message does not name the file"
+                                                                    : "a file was left behind");
+            char exr_path[PATH_SIZE], png_path[PATH_SIZE];
+            assert_false(file_exists(in_dir(exr_path, "full.exr")));
+            assert_false(file_exists(in_dir(png_path, "full.png")));
+            assert_int_equal(count_temp_files(test_dir), 0);
+        }
+}
+
 static void test_read_missing_file_fails(void **state)
 {
     (void)state;
@@ -786,6 +848,7 @@ int main(void)
         cmocka_unit_test(test_write_into_missing_directory_fails_cleanly),
         cmocka_unit_test(test_write_into_read_only_directory_fails_cleanly),
         cmocka_unit_test(test_failed_write_keeps_the_old_file),
+        cmocka_unit_test(test_write_to_a_disk_full_from_the_first_byte_fails_cleanly),
         cmocka_unit_test(test_read_missing_file_fails),
         cmocka_unit_test(test_read_non_exr_fails),
         cmocka_unit_test(test_read_exr_without_rgb_fails),

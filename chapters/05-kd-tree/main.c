@@ -115,6 +115,7 @@ int main(int argc, char **argv)
         char err[MESH_ERROR_SIZE];
         if (!mesh_load_obj(&m, obj_path, err, sizeof err)) {
             fprintf(stderr, "05-kd-tree: %s\n", err);
+            mesh_free(&m); /* the load left m as it was, but its arrays may have grown */
             return 1;
         }
         scene_name = obj_path;

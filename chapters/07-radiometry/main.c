@@ -574,7 +574,7 @@ int main(int argc, char **argv)
     const char *rho_text = "0.8";
     int bounces = 30;
     const cli_flag extras[] = {
-        {"--data", CLI_STRING, &data_dir, "DIR", "write ch07_furnace.csv, ch07_disk_irradiance.csv, ch07_albedo.csv there",
+        {"--data", CLI_DIR, &data_dir, "DIR", "write ch07_furnace.csv, ch07_disk_irradiance.csv, ch07_albedo.csv there",
          0, 0},
         {"--rho", CLI_STRING, &rho_text, "X", "albedo of the closed furnace, 0 <= X < 1 (default 0.8)", 0, 0},
         {"--bounces", CLI_INT, &bounces, "N", "bounces of the furnace table, 1 to 1000 (default 30)", 1, 1000},

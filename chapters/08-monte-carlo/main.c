@@ -149,7 +149,7 @@ int main(int argc, char **argv)
         {"--runs", CLI_INT, &runs, "N", "independent estimates per N, for the RMSE (default 256)", 2, 1000000},
         {"--max-log2n", CLI_INT, &max_log2n, "K", "largest N is 2^K (default 16)", 0, MAX_LOG2N},
         {"--quick", CLI_BOOL, &quick, NULL, "a rough run in under a second: 64 runs, N up to 2^12 (overrides --runs)", 0, 0},
-        {"--data", CLI_STRING, &data_dir, "DIR", "write DIR/ch08_convergence.csv and DIR/ch08_efficiency.csv", 0, 0},
+        {"--data", CLI_DIR, &data_dir, "DIR", "write DIR/ch08_convergence.csv and DIR/ch08_efficiency.csv", 0, 0},
     };
     cli_spec spec = {"08-monte-carlo",
                      "Monte Carlo integration (GAMES101 lecture 16): the estimator (1/N) sum f(X)/p(X) on four\n"

@@ -139,7 +139,15 @@ bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int
     fflush(stdout);
     *out = render_estimate(&reference, cam, spp, 0x5eedULL, threads);
     printf("reference: %.1f s, estimated relative error %.4f -> %s\n", out->seconds, estimate_relative_error(out), path);
-    return image_write_exr(&out->mean, path, err, err_size) && image_write_exr(&out->standard_error, se_path, err, err_size);
+    if (!image_write_exr(&out->mean, path, err, err_size))
+        return false;
+    /* The cache is the pair: a new mean beside an old standard error (or
+     * none) must not be taken for one next time. */
+    if (!image_write_exr(&out->standard_error, se_path, err, err_size)) {
+        unlink(path);
+        return false;
+    }
+    return true;
 }
 
 /* ---- error against the reference ---------------------------------------------------
@@ -161,19 +169,51 @@ static void measure_error(const estimate_image *e, const estimate_image *ref, do
     *relmse = fmax(0.0, sum_relative / (double)n);
 }
 
+/* A CSV is written as "<path>.tmp" and renamed into place only when every
+ * write succeeded: a full disk or a killed run leaves the old table (or
+ * none), never half of one that a plot would draw without complaint. */
+static void csv_temp_path(const char *path, char *temp, size_t size) { snprintf(temp, size, "%s.tmp", path); }
+
 static FILE *open_csv(const char *dir, const char *name, char *path, size_t path_size, char *err, size_t err_size)
 {
+    char temp[4200];
     snprintf(path, path_size, "%s/%s", dir, name);
-    FILE *f = fopen(path, "w");
+    csv_temp_path(path, temp, sizeof temp);
+    FILE *f = fopen(temp, "w");
     if (f == NULL)
         snprintf(err, err_size, "%s: %s", path, strerror(errno));
     return f;
 }
 
+/* Closes without keeping anything: for a run that failed elsewhere. */
+static void discard_csv(FILE *f, const char *path)
+{
+    char temp[4200];
+    csv_temp_path(path, temp, sizeof temp);
+    fclose(f);
+    unlink(temp);
+}
+
 static bool close_csv(FILE *f, const char *path, char *err, size_t err_size)
 {
-    if (ferror(f) | (fclose(f) != 0)) {
-        snprintf(err, err_size, "%s: write failed", path);
+    char temp[4200];
+    csv_temp_path(path, temp, sizeof temp);
+    /* An earlier fprintf may have failed (ferror); the final flush and close
+     * may fail too (a full disk shows up there). */
+    bool written = !ferror(f) && fflush(f) == 0;
+    int reason = errno;
+    if (fclose(f) != 0 && written) {
+        written = false;
+        reason = errno;
+    }
+    if (!written) {
+        snprintf(err, err_size, "%s: write failed (%s)", path, reason != 0 ? strerror(reason) : "stream error");
+        unlink(temp);
+        return false;
+    }
+    if (rename(temp, path) != 0) {
+        snprintf(err, err_size, "%s: %s", path, strerror(errno));
+        unlink(temp);
         return false;
     }
     return true;
@@ -228,7 +268,7 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
     snprintf(file, sizeof file, "ch09_time_to_error_%s.csv", name);
     FILE *time_csv = open_csv(dir, file, time_path, sizeof time_path, err, err_size);
     if (time_csv == NULL) {
-        fclose(csv);
+        discard_csv(csv, path);
         return false;
     }
     fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample,cpu_seconds\n");
@@ -278,8 +318,12 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
         }
         printf("\n");
     }
-    bool ok = close_csv(csv, path, err, err_size);
-    return close_csv(time_csv, time_path, err, err_size) && ok;
+    /* Both files or neither: a failed first one discards the second. */
+    if (!close_csv(csv, path, err, err_size)) {
+        discard_csv(time_csv, time_path);
+        return false;
+    }
+    return close_csv(time_csv, time_path, err, err_size);
 }
 
 bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp,

@@ -54,7 +54,7 @@ int main(int argc, char **argv)
         {"--time-budget", CLI_FLOAT, &time_budget, "SECONDS", "progressive: passes until this much time is spent", 0.0, 1e6},
         {"--target-error", CLI_FLOAT, &target_error, "E",
          "progressive: passes until the estimated relative error is below E", 0.0, 10.0},
-        {"--data", CLI_STRING, &data, "DIR", "run the experiments (error against time) and write CSV into DIR", 0, 0},
+        {"--data", CLI_DIR, &data, "DIR", "run the experiments (error against time) and write CSV into DIR", 0, 0},
         {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 96)", 8, 1024},
         {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached reference (default 4096)", 16, 1 << 20},
         {"--experiment-spp", CLI_INT, &experiment_spp, "N", "largest spp of the experiments (default 256)", 1, 1 << 16},

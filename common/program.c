@@ -26,7 +26,10 @@ void program_note_effects(const effects_report *e)
 void program_warn(const char *label, const scene_desc *d, int line, int column, const char *format, ...)
 {
     char where[SCENE_PATH_SIZE + 32];
-    scene_desc_where(d, line, column, where, sizeof where);
+    if (line > 0)
+        scene_desc_where(d, line, column, where, sizeof where);
+    else
+        snprintf(where, sizeof where, "%s", d->source);
     fprintf(stderr, "%s: %s: warning: ", label, where);
     va_list args;
     va_start(args, format);

@@ -147,7 +147,8 @@ typedef struct {
 
 typedef struct {
     bool present;
-    int column; /* of the key */
+    int column;       /* of the key */
+    int value_column; /* of its (first) value */
     double v[3];
     char text[SCENE_PATH_SIZE];
 } key_value;
@@ -177,6 +178,7 @@ static bool parse_keys(const parse_context *pc, const token *tokens, int first, 
         values[k].present = true;
         values[k].column = t->column;
         i++;
+        values[k].value_column = i < count ? tokens[i].column : t->column;
         int needed = spec[k].kind == ARG_VEC3 ? 3 : spec[k].kind == ARG_FLAG ? 0 : 1;
         if (count - i < needed)
             return fail(pc, t->column, "'%s' needs %d value%s", spec[k].key, needed, needed > 1 ? "s" : "");
@@ -260,7 +262,7 @@ static bool resolve_material(const parse_context *pc, const scene_desc *d, const
 {
     *out = find_material(d, v->text);
     if (*out < 0)
-        return fail(pc, v->column, "unknown material '%s' (define it with 'material %s KIND ...' before using it)",
+        return fail(pc, v->value_column, "unknown material '%s' (define it with 'material %s KIND ...' before using it)",
                     v->text, v->text);
     return true;
 }
@@ -607,7 +609,7 @@ static bool statement_mesh(const parse_context *pc, scene_desc *d, const token *
             return fail(pc, v[0].column, "the mesh path is too long");
     } else {
         if (strcmp(v[1].text, "tori_field") != 0)
-            return fail(pc, v[1].column, "unknown mesh generator '%s' (tori_field)", v[1].text);
+            return fail(pc, v[1].value_column, "unknown mesh generator '%s' (tori_field)", v[1].text);
         s.kind = SCENE_SHAPE_MESH_TORI;
         s.triangles = v[2].present ? (int)v[2].v[0] : 10240;
     }

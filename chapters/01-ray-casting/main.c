@@ -27,15 +27,17 @@ int main(int argc, char **argv)
             return 1;
         }
         /* Ray casting shows shadows and nothing that needs a second bounce. */
-        effects_report e = effects_analyse(&desc);
-        sc.effects = effects_decide(&e, EFFECT_SHADOWS);
-        if (!opts.quiet)
-            effects_print(stdout, &e, spec.program);
-        program_note_effects(&e);
-        scene_desc_free(&desc);
     } else {
         scene_build_ray_casting_demo(&sc);
+        scene_describe(&sc, &desc);
     }
+    /* The effects analysis, on the file or on the built-in scene alike. */
+    effects_report e = effects_analyse(&desc);
+    sc.effects = effects_decide(&e, EFFECT_SHADOWS);
+    if (!opts.quiet)
+        effects_print(stdout, &e, spec.program);
+    program_note_effects(&e);
+    scene_desc_free(&desc);
     camera cam = scene_make_camera(&sc, opts.width, opts.height);
     int status = program_render(&opts, spec.program, ray_cast_radiance, &sc, &cam, NULL);
     scene_free(&sc);

@@ -304,3 +304,72 @@ bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *er
                      "integrator '%s' is not one of chapters 01-02 (ray_casting, whitted): ignored", d->integrator);
     return true;
 }
+
+void scene_describe(const scene *sc, scene_desc *d)
+{
+    scene_desc_init(d);
+    snprintf(d->source, sizeof d->source, "built-in scene");
+    d->has_camera = true;
+    d->eye = sc->camera.eye;
+    d->target = sc->camera.target;
+    d->up = sc->camera.up;
+    d->fov_degrees = sc->camera.vertical_fov_degrees;
+    d->background = sc->background;
+    d->ambient = sc->ambient;
+    for (int i = 0; i < sc->material_count; i++) {
+        const material *m = &sc->materials[i];
+        scene_material sm;
+        memset(&sm, 0, sizeof sm);
+        snprintf(sm.name, sizeof sm.name, "material%d", i);
+        sm.kind = m->kind == MATERIAL_MIRROR  ? SCENE_MATERIAL_MIRROR
+                  : m->kind == MATERIAL_GLASS ? SCENE_MATERIAL_GLASS
+                                              : SCENE_MATERIAL_BLINN_PHONG;
+        sm.albedo = m->diffuse;
+        sm.specular = m->specular;
+        sm.shininess = m->shininess;
+        sm.ior = m->ior;
+        d->materials = memory_grow(d->materials, &d->material_capacity, d->material_count + 1, sizeof sm);
+        d->materials[d->material_count++] = sm;
+    }
+    for (int i = 0; i < sc->shape_count; i++) {
+        const shape *s = &sc->shapes[i];
+        scene_shape ss;
+        memset(&ss, 0, sizeof ss);
+        ss.material = s->material_id;
+        switch (s->kind) {
+        case SHAPE_SPHERE:
+            ss.kind = SCENE_SHAPE_SPHERE;
+            ss.center = s->as.sphere.center;
+            ss.radius = s->as.sphere.radius;
+            break;
+        case SHAPE_PLANE:
+            ss.kind = SCENE_SHAPE_PLANE;
+            ss.point = s->as.plane.point;
+            ss.normal = s->as.plane.normal;
+            break;
+        case SHAPE_TRIANGLE:
+            ss.kind = SCENE_SHAPE_TRIANGLE;
+            ss.p[0] = s->as.triangle.p0;
+            ss.p[1] = s->as.triangle.p1;
+            ss.p[2] = s->as.triangle.p2;
+            break;
+        case SHAPE_IMPLICIT:
+            ss.kind = SCENE_SHAPE_TORUS;
+            ss.center = s->as.torus.center;
+            ss.major = s->as.torus.major;
+            ss.minor = s->as.torus.minor;
+            break;
+        }
+        d->shapes = memory_grow(d->shapes, &d->shape_capacity, d->shape_count + 1, sizeof ss);
+        d->shapes[d->shape_count++] = ss;
+    }
+    for (int i = 0; i < sc->light_count; i++) {
+        scene_light l;
+        memset(&l, 0, sizeof l);
+        l.kind = SCENE_LIGHT_POINT;
+        l.position = sc->lights[i].position;
+        l.intensity = sc->lights[i].intensity;
+        d->lights = memory_grow(d->lights, &d->light_capacity, d->light_count + 1, sizeof l);
+        d->lights[d->light_count++] = l;
+    }
+}

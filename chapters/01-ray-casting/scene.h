@@ -117,6 +117,9 @@ vec3 material_diffuse_at(const material *m, vec3 point);
  * effects are left at EFFECT_ALL (the caller narrows them). False with err
  * ("file:line:col: ...") if a mesh cannot be loaded; sc is then empty. */
 bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *err, size_t err_size);
+/* The reverse: a built-in scene as a description, so that the effects
+ * analysis runs on it as on a file (d->source is "built-in scene"). */
+void scene_describe(const scene *sc, scene_desc *d);
 /* Does the scene trace shadow rays (the effects analysis did not prove them
  * useless, or narrow them away)? */
 static inline bool scene_traces_shadows(const scene *sc) { return (sc->effects & EFFECT_SHADOWS) != 0; }

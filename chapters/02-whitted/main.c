@@ -34,17 +34,19 @@ int main(int argc, char **argv)
             scene_desc_free(&desc);
             return 1;
         }
-        effects_report e = effects_analyse(&desc);
-        sc.effects = effects_decide(&e, EFFECT_SHADOWS | EFFECT_REFLECTION | EFFECT_REFRACTION);
-        if (!opts.quiet)
-            effects_print(stdout, &e, spec.program);
-        program_note_effects(&e);
-        if (max_depth < 0 && desc.max_depth >= 0)
-            max_depth = desc.max_depth > 64 ? 64 : desc.max_depth;
-        scene_desc_free(&desc);
     } else {
         scene_build_whitted_demo(&sc);
+        scene_describe(&sc, &desc);
     }
+    /* The effects analysis, on the file or on the built-in scene alike. */
+    effects_report e = effects_analyse(&desc);
+    sc.effects = effects_decide(&e, EFFECT_SHADOWS | EFFECT_REFLECTION | EFFECT_REFRACTION);
+    if (!opts.quiet)
+        effects_print(stdout, &e, spec.program);
+    program_note_effects(&e);
+    if (max_depth < 0 && desc.max_depth >= 0)
+        max_depth = desc.max_depth > 64 ? 64 : desc.max_depth;
+    scene_desc_free(&desc);
     if (max_depth < 0)
         max_depth = DEFAULT_MAX_DEPTH;
     camera cam = scene_make_camera(&sc, opts.width, opts.height);

@@ -104,27 +104,28 @@ int main(int argc, char **argv)
         scene_desc_free(&desc);
         return 2;
     }
-    unsigned effects = EFFECT_ALL;
     if (from_file) {
         bool ok = pt_scene_from_desc(&sc, &desc, spec.program, err, sizeof err);
-        if (ok) {
-            /* The path tracer can simulate every effect; it simulates those
-             * the scene calls for and allows. */
-            effects_report e = effects_analyse(&desc);
-            effects = effects_decide(&e, EFFECT_ALL);
-            if (!opts.quiet)
-                effects_print(stdout, &e, spec.program);
-            program_note_effects(&e);
-        }
-        scene_desc_free(&desc);
         if (!ok) {
+            scene_desc_free(&desc);
             fprintf(stderr, "09-path-tracing: %s\n", err);
             return 1;
         }
     } else if (!build_scene(&sc, scene_name, obj, err, sizeof err)) {
         fprintf(stderr, "09-path-tracing: %s\n", err);
         return obj != NULL ? 1 : 2;
+    } else {
+        pt_scene_describe(&sc, &desc);
     }
+    /* The path tracer can simulate every effect; it simulates those the
+     * scene (file or built-in) calls for and allows. The experiments (--data)
+     * measure the integrators themselves, so they keep every effect on. */
+    effects_report e = effects_analyse(&desc);
+    unsigned effects = data != NULL ? EFFECT_ALL : effects_decide(&e, EFFECT_ALL);
+    if (!opts.quiet && data == NULL)
+        effects_print(stdout, &e, spec.program);
+    program_note_effects(&e);
+    scene_desc_free(&desc);
     pt = path_tracer_defaults(&sc);
     pt.effects = effects;
     pt.integrator = chosen;

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "09-path-tracing/scene_pt.h"
+#include "memory.h"
 #include "program.h"
 
 static pt_material material_from_desc(const scene_desc *d, const scene_material *sm, const char *label)
@@ -115,4 +116,62 @@ bool pt_scene_from_desc(pt_scene *sc, const scene_desc *d, const char *label, ch
     }
     pt_scene_finish(sc);
     return true;
+}
+
+void pt_scene_describe(const pt_scene *sc, scene_desc *d)
+{
+    scene_desc_init(d);
+    snprintf(d->source, sizeof d->source, "built-in scene");
+    d->has_camera = true;
+    d->eye = sc->eye;
+    d->target = sc->target;
+    d->up = sc->up;
+    d->fov_degrees = sc->vertical_fov_degrees;
+    d->background = sc->environment;
+    for (int i = 0; i < sc->material_count; i++) {
+        const pt_material *m = &sc->materials[i];
+        scene_material sm;
+        memset(&sm, 0, sizeof sm);
+        snprintf(sm.name, sizeof sm.name, "material%d", i);
+        bool emits = m->emission.x > 0.0f || m->emission.y > 0.0f || m->emission.z > 0.0f;
+        sm.kind = m->kind == BSDF_GLOSSY ? SCENE_MATERIAL_GLOSSY
+                  : m->kind == BSDF_GLASS  ? SCENE_MATERIAL_GLASS
+                  : m->kind == BSDF_MIRROR ? SCENE_MATERIAL_MIRROR
+                  : emits                  ? SCENE_MATERIAL_EMISSIVE
+                                           : SCENE_MATERIAL_DIFFUSE;
+        sm.albedo = m->albedo;
+        sm.emission = m->emission;
+        sm.roughness = m->roughness;
+        sm.ior = m->ior;
+        d->materials = memory_grow(d->materials, &d->material_capacity, d->material_count + 1, sizeof sm);
+        d->materials[d->material_count++] = sm;
+    }
+    for (int i = 0; i < sc->geometry.face_count + sc->sphere_count; i++) {
+        scene_shape s;
+        memset(&s, 0, sizeof s);
+        if (i < sc->geometry.face_count) {
+            s.kind = SCENE_SHAPE_TRIANGLE;
+            for (int k = 0; k < 3; k++)
+                s.p[k] = mesh_vertex(&sc->geometry, i, k);
+            s.material = sc->geometry.faces[i].material;
+        } else {
+            const pt_sphere *sp = &sc->spheres[i - sc->geometry.face_count];
+            s.kind = SCENE_SHAPE_SPHERE;
+            s.center = sp->center;
+            s.radius = sp->radius;
+            s.inside_out = sp->inside_out;
+            s.material = sp->material;
+        }
+        d->shapes = memory_grow(d->shapes, &d->shape_capacity, d->shape_count + 1, sizeof s);
+        d->shapes[d->shape_count++] = s;
+    }
+    for (int i = 0; i < sc->point_light_count; i++) {
+        scene_light l;
+        memset(&l, 0, sizeof l);
+        l.kind = SCENE_LIGHT_POINT;
+        l.position = sc->point_lights[i].position;
+        l.intensity = sc->point_lights[i].intensity;
+        d->lights = memory_grow(d->lights, &d->light_capacity, d->light_count + 1, sizeof l);
+        d->lights[d->light_count++] = l;
+    }
 }

@@ -27,9 +27,12 @@ void counters_print(FILE *out, const ray_counters *c, double seconds)
 {
     uint64_t rays = counters_total_rays(c);
     fprintf(out, "rays: %" PRIu64 " camera, %" PRIu64 " shadow, %" PRIu64 " reflection, %" PRIu64
-                 " refraction, %" PRIu64 " indirect (%.2f Mrays/s)\n",
-            c->camera_rays, c->shadow_rays, c->reflection_rays, c->refraction_rays, c->indirect_rays,
-            seconds > 0 ? (double)rays / seconds * 1e-6 : 0.0);
+                 " refraction, %" PRIu64 " indirect",
+            c->camera_rays, c->shadow_rays, c->reflection_rays, c->refraction_rays, c->indirect_rays);
+    /* No rate without a time (one explained pixel is not timed). */
+    if (seconds > 0)
+        fprintf(out, " (%.2f Mrays/s)", (double)rays / seconds * 1e-6);
+    fputc('\n', out);
     if (rays > 0)
         fprintf(out, "tests per ray: %.2f primitive, %.2f box\n", (double)c->primitive_tests / (double)rays,
                 (double)c->box_tests / (double)rays);

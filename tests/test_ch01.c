@@ -636,6 +636,28 @@ static void test_a_second_shape_brings_shadow_rays_back(void **state)
     scene_free(&sc);
 }
 
+/* The built-in scene, described, is analysed like its file: the same
+ * effects, shadows included (a sphere and a torus over a floor). */
+static void test_built_in_scene_description_matches_its_file(void **state)
+{
+    (void)state;
+    scene sc;
+    scene_build_ray_casting_demo(&sc);
+    scene_desc built_in, file;
+    scene_describe(&sc, &built_in);
+    char err[SCENE_ERROR_SIZE];
+    if (!scene_desc_load(&file, "chapters/01-ray-casting/scenes/default.scene", err, sizeof err))
+        fail_msg("%s", err);
+    assert_int_equal(built_in.shape_count, file.shape_count);
+    assert_int_equal(built_in.light_count, file.light_count);
+    effects_report a = effects_analyse(&built_in), b = effects_analyse(&file);
+    assert_int_equal(a.needed, b.needed);
+    assert_int_equal(a.needed, EFFECT_SHADOWS | EFFECT_INDIRECT);
+    scene_desc_free(&built_in);
+    scene_desc_free(&file);
+    scene_free(&sc);
+}
+
 /* A mesh shape brings the OBJ's triangles with their MTL colours; an area
  * light becomes a point light (with a warning). */
 static void test_scene_file_mesh_and_area_light_convert(void **state)
@@ -682,6 +704,7 @@ int main(void)
         cmocka_unit_test(test_one_unoccluded_light_needs_no_shadow_ray),
         cmocka_unit_test(test_a_second_shape_brings_shadow_rays_back),
         cmocka_unit_test(test_scene_file_mesh_and_area_light_convert),
+        cmocka_unit_test(test_built_in_scene_description_matches_its_file),
     };
     return cmocka_run_group_tests_name("ch01 ray casting", tests, NULL, NULL);
 }

@@ -499,6 +499,16 @@ static void test_point_light_in_a_sphere_needs_no_shadow_ray(void **state)
     assert_true(c_forced.shadow_rays > 0);
     pt_scene_free(&sc);
 
+    /* The built-in point-in-sphere scene, described, gets the same verdict. */
+    pt_scene built_in;
+    pt_scene_build_point_in_sphere(&built_in, 0.5f, (float)PI);
+    scene_desc d;
+    pt_scene_describe(&built_in, &d);
+    effects_report e = effects_analyse(&d);
+    assert_int_equal(e.needed, EFFECT_INDIRECT);
+    scene_desc_free(&d);
+    pt_scene_free(&built_in);
+
     /* The twin: move the light outside, and the sphere blocks it. */
     const char *outside = "camera eye 0.2 -0.1 0.3 target 0.4 0.3 -1 fov 70\n"
                           "material grey diffuse albedo 0.5 0.5 0.5\n"

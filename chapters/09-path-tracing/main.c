@@ -166,6 +166,12 @@ int main(int argc, char **argv)
                    pt_integrator_name(pt.integrator), e.spp, e.seconds, estimate_relative_error(&e), opts.out);
             counters_print(stdout, &e.counters, e.seconds);
         }
+        char counters_path[4096];
+        counters_path_for_image(opts.out, counters_path, sizeof counters_path);
+        if (status == 0 && !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
+            fprintf(stderr, "09-path-tracing: %s\n", err);
+            status = 1;
+        }
         estimate_image_free(&e);
     } else {
         camera cam = pt_scene_camera(&sc, opts.width, opts.height);

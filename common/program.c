@@ -58,7 +58,7 @@ bool program_load_scene(cli_options *opts, const char *label, scene_desc *d)
 }
 
 /* --explain X,Y: one pixel, one thread, every step printed. */
-static int program_explain(const cli_options *opts, const char *label, const render_job *job)
+static int program_explain(const cli_options *opts, const char *label, const render_job *job, render_stats *stats_out)
 {
     if (opts->explain_x >= job->cam->width || opts->explain_y >= job->cam->height) {
         fprintf(stderr, "%s: --explain %d,%d: outside the %dx%d image\n", label, opts->explain_x, opts->explain_y,
@@ -77,6 +77,11 @@ static int program_explain(const cli_options *opts, const char *label, const ren
     printf("pixel (%d, %d) = %s: the mean of the samples above\n", opts->explain_x, opts->explain_y,
            explain_vec3(value, c));
     counters_print(stdout, &counters, 0.0);
+    /* What callers print after a render then describes this one pixel. */
+    if (stats_out != NULL) {
+        stats_out->seconds = 0.0;
+        stats_out->counters = counters;
+    }
     return 0;
 }
 
@@ -93,7 +98,7 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
                       .scene = scene,
                       .jitter = opts->jitter};
     if (opts->explain)
-        return program_explain(opts, label, &job);
+        return program_explain(opts, label, &job, stats_out);
     image img = image_make(cam->width, cam->height);
     if (img.rgb == NULL) {
         fprintf(stderr, "%s: out of memory for a %dx%d image\n", label, cam->width, cam->height);

@@ -20,7 +20,8 @@
  * the image went, the time, and the ray counters, and writes the counters
  * beside the image (counters_path_for_image). If stats is not NULL it
  * receives the render's time and counters. With opts->explain, renders only
- * that pixel, printing its path tree, and writes nothing. */
+ * that pixel, printing its path tree, writes nothing, and stats (if not
+ * NULL) receives that pixel's counters and a time of 0. */
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
                    const camera *cam, render_stats *stats);
 

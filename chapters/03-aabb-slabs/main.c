@@ -11,6 +11,7 @@
 
 #include "03-aabb-slabs/accel.h"
 #include "cli.h"
+#include "explain.h"
 #include "memory.h"
 #include "program.h"
 
@@ -57,6 +58,7 @@ static vec3 boxed_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *cou
     (void)rng;
     const boxed_scene *sc = ctx;
     slab_ray sr = slab_ray_make(r);
+    uint64_t tests_before = counters->primitive_tests;
     int best = -1;
     float best_t = INFINITY, best_b1 = 0, best_b2 = 0;
     vec3 overlay = vec3_splat(0.0f);
@@ -86,6 +88,15 @@ static vec3 boxed_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *cou
                 best_b2 = b2;
             }
         }
+    }
+    if (explain_on()) {
+        explain_line(1, "%d object boxes tested, %llu triangles tested (only inside boxes the ray entered, nearer "
+                     "than the best hit)", sc->use_boxes ? sc->object_count : 0,
+                     (unsigned long long)(counters->primitive_tests - tests_before));
+        if (best >= 0)
+            explain_line(1, "closest hit: triangle #%d at t = %.6g", best, (double)best_t);
+        else
+            explain_line(1, "no triangle hit: the background");
     }
     vec3 colour = vec3_make(0.02f, 0.02f, 0.03f);
     if (best >= 0) {

@@ -13,7 +13,7 @@ void explain_end(void)
     explain_stream = NULL;
 }
 
-void explain_line(int depth, const char *format, ...)
+void explain_print_line(int depth, const char *format, ...)
 {
     if (explain_stream == NULL)
         return;

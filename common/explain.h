@@ -29,8 +29,15 @@ static inline bool explain_on(void) { return explain_stream != NULL; }
 
 void explain_begin(FILE *out);
 void explain_end(void);
-/* One line, indented two spaces per depth. */
-void explain_line(int depth, const char *format, ...)
+/* One line, indented two spaces per depth. A macro, so that when nothing is
+ * being explained neither the call nor its arguments cost anything in the
+ * integrators' inner loops. */
+#define explain_line(...)                  \
+    do {                                   \
+        if (explain_on())                  \
+            explain_print_line(__VA_ARGS__); \
+    } while (0)
+void explain_print_line(int depth, const char *format, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))
 #endif

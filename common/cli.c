@@ -69,6 +69,18 @@ static bool parse_u64(const char *text, uint64_t *out)
     return true;
 }
 
+/* "X,Y": two non-negative whole numbers (checked against the image size
+ * once the size is known: a scene file may still change it). */
+static bool parse_pixel(const char *text, int *x, int *y)
+{
+    const char *comma = strchr(text, ',');
+    if (comma == NULL || comma - text >= 32)
+        return false;
+    char first[32];
+    snprintf(first, sizeof first, "%.*s", (int)(comma - text), text);
+    return parse_int(first, 0, CLI_MAX_IMAGE_SIDE - 1, x) && parse_int(comma + 1, 0, CLI_MAX_IMAGE_SIDE - 1, y);
+}
+
 static bool has_suffix(const char *s, const char *suffix)
 {
     size_t n = strlen(s), m = strlen(suffix);
@@ -197,7 +209,8 @@ cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *o
                 extra = &spec->extras[k];
         bool core = strcmp(name, "--width") == 0 || strcmp(name, "--height") == 0 || strcmp(name, "--spp") == 0 ||
                     strcmp(name, "--seed") == 0 || strcmp(name, "--threads") == 0 || strcmp(name, "--out") == 0 ||
-                    strcmp(name, "--exposure") == 0;
+                    strcmp(name, "--exposure") == 0 || strcmp(name, "--scene") == 0 ||
+                    strcmp(name, "--explain") == 0;
         if (!core && extra == NULL) {
             snprintf(err, err_size, "unknown flag '%s'", name);
             return CLI_ERROR;
@@ -215,6 +228,7 @@ cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *o
                 return CLI_ERROR;
         } else if (strcmp(name, "--width") == 0 || strcmp(name, "--height") == 0) {
             int *dst = name[2] == 'w' ? &opts->width : &opts->height;
+            *(name[2] == 'w' ? &opts->width_given : &opts->height_given) = true;
             if (!parse_int(value, 1, CLI_MAX_IMAGE_SIDE, dst)) {
                 snprintf(err, err_size, "%s: expected a whole number of pixels from 1 to %d, got '%s'", name,
                          CLI_MAX_IMAGE_SIDE, value);
@@ -225,6 +239,19 @@ cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *o
                 snprintf(err, err_size, "--spp: expected samples per pixel from 1 to %d, got '%s'", CLI_MAX_SPP, value);
                 return CLI_ERROR;
             }
+            opts->spp_given = true;
+        } else if (strcmp(name, "--scene") == 0) {
+            if (value[0] == '\0') {
+                snprintf(err, err_size, "--scene: expected a file name");
+                return CLI_ERROR;
+            }
+            opts->scene = value;
+        } else if (strcmp(name, "--explain") == 0) {
+            if (!parse_pixel(value, &opts->explain_x, &opts->explain_y)) {
+                snprintf(err, err_size, "--explain: expected a pixel as X,Y (two whole numbers >= 0), got '%s'", value);
+                return CLI_ERROR;
+            }
+            opts->explain = true;
         } else if (strcmp(name, "--threads") == 0) {
             if (!parse_int(value, 1, CLI_MAX_THREADS, &opts->threads)) {
                 snprintf(err, err_size, "--threads: expected a thread count from 1 to %d, got '%s'", CLI_MAX_THREADS, value);
@@ -273,6 +300,9 @@ void cli_print_help(const cli_spec *spec, const cli_options *d)
     printf("  --out FILE       .exr writes the EXR and a .png preview beside it; .png the preview only\n");
     printf("                   (default %s)\n", d->out);
     printf("  --exposure X     preview brightness in stops, 2^X (default %g)\n", (double)d->exposure);
+    printf("  --scene FILE     render a scene file instead of the built-in scene (docs/scene-format.md)\n");
+    printf("  --explain X,Y    print the path tree of pixel (X, Y) -- every ray, hit, light sample and\n");
+    printf("                   Russian roulette decision -- instead of rendering the image\n");
     printf("  --quiet          no progress line and no report\n");
     printf("  --help           this text\n");
     if (spec->extra_count > 0) {

@@ -1,7 +1,7 @@
 /* cli.h -- the command line every chapter program shares.
  *
  *   --width N --height N --spp N --seed N --threads N --out FILE
- *   --exposure STOPS --quiet --help
+ *   --exposure STOPS --scene FILE --explain X,Y --quiet --help
  *
  * plus flags of a chapter's own, described in a small table so that --help
  * lists them and parsing checks them the same way.
@@ -29,6 +29,12 @@ typedef struct {
     const char *out;    /* .exr (plus a .png preview beside it) or .png */
     float exposure;     /* preview brightness in stops */
     bool quiet;
+    const char *scene;  /* --scene FILE (docs/scene-format.md), or NULL: the built-in scene */
+    bool explain;       /* --explain X,Y: print the path tree of that pixel */
+    int explain_x, explain_y;
+    /* Whether --width, --height, --spp were given: a scene file's image
+     * statement applies to those that were not. */
+    bool width_given, height_given, spp_given;
     /* Not a flag: set by programs that integrate over the pixel (the path
      * tracer) so that even one sample per pixel lands at a random point
      * inside it, rather than at its centre (see render.h). */

@@ -1,6 +1,10 @@
 #include "counters.h"
 
+#include <errno.h>
 #include <inttypes.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
 
 void counters_add(ray_counters *into, const ray_counters *from)
 {
@@ -23,12 +27,60 @@ void counters_print(FILE *out, const ray_counters *c, double seconds)
 {
     uint64_t rays = counters_total_rays(c);
     fprintf(out, "rays: %" PRIu64 " camera, %" PRIu64 " shadow, %" PRIu64 " reflection, %" PRIu64
-                 " refraction, %" PRIu64 " indirect (%.2f Mrays/s)\n",
-            c->camera_rays, c->shadow_rays, c->reflection_rays, c->refraction_rays, c->indirect_rays,
-            seconds > 0 ? (double)rays / seconds * 1e-6 : 0.0);
+                 " refraction, %" PRIu64 " indirect",
+            c->camera_rays, c->shadow_rays, c->reflection_rays, c->refraction_rays, c->indirect_rays);
+    /* No rate without a time (one explained pixel is not timed). */
+    if (seconds > 0)
+        fprintf(out, " (%.2f Mrays/s)", (double)rays / seconds * 1e-6);
+    fputc('\n', out);
     if (rays > 0)
         fprintf(out, "tests per ray: %.2f primitive, %.2f box\n", (double)c->primitive_tests / (double)rays,
                 (double)c->box_tests / (double)rays);
     if (c->nonfinite_samples > 0)
         fprintf(out, "warning: %" PRIu64 " NaN/Inf samples dropped\n", c->nonfinite_samples);
+}
+
+void counters_path_for_image(const char *image_path, char *out, size_t out_size)
+{
+    const char *dot = strrchr(image_path, '.');
+    const char *slash = strrchr(image_path, '/');
+    size_t stem = (dot != NULL && (slash == NULL || dot > slash)) ? (size_t)(dot - image_path) : strlen(image_path);
+    snprintf(out, out_size, "%.*s.counters.json", (int)stem, image_path);
+}
+
+bool counters_write_json(const char *path, const ray_counters *c, double seconds, const char *extra, char *err,
+                         size_t err_size)
+{
+    char temp[4096];
+    if (snprintf(temp, sizeof temp, "%s.tmp.%ld", path, (long)getpid()) >= (int)sizeof temp) {
+        snprintf(err, err_size, "%s: path too long", path);
+        return false;
+    }
+    FILE *f = fopen(temp, "w");
+    if (f == NULL) {
+        snprintf(err, err_size, "cannot write '%s': %s", path, strerror(errno));
+        return false;
+    }
+    fprintf(f,
+            "{\n  \"camera_rays\": %" PRIu64 ",\n  \"shadow_rays\": %" PRIu64 ",\n  \"reflection_rays\": %" PRIu64
+            ",\n  \"refraction_rays\": %" PRIu64 ",\n  \"indirect_rays\": %" PRIu64 ",\n  \"box_tests\": %" PRIu64
+            ",\n  \"primitive_tests\": %" PRIu64 ",\n  \"nonfinite_samples_dropped\": %" PRIu64
+            ",\n  \"seconds\": %.6f%s%s\n}\n",
+            c->camera_rays, c->shadow_rays, c->reflection_rays, c->refraction_rays, c->indirect_rays, c->box_tests,
+            c->primitive_tests, c->nonfinite_samples, seconds, extra != NULL ? ",\n  " : "", extra != NULL ? extra : "");
+    int failure = 0;
+    if (fflush(f) != 0 || ferror(f))
+        failure = errno ? errno : EIO;
+    if (failure == 0 && fsync(fileno(f)) != 0)
+        failure = errno;
+    if (fclose(f) != 0 && failure == 0)
+        failure = errno;
+    if (failure == 0 && rename(temp, path) != 0)
+        failure = errno;
+    if (failure != 0) {
+        unlink(temp);
+        snprintf(err, err_size, "cannot write '%s': %s", path, strerror(failure));
+        return false;
+    }
+    return true;
 }

@@ -1,15 +1,93 @@
 #include "program.h"
 
+#include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "explain.h"
+
+/* The effects of the current render, for its counters file ("" until noted). */
+static char noted_effects[256];
+
+void program_note_effects(const effects_report *e)
+{
+    size_t used = (size_t)snprintf(noted_effects, sizeof noted_effects, "\"effects_simulated\": [");
+    bool first = true;
+    for (int k = 0; k < EFFECT_COUNT; k++)
+        if (e->simulated & (1u << k)) {
+            used += (size_t)snprintf(noted_effects + used, sizeof noted_effects - used, "%s\"%s\"", first ? "" : ", ",
+                                     effect_name(1u << k));
+            first = false;
+        }
+    snprintf(noted_effects + used, sizeof noted_effects - used, "]");
+}
+
+void program_warn(const char *label, const scene_desc *d, int line, int column, const char *format, ...)
+{
+    char where[SCENE_PATH_SIZE + 32];
+    if (line > 0)
+        scene_desc_where(d, line, column, where, sizeof where);
+    else
+        snprintf(where, sizeof where, "%s", d->source);
+    fprintf(stderr, "%s: %s: warning: ", label, where);
+    va_list args;
+    va_start(args, format);
+    vfprintf(stderr, format, args);
+    va_end(args);
+    fputc('\n', stderr);
+}
+
+bool program_load_scene(cli_options *opts, const char *label, scene_desc *d)
+{
+    scene_desc_init(d);
+    if (opts->scene == NULL)
+        return false;
+    char err[SCENE_ERROR_SIZE];
+    if (!scene_desc_load(d, opts->scene, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", label, err);
+        exit(1);
+    }
+    if (d->has_width && !opts->width_given)
+        opts->width = d->width;
+    if (d->has_height && !opts->height_given)
+        opts->height = d->height;
+    if (d->has_spp && !opts->spp_given)
+        opts->spp = d->spp;
+    return true;
+}
+
+/* --explain X,Y: one pixel, one thread, every step printed. */
+static int program_explain(const cli_options *opts, const char *label, const render_job *job, render_stats *stats_out)
+{
+    if (opts->explain_x >= job->cam->width || opts->explain_y >= job->cam->height) {
+        fprintf(stderr, "%s: --explain %d,%d: outside the %dx%d image\n", label, opts->explain_x, opts->explain_y,
+                job->cam->width, job->cam->height);
+        return 2;
+    }
+    printf("%s: the path tree of pixel (%d, %d) of %dx%d, %d sample%s (seed %llu)\n", label, opts->explain_x,
+           opts->explain_y, job->cam->width, job->cam->height, job->spp, job->spp > 1 ? "s" : "",
+           (unsigned long long)job->seed);
+    ray_counters counters;
+    memset(&counters, 0, sizeof counters);
+    explain_begin(stdout);
+    vec3 c = render_pixel(job, opts->explain_x, opts->explain_y, &counters, NULL);
+    explain_end();
+    char value[64];
+    printf("pixel (%d, %d) = %s: the mean of the samples above\n", opts->explain_x, opts->explain_y,
+           explain_vec3(value, c));
+    counters_print(stdout, &counters, 0.0);
+    /* What callers print after a render then describes this one pixel. */
+    if (stats_out != NULL) {
+        stats_out->seconds = 0.0;
+        stats_out->counters = counters;
+    }
+    return 0;
+}
 
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
                    const camera *cam, render_stats *stats_out)
 {
-    image img = image_make(cam->width, cam->height);
-    if (img.rgb == NULL) {
-        fprintf(stderr, "%s: out of memory for a %dx%d image\n", label, cam->width, cam->height);
-        return 1;
-    }
     render_job job = {.cam = cam,
                       .spp = opts->spp,
                       .seed = opts->seed,
@@ -19,6 +97,13 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
                       .radiance = radiance,
                       .scene = scene,
                       .jitter = opts->jitter};
+    if (opts->explain)
+        return program_explain(opts, label, &job, stats_out);
+    image img = image_make(cam->width, cam->height);
+    if (img.rgb == NULL) {
+        fprintf(stderr, "%s: out of memory for a %dx%d image\n", label, cam->width, cam->height);
+        return 1;
+    }
     render_stats stats;
     render_image(&job, &img, &stats);
 
@@ -29,10 +114,19 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
         fprintf(stderr, "%s: %s\n", label, err);
         return 1;
     }
+    char counters_path[4096], extra[512];
+    counters_path_for_image(opts->out, counters_path, sizeof counters_path);
+    snprintf(extra, sizeof extra, "\"program\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n  \"spp\": %d%s%s", label,
+             cam->width, cam->height, opts->spp, noted_effects[0] ? ",\n  " : "", noted_effects);
+    if (!counters_write_json(counters_path, &stats.counters, stats.seconds, extra, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", label, err);
+        return 1;
+    }
     if (!opts->quiet) {
         printf("%s: %dx%d, %d spp, %d threads, %.3f s -> %s\n", label, cam->width, cam->height, opts->spp,
                opts->threads, stats.seconds, opts->out);
         counters_print(stdout, &stats.counters, stats.seconds);
+        printf("counters -> %s\n", counters_path);
     }
     if (stats_out != NULL)
         *stats_out = stats;

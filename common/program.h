@@ -1,20 +1,45 @@
 /* program.h -- the end of every chapter program's main(): render the scene
- * with the options from the command line, write the image, report.
+ * with the options from the command line, write the image and its counters,
+ * report; or, with --explain X,Y, print the path tree of one pixel instead.
  *
  * Usage (after cli_parse_or_exit and building the scene):
+ *   scene_desc desc;
+ *   if (program_load_scene(&opts, "01-ray-casting", &desc)) ... convert desc into the chapter's scene
  *   return program_render(&opts, "01-ray-casting", ray_cast_radiance, &sc, &cam, NULL);
  */
 #ifndef PROGRAM_H
 #define PROGRAM_H
 
 #include "cli.h"
+#include "effects.h"
 #include "render.h"
+#include "scene_file.h"
 
 /* Returns the process exit status: 0, or 1 if the image could not be written
  * (the message names the file). On success, unless opts->quiet, prints where
- * the image went, the time, and the ray counters. If stats is not NULL it
- * receives the render's time and counters. */
+ * the image went, the time, and the ray counters, and writes the counters
+ * beside the image (counters_path_for_image). If stats is not NULL it
+ * receives the render's time and counters. With opts->explain, renders only
+ * that pixel, printing its path tree, writes nothing, and stats (if not
+ * NULL) receives that pixel's counters and a time of 0. */
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
                    const camera *cam, render_stats *stats);
+
+/* With --scene FILE: loads it into d (exits with status 1 and the parser's
+ * "file:line:col: message" on error), applies its image statement to the
+ * options the command line did not set, and returns true. Without --scene:
+ * d is left empty and the result is false. */
+bool program_load_scene(cli_options *opts, const char *label, scene_desc *d);
+
+/* Records which effects the render simulates, for the counters file. */
+void program_note_effects(const effects_report *e);
+
+/* A chapter's warning about something in the scene file it cannot show:
+ * "label: file:line:col: warning: message". */
+void program_warn(const char *label, const scene_desc *d, int line, int column, const char *format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 5, 6)))
+#endif
+    ;
 
 #endif

@@ -6,6 +6,7 @@
 #include <omp.h>
 #endif
 
+#include "explain.h"
 #include "progress.h"
 #include "stats.h"
 #include "timer.h"
@@ -23,11 +24,20 @@ vec3 render_pixel(const render_job *job, int x, int y, ray_counters *counters, v
         }
         ray r = camera_ray(cam, px, py);
         counters->camera_rays++;
+        if (explain_on()) {
+            explain_line(0, "sample %d of %d, at (%.3f, %.3f) in the image", s + 1, job->spp, (double)px, (double)py);
+            explain_ray(1, "camera ray", r);
+        }
         vec3 sample = job->radiance(job->scene, r, &rng, counters);
+        if (explain_on()) {
+            char c[64];
+            explain_line(1, "sample radiance %s", explain_vec3(c, sample));
+        }
         /* Drop NaN and Inf here, before they are added: one bad sample would
          * otherwise turn the whole pixel NaN (or white) for good. */
         if (!vec3_is_finite(sample)) {
             counters->nonfinite_samples++;
+            explain_line(1, "NaN or Inf: dropped, not averaged");
             continue;
         }
         welford_add(&channel[0], sample.x);

@@ -1,5 +1,5 @@
 # Where multiple importance sampling wins: the same measurement as
-# ch09_error.gp on the Veach scene (--scene veach): glossy GGX plates of four
+# ch09_error.gp on the Veach scene (--builtin veach): glossy GGX plates of four
 # roughnesses lit by four lights of four sizes.
 # Data: build/bin/09-path-tracing --data DIR  ->  DIR/ch09_convergence_veach.csv
 set datafile separator ","

@@ -7,13 +7,16 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "01-ray-casting/ray_casting.h"
 #include "01-ray-casting/scene.h"
 #include "01-ray-casting/shapes.h"
+#include "effects.h"
 #include "mesh.h"
 #include "render.h"
+#include "scene_file.h"
 #include "test_support.h"
 
 static ray ray_from(float ox, float oy, float oz, float dx, float dy, float dz)
@@ -644,6 +647,149 @@ static void test_demo_is_bit_identical_for_one_and_two_threads(void **state)
     image_free(&two);
 }
 
+
+/* ---- scene files ------------------------------------------------------------ */
+
+/* A scene from scene-file text, effects decided as the program decides them. */
+static void scene_from_text(scene *sc, const char *text, unsigned supported)
+{
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    if (!scene_desc_parse(&d, text, strlen(text), "test.scene", NULL, err, sizeof err))
+        fail_msg("%s", err);
+    assert_true(scene_from_desc(sc, &d, "test", err, sizeof err));
+    effects_report e = effects_analyse(&d);
+    sc->effects = effects_decide(&e, supported);
+    scene_desc_free(&d);
+}
+
+static image render_scene(const scene *sc, int width, int height, ray_counters *counters)
+{
+    camera cam = scene_make_camera(sc, width, height);
+    render_job job = {.cam = &cam, .spp = 1, .seed = 1, .threads = 2, .quiet = true, .radiance = ray_cast_radiance,
+                      .scene = sc};
+    image img = image_make(width, height);
+    render_stats stats;
+    render_image(&job, &img, &stats);
+    *counters = stats.counters;
+    return img;
+}
+
+static void test_default_scene_file_renders_the_built_in_image(void **state)
+{
+    (void)state;
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    if (!scene_desc_load(&d, "chapters/01-ray-casting/scenes/default.scene", err, sizeof err))
+        fail_msg("%s", err);
+    scene from_file, built_in;
+    assert_true(scene_from_desc(&from_file, &d, "test", err, sizeof err));
+    effects_report e = effects_analyse(&d);
+    from_file.effects = effects_decide(&e, EFFECT_SHADOWS);
+    assert_int_equal(d.width, 1280);
+    scene_desc_free(&d);
+    scene_build_ray_casting_demo(&built_in);
+    ray_counters c1, c2;
+    image a = render_scene(&from_file, 128, 72, &c1), b = render_scene(&built_in, 128, 72, &c2);
+    assert_memory_equal(a.rgb, b.rgb, 128 * 72 * 3 * sizeof(float));
+    assert_memory_equal(&c1, &c2, sizeof c1);
+    image_free(&a);
+    image_free(&b);
+    scene_free(&from_file);
+    scene_free(&built_in);
+}
+
+static const char *const ONE_SPHERE =
+    "camera eye 0 0 5 target 0 0 0 fov 40\n"
+    "material red blinn_phong diffuse 0.7 0.2 0.1 specular 0.5 0.5 0.5 shininess 32\n"
+    "sphere center 0 0 0 radius 1 material red\n"
+    "light point position 3 4 5 intensity 30 30 30\n";
+
+/* One sphere seen from outside, one light outside it: the analysis proves no
+ * light can be blocked, so no shadow ray is traced, and the image is the
+ * same, bit for bit, as with a shadow ray to every light. */
+static void test_one_unoccluded_light_needs_no_shadow_ray(void **state)
+{
+    (void)state;
+    scene analysed, forced;
+    scene_from_text(&analysed, ONE_SPHERE, EFFECT_SHADOWS);
+    scene_from_text(&forced, ONE_SPHERE, EFFECT_SHADOWS);
+    assert_false(scene_traces_shadows(&analysed));
+    forced.effects = EFFECT_ALL;
+    ray_counters c_analysed, c_forced;
+    image a = render_scene(&analysed, 64, 48, &c_analysed), b = render_scene(&forced, 64, 48, &c_forced);
+    assert_int_equal(c_analysed.shadow_rays, 0);
+    assert_true(c_forced.shadow_rays > 100); /* the check would see shadow rays if they were traced */
+    assert_memory_equal(a.rgb, b.rgb, 64 * 48 * 3 * sizeof(float));
+    image_free(&a);
+    image_free(&b);
+    scene_free(&analysed);
+    scene_free(&forced);
+}
+
+/* The twin: add a floor, and the sphere can shadow it; shadow rays are back
+ * and they change the image. */
+static void test_a_second_shape_brings_shadow_rays_back(void **state)
+{
+    (void)state;
+    char text[1024];
+    snprintf(text, sizeof text, "%smaterial grey diffuse albedo 0.5 0.5 0.5\nplane point 0 -1 0 normal 0 1 0 "
+                                "material grey\n", ONE_SPHERE);
+    scene sc;
+    scene_from_text(&sc, text, EFFECT_SHADOWS);
+    assert_true(scene_traces_shadows(&sc));
+    ray_counters c;
+    image a = render_scene(&sc, 64, 48, &c);
+    assert_true(c.shadow_rays > 0);
+    sc.effects = 0; /* no shadows: the floor under the sphere gets light it should not */
+    ray_counters c_off;
+    image b = render_scene(&sc, 64, 48, &c_off);
+    assert_int_equal(c_off.shadow_rays, 0);
+    assert_true(memcmp(a.rgb, b.rgb, 64 * 48 * 3 * sizeof(float)) != 0);
+    image_free(&a);
+    image_free(&b);
+    scene_free(&sc);
+}
+
+/* The built-in scene, described, is analysed like its file: the same
+ * effects, shadows included (a sphere and a torus over a floor). */
+static void test_built_in_scene_description_matches_its_file(void **state)
+{
+    (void)state;
+    scene sc;
+    scene_build_ray_casting_demo(&sc);
+    scene_desc built_in, file;
+    scene_describe(&sc, &built_in);
+    char err[SCENE_ERROR_SIZE];
+    if (!scene_desc_load(&file, "chapters/01-ray-casting/scenes/default.scene", err, sizeof err))
+        fail_msg("%s", err);
+    assert_int_equal(built_in.shape_count, file.shape_count);
+    assert_int_equal(built_in.light_count, file.light_count);
+    effects_report a = effects_analyse(&built_in), b = effects_analyse(&file);
+    assert_int_equal(a.needed, b.needed);
+    assert_int_equal(a.needed, EFFECT_SHADOWS | EFFECT_INDIRECT);
+    scene_desc_free(&built_in);
+    scene_desc_free(&file);
+    scene_free(&sc);
+}
+
+/* A mesh shape brings the OBJ's triangles with their MTL colours; an area
+ * light becomes a point light (with a warning). */
+static void test_scene_file_mesh_and_area_light_convert(void **state)
+{
+    (void)state;
+    const char *text = "material m diffuse albedo 0.5 0.5 0.5\n"
+                       "mesh generator tori_field triangles 1024\n"
+                       "light area p0 0 5 0 p1 1 5 0 p2 1 5 1 p3 0 5 1 emission 2 2 2\n";
+    scene sc;
+    scene_from_text(&sc, text, EFFECT_SHADOWS);
+    assert_int_equal(sc.shape_count, 1024);
+    assert_int_equal(sc.light_count, 1);
+    assert_close(sc.lights[0].intensity.x, 2.0, 1e-6); /* L_e x area 1 */
+    assert_close(sc.lights[0].position.x, 0.5, 1e-6);
+    scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -672,6 +818,11 @@ int main(void)
         cmocka_unit_test(test_unoffset_shadow_rays_hit_the_light_they_aim_at),
         cmocka_unit_test(test_degenerate_collinear_triangles_are_never_hit),
         cmocka_unit_test(test_demo_is_bit_identical_for_one_and_two_threads),
+        cmocka_unit_test(test_default_scene_file_renders_the_built_in_image),
+        cmocka_unit_test(test_one_unoccluded_light_needs_no_shadow_ray),
+        cmocka_unit_test(test_a_second_shape_brings_shadow_rays_back),
+        cmocka_unit_test(test_scene_file_mesh_and_area_light_convert),
+        cmocka_unit_test(test_built_in_scene_description_matches_its_file),
     };
     return cmocka_run_group_tests_name("ch01 ray casting", tests, NULL, NULL);
 }

@@ -12,7 +12,9 @@
 #include <string.h>
 
 #include "02-whitted/whitted.h"
+#include "effects.h"
 #include "render.h"
+#include "scene_file.h"
 #include "rng.h"
 #include "test_support.h"
 
@@ -444,10 +446,129 @@ static void test_image_is_identical_for_one_and_two_threads(void **state)
     scene_free(&sc);
 }
 
+
+/* ---- scene files and effects -------------------------------------------------- */
+
+static const unsigned WHITTED_EFFECTS = EFFECT_SHADOWS | EFFECT_REFLECTION | EFFECT_REFRACTION;
+
+static void scene_from_text(scene *sc, const char *text)
+{
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    if (!scene_desc_parse(&d, text, strlen(text), "test.scene", NULL, err, sizeof err))
+        fail_msg("%s", err);
+    assert_true(scene_from_desc(sc, &d, "test", err, sizeof err));
+    effects_report e = effects_analyse(&d);
+    sc->effects = effects_decide(&e, WHITTED_EFFECTS);
+    scene_desc_free(&d);
+}
+
+static image render_whitted(const scene *sc, int width, int height, ray_counters *counters)
+{
+    camera cam = scene_make_camera(sc, width, height);
+    whitted_context ctx = {sc, 5};
+    render_job job = {.cam = &cam, .spp = 1, .seed = 1, .threads = 2, .quiet = true, .radiance = whitted_radiance,
+                      .scene = &ctx};
+    image img = image_make(width, height);
+    render_stats stats;
+    render_image(&job, &img, &stats);
+    *counters = stats.counters;
+    return img;
+}
+
+static void test_default_scene_file_renders_the_built_in_image(void **state)
+{
+    (void)state;
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    if (!scene_desc_load(&d, "chapters/02-whitted/scenes/default.scene", err, sizeof err))
+        fail_msg("%s", err);
+    scene from_file, built_in;
+    assert_true(scene_from_desc(&from_file, &d, "test", err, sizeof err));
+    effects_report e = effects_analyse(&d);
+    from_file.effects = effects_decide(&e, WHITTED_EFFECTS);
+    assert_int_equal(from_file.effects, WHITTED_EFFECTS);
+    assert_int_equal(d.max_depth, 5);
+    scene_desc_free(&d);
+    scene_build_whitted_demo(&built_in);
+    ray_counters c1, c2;
+    image a = render_whitted(&from_file, 128, 72, &c1), b = render_whitted(&built_in, 128, 72, &c2);
+    assert_memory_equal(a.rgb, b.rgb, 128 * 72 * 3 * sizeof(float));
+    assert_memory_equal(&c1, &c2, sizeof c1);
+    image_free(&a);
+    image_free(&b);
+    scene_free(&from_file);
+    scene_free(&built_in);
+}
+
+#define MIRROR_SCENE_HEAD                                                                     \
+    "camera eye 0 2 6 target 0 0.5 0 fov 45\n"                                                \
+    "background 0.3 0.5 0.8\nambient 0.05 0.05 0.05\n"                                        \
+    "material floor blinn_phong diffuse 0.8 0.8 0.8 checker 0.2 0.2 0.2 size 1\n"             \
+    "material blue blinn_phong diffuse 0.1 0.2 0.8 specular 0.4 0.4 0.4 shininess 32\n"        \
+    "plane point 0 0 0 normal 0 1 0 material floor\n"                                          \
+    "sphere center -1.2 0.8 0 radius 0.8 material blue\n"                                      \
+    "light point position 2 5 4 intensity 60 60 60\n"
+
+/* A mirror but no glass: reflection rays, and not one refraction ray. The
+ * twin (the same scene with a glass sphere) does trace refraction rays. */
+static void test_no_glass_means_no_refraction_rays(void **state)
+{
+    (void)state;
+    scene sc;
+    scene_from_text(&sc, MIRROR_SCENE_HEAD "material m mirror\nsphere center 1.2 0.8 0 radius 0.8 material m\n");
+    assert_false(sc.effects & EFFECT_REFRACTION);
+    ray_counters c;
+    image a = render_whitted(&sc, 64, 48, &c);
+    assert_int_equal(c.refraction_rays, 0);
+    assert_true(c.reflection_rays > 0);
+    image_free(&a);
+    scene_free(&sc);
+
+    scene_from_text(&sc, MIRROR_SCENE_HEAD "material g glass ior 1.5\nsphere center 1.2 0.8 0 radius 0.8 material g\n");
+    assert_true(sc.effects & EFFECT_REFRACTION);
+    a = render_whitted(&sc, 64, 48, &c);
+    assert_true(c.refraction_rays > 0);
+    image_free(&a);
+    scene_free(&sc);
+}
+
+/* Narrowing: "effects without reflection" on a scene with a mirror gives the
+ * same image as the scene built with a black, highlight-free material in the
+ * mirror's place -- and traces no reflection ray. */
+static void test_narrowing_reflection_equals_a_scene_without_the_mirror(void **state)
+{
+    (void)state;
+    scene narrowed, black;
+    scene_from_text(&narrowed, MIRROR_SCENE_HEAD "effects without reflection\n"
+                               "material m mirror\nsphere center 1.2 0.8 0 radius 0.8 material m\n");
+    scene_from_text(&black, MIRROR_SCENE_HEAD "material m blinn_phong diffuse 0 0 0\n"
+                            "sphere center 1.2 0.8 0 radius 0.8 material m\n");
+    ray_counters c_narrowed, c_black;
+    image a = render_whitted(&narrowed, 64, 48, &c_narrowed), b = render_whitted(&black, 64, 48, &c_black);
+    assert_int_equal(c_narrowed.reflection_rays, 0);
+    assert_memory_equal(a.rgb, b.rgb, 64 * 48 * 3 * sizeof(float));
+    image_free(&a);
+    image_free(&b);
+    /* The twin: without the narrowing the mirror shows the scene, not black. */
+    scene_free(&narrowed);
+    scene_from_text(&narrowed, MIRROR_SCENE_HEAD "material m mirror\nsphere center 1.2 0.8 0 radius 0.8 material m\n");
+    a = render_whitted(&narrowed, 64, 48, &c_narrowed);
+    b = render_whitted(&black, 64, 48, &c_black);
+    assert_true(memcmp(a.rgb, b.rgb, 64 * 48 * 3 * sizeof(float)) != 0);
+    image_free(&a);
+    image_free(&b);
+    scene_free(&narrowed);
+    scene_free(&black);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fresnel_is_four_percent_at_normal_incidence),
+        cmocka_unit_test(test_default_scene_file_renders_the_built_in_image),
+        cmocka_unit_test(test_no_glass_means_no_refraction_rays),
+        cmocka_unit_test(test_narrowing_reflection_equals_a_scene_without_the_mirror),
         cmocka_unit_test(test_fresnel_is_one_beyond_the_critical_angle),
         cmocka_unit_test(test_fresnel_reflected_plus_transmitted_is_one),
         cmocka_unit_test(test_schlick_matches_exact_at_normal_incidence_and_is_close_elsewhere),

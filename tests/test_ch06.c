@@ -7,11 +7,14 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "06-bvh/bvh.h"
 #include "06-bvh/bvh4.h"
+#include "render.h"
+#include "scene_file.h"
 #include "accel_check.h"
 #include "test_support.h"
 
@@ -974,9 +977,101 @@ static void test_bvh4_empty_set_builds_and_misses(void **state)
     mesh_free(&m);
 }
 
+/* ---- scene files (chapters 03-06) ---------------------------------------------- */
+
+static image render_view(const accel *a, const camera *cam)
+{
+    accel_view view = {a, false, 100.0f};
+    render_job job = {.cam = cam, .spp = 1, .seed = 1, .threads = 2, .quiet = true, .radiance = accel_view_radiance,
+                      .scene = &view};
+    image img = image_make(cam->width, cam->height);
+    render_stats stats;
+    render_image(&job, &img, &stats);
+    return img;
+}
+
+/* Each accelerator chapter's default.scene holds the built-in mesh, face for
+ * face, and no camera (so the harness view): the BVH renders the same image
+ * from it as from the built-in mesh, bit for bit. */
+static void test_default_scene_files_hold_the_built_in_meshes(void **state)
+{
+    (void)state;
+    const char *chapters[4] = {"03-aabb-slabs", "04-uniform-grid", "05-kd-tree", "06-bvh"};
+    const long sizes[4] = {10240, 102400, 102400, 102400};
+    for (int c = 0; c < 4; c++) {
+        char path[256], err[SCENE_ERROR_SIZE];
+        snprintf(path, sizeof path, "chapters/%s/scenes/default.scene", chapters[c]);
+        scene_desc d;
+        if (!scene_desc_load(&d, path, err, sizeof err))
+            fail_msg("%s", err);
+        assert_false(d.has_camera);
+        mesh from_file, built_in;
+        mesh_init(&from_file);
+        mesh_init(&built_in);
+        int *first = NULL, objects = 0;
+        if (!accel_mesh_from_desc(&from_file, &d, "test", &first, &objects, err, sizeof err))
+            fail_msg("%s", err);
+        mesh_tori_field(&built_in, sizes[c]);
+        assert_int_equal(from_file.face_count, built_in.face_count);
+        assert_int_equal(objects, 16); /* one object per torus */
+        assert_int_equal(first[16], built_in.face_count);
+        for (int i = 0; i < built_in.face_count; i++)
+            for (int k = 0; k < 3; k++) {
+                vec3 a = mesh_vertex(&from_file, i, k), b = mesh_vertex(&built_in, i, k);
+                assert_memory_equal(&a, &b, sizeof a);
+            }
+        if (c == 3) {
+            triangle_set s1, s2;
+            triangle_set_from_mesh(&s1, &from_file);
+            triangle_set_from_mesh(&s2, &built_in);
+            accel *a1 = bvh_build(&s1, BVH_SPLIT_SAH), *a2 = bvh_build(&s2, BVH_SPLIT_SAH);
+            camera c1 = accel_scene_camera(&d, s1.bounds, 64, 48), c2 = accel_view_camera(s2.bounds, 64, 48);
+            image i1 = render_view(a1, &c1), i2 = render_view(a2, &c2);
+            assert_memory_equal(i1.rgb, i2.rgb, 64 * 48 * 3 * sizeof(float));
+            image_free(&i1);
+            image_free(&i2);
+            accel_destroy(a1);
+            accel_destroy(a2);
+            triangle_set_free(&s1);
+            triangle_set_free(&s2);
+        }
+        free(first);
+        mesh_free(&from_file);
+        mesh_free(&built_in);
+        scene_desc_free(&d);
+    }
+}
+
+/* Only triangles are taken; a scene of spheres alone is an error naming the
+ * file, and m is left as it was. */
+static void test_scene_without_triangles_is_an_error(void **state)
+{
+    (void)state;
+    const char *text = "material w diffuse albedo 1 1 1\nsphere center 0 0 0 radius 1 material w\n"
+                       "quad p0 0 0 0 p1 1 0 0 p2 1 1 0 p3 0 1 0 material w\n";
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    assert_true(scene_desc_parse(&d, text, strlen(text), "t.scene", NULL, err, sizeof err));
+    mesh m;
+    mesh_init(&m);
+    int *first = NULL, objects = 0;
+    assert_true(accel_mesh_from_desc(&m, &d, "test", &first, &objects, err, sizeof err));
+    assert_int_equal(m.face_count, 2); /* the quad; the sphere is ignored with a warning */
+    assert_int_equal(objects, 1);
+    free(first);
+    d.shape_count = 1; /* the sphere alone */
+    assert_false(accel_mesh_from_desc(&m, &d, "test", NULL, NULL, err, sizeof err));
+    assert_non_null(strstr(err, "t.scene: no triangles"));
+    assert_int_equal(m.face_count, 2);
+    mesh_free(&m);
+    scene_desc_free(&d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_default_scene_files_hold_the_built_in_meshes),
+        cmocka_unit_test(test_scene_without_triangles_is_an_error),
         cmocka_unit_test(test_median_bvh_agrees_with_brute_force),
         cmocka_unit_test(test_sah_bvh_agrees_with_brute_force),
         cmocka_unit_test(test_distance_order_agrees_with_brute_force),

@@ -11,11 +11,14 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/path_tracer.h"
+#include "effects.h"
 #include "render.h"
+#include "scene_file.h"
 #include "stats.h"
 #include "test_support.h"
 
@@ -443,10 +446,153 @@ static void test_ggx_sampling_matches_its_pdf(void **state)
     }
 }
 
+
+/* ---- scene files and effects ------------------------------------------------------ */
+
+/* A scene file as the program loads it: converted, effects analysed. */
+static void load_scene_file(pt_scene *sc, unsigned *effects, const char *path, const char *text)
+{
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    bool ok = text != NULL ? scene_desc_parse(&d, text, strlen(text), "test.scene", NULL, err, sizeof err)
+                           : scene_desc_load(&d, path, err, sizeof err);
+    if (!ok)
+        fail_msg("%s", err);
+    if (!pt_scene_from_desc(sc, &d, "test", err, sizeof err))
+        fail_msg("%s", err);
+    effects_report e = effects_analyse(&d);
+    *effects = effects_decide(&e, EFFECT_ALL);
+    scene_desc_free(&d);
+}
+
+static void assert_same_render(const path_tracer *a, const path_tracer *b, ray_counters *ca, ray_counters *cb)
+{
+    render_result ra = render(a, 48, 48, 2, 7, 2), rb = render(b, 48, 48, 2, 7, 2);
+    assert_memory_equal(ra.mean.rgb, rb.mean.rgb, 48 * 48 * 3 * sizeof(float));
+    *ca = ra.stats.counters;
+    *cb = rb.stats.counters;
+    render_result_free(&ra);
+    render_result_free(&rb);
+}
+
+/* The shipped scene files render the built-in scenes bit for bit, with the
+ * same counters; the Cornell box has no glass and traces no refraction ray,
+ * the materials box has glass and does. */
+static void test_scene_files_render_the_built_in_scenes(void **state)
+{
+    (void)state;
+    const char *files[2] = {"chapters/09-path-tracing/scenes/cornell.scene",
+                            "chapters/09-path-tracing/scenes/materials.scene"};
+    for (int k = 0; k < 2; k++) {
+        pt_scene from_file, built_in;
+        unsigned effects;
+        load_scene_file(&from_file, &effects, files[k], NULL);
+        if (k == 0)
+            pt_scene_build_cornell_box(&built_in);
+        else
+            pt_scene_build_cornell_box_materials(&built_in);
+        for (int rung = 0; rung < 3; rung++) {
+            path_tracer a = tracer(&from_file, all_rungs[rung], RR_FIXED), b = tracer(&built_in, all_rungs[rung], RR_FIXED);
+            a.effects = effects;
+            ray_counters ca, cb;
+            assert_same_render(&a, &b, &ca, &cb);
+            assert_memory_equal(&ca, &cb, sizeof ca);
+            if (k == 0)
+                assert_int_equal(ca.refraction_rays, 0);
+            else
+                assert_true(ca.refraction_rays > 0);
+        }
+        assert_int_equal(effects & EFFECT_REFRACTION, k == 0 ? 0 : EFFECT_REFRACTION);
+        pt_scene_free(&from_file);
+        pt_scene_free(&built_in);
+    }
+}
+
+/* "effects without indirect" is direct light only: the lecture's estimator
+ * then gives the image of max_depth 1, bit for bit (the same random numbers
+ * are drawn), and traces no indirect ray. The twin: with indirect light the
+ * image differs. */
+static void test_direct_light_only_equals_depth_one(void **state)
+{
+    (void)state;
+    char text[8192];
+    FILE *f = fopen("chapters/09-path-tracing/scenes/cornell.scene", "r");
+    assert_non_null(f);
+    size_t n = fread(text, 1, sizeof text - 64, f);
+    fclose(f);
+    text[n] = '\0';
+    strcat(text, "\neffects without indirect\n");
+    pt_scene sc;
+    unsigned effects;
+    load_scene_file(&sc, &effects, NULL, text);
+    assert_false(effects & EFFECT_INDIRECT);
+    path_tracer direct = tracer(&sc, PT_LECTURE, RR_FIXED), depth_one = tracer(&sc, PT_LECTURE, RR_FIXED);
+    direct.effects = effects;
+    depth_one.max_depth = 1;
+    ray_counters c_direct, c_depth_one;
+    assert_same_render(&direct, &depth_one, &c_direct, &c_depth_one);
+    assert_int_equal(c_direct.indirect_rays, 0);
+    assert_true(c_direct.shadow_rays > 0);
+
+    path_tracer full = tracer(&sc, PT_LECTURE, RR_FIXED);
+    render_result a = render(&direct, 48, 48, 2, 7, 2), b = render(&full, 48, 48, 2, 7, 2);
+    assert_true(memcmp(a.mean.rgb, b.mean.rgb, 48 * 48 * 3 * sizeof(float)) != 0);
+    assert_true(b.stats.counters.indirect_rays > 0);
+    render_result_free(&a);
+    render_result_free(&b);
+    pt_scene_free(&sc);
+}
+
+/* A point light inside a sphere seen from inside: nothing can block it, the
+ * analysis drops shadow rays, and the image is the same, bit for bit, as
+ * with a shadow ray per light sample (shadow rays draw no random numbers). */
+static void test_point_light_in_a_sphere_needs_no_shadow_ray(void **state)
+{
+    (void)state;
+    const char *text = "camera eye 0.2 -0.1 0.3 target 0.4 0.3 -1 fov 70\n"
+                       "material grey diffuse albedo 0.5 0.5 0.5\n"
+                       "sphere center 0 0 0 radius 1 material grey inside_out\n"
+                       "light point position 0 0 0 intensity 3.14159265 3.14159265 3.14159265\n";
+    pt_scene sc;
+    unsigned effects;
+    load_scene_file(&sc, &effects, NULL, text);
+    assert_false(effects & EFFECT_SHADOWS);
+    assert_true(effects & EFFECT_INDIRECT);
+    path_tracer analysed = tracer(&sc, PT_COSINE, RR_FIXED), forced = tracer(&sc, PT_COSINE, RR_FIXED);
+    analysed.effects = effects;
+    ray_counters c_analysed, c_forced;
+    assert_same_render(&analysed, &forced, &c_analysed, &c_forced);
+    assert_int_equal(c_analysed.shadow_rays, 0);
+    assert_true(c_forced.shadow_rays > 0);
+    pt_scene_free(&sc);
+
+    /* The built-in point-in-sphere scene, described, gets the same verdict. */
+    pt_scene built_in;
+    pt_scene_build_point_in_sphere(&built_in, 0.5f, (float)PI);
+    scene_desc d;
+    pt_scene_describe(&built_in, &d);
+    effects_report e = effects_analyse(&d);
+    assert_int_equal(e.needed, EFFECT_INDIRECT);
+    scene_desc_free(&d);
+    pt_scene_free(&built_in);
+
+    /* The twin: move the light outside, and the sphere blocks it. */
+    const char *outside = "camera eye 0.2 -0.1 0.3 target 0.4 0.3 -1 fov 70\n"
+                          "material grey diffuse albedo 0.5 0.5 0.5\n"
+                          "sphere center 0 0 0 radius 1 material grey inside_out\n"
+                          "light point position 0 3 0 intensity 1 1 1\n";
+    load_scene_file(&sc, &effects, NULL, outside);
+    assert_true(effects & EFFECT_SHADOWS);
+    pt_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_furnace_every_pixel_is_one),
+        cmocka_unit_test(test_scene_files_render_the_built_in_scenes),
+        cmocka_unit_test(test_direct_light_only_equals_depth_one),
+        cmocka_unit_test(test_point_light_in_a_sphere_needs_no_shadow_ray),
         cmocka_unit_test(test_furnace_truncated_at_depth_is_the_partial_sum),
         cmocka_unit_test(test_point_light_in_a_sphere_gives_radiance_one),
         cmocka_unit_test(test_white_furnace_diffuse_and_glass),

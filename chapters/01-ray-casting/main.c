@@ -1,5 +1,8 @@
 /* 01-ray-casting: render chapter 01's scene by ray casting (lecture 13). */
+#include <stdio.h>
+
 #include "cli.h"
+#include "effects.h"
 #include "program.h"
 #include "ray_casting.h"
 
@@ -9,12 +12,32 @@ int main(int argc, char **argv)
     cli_spec spec = {"01-ray-casting",
                      "Ray casting (GAMES101 lecture 13): one ray from the eye through each pixel, the closest\n"
                      "hit among a sphere, a plane, a triangle (Moller-Trumbore) and an implicit torus (sphere\n"
-                     "tracing), a shadow ray to each point light, and Blinn-Phong shading.",
+                     "tracing), a shadow ray to each point light, and Blinn-Phong shading. The built-in scene\n"
+                     "is chapters/01-ray-casting/scenes/default.scene.",
                      NULL, 0};
     cli_parse_or_exit(argc, argv, &spec, &opts);
 
     scene sc;
-    scene_build_ray_casting_demo(&sc);
+    scene_desc desc;
+    if (program_load_scene(&opts, spec.program, &desc)) {
+        char err[SCENE_ERROR_SIZE];
+        if (!scene_from_desc(&sc, &desc, spec.program, err, sizeof err)) {
+            fprintf(stderr, "%s: %s\n", spec.program, err);
+            scene_desc_free(&desc);
+            return 1;
+        }
+        /* Ray casting shows shadows and nothing that needs a second bounce. */
+    } else {
+        scene_build_ray_casting_demo(&sc);
+        scene_describe(&sc, &desc);
+    }
+    /* The effects analysis, on the file or on the built-in scene alike. */
+    effects_report e = effects_analyse(&desc);
+    sc.effects = effects_decide(&e, EFFECT_SHADOWS);
+    if (!opts.quiet)
+        effects_print(stdout, &e, spec.program);
+    program_note_effects(&e);
+    scene_desc_free(&desc);
     camera cam = scene_make_camera(&sc, opts.width, opts.height);
     int status = program_render(&opts, spec.program, ray_cast_radiance, &sc, &cam, NULL);
     scene_free(&sc);

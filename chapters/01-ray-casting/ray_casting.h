@@ -16,8 +16,15 @@
  */
 vec3 blinn_phong_shade(const scene *sc, const hit_record *hit, vec3 to_viewer, ray_counters *counters);
 
+/* The same, with --explain lines indented at `depth` (chapter 02 calls it
+ * deep in its recursion). */
+vec3 blinn_phong_shade_at(const scene *sc, const hit_record *hit, vec3 to_viewer, int depth, ray_counters *counters);
+/* One --explain line for a hit: shape, material, t, point, normal. */
+void explain_hit(const scene *sc, const hit_record *hit, int depth);
+
 /* Is the light at `light_position` visible from the hit point? Traces one
- * shadow ray (and counts it). */
+ * shadow ray (and counts it), unless the scene's effects say no light can
+ * be blocked. */
 bool light_visible(const scene *sc, const hit_record *hit, vec3 light_position, ray_counters *counters);
 
 /* The integrator of chapter 01 (render.h's radiance_fn): the background if

@@ -18,6 +18,7 @@
 #include "camera.h"
 #include "counters.h"
 #include "ray.h"
+#include "scene_file.h"
 #include "shapes.h"
 
 typedef enum {
@@ -34,6 +35,7 @@ typedef struct {
     vec3 checker_diffuse; /* the other k_d of a checkerboard ... */
     float checker_size;   /* ... with squares this wide in x and z (0: no checkerboard) */
     float ior;            /* index of refraction of glass */
+    char name[SCENE_NAME_SIZE]; /* from the scene file, for --explain ("" for built-ins) */
 } material;
 
 /* A point light of intensity I: irradiance I / r^2 at distance r. */
@@ -70,6 +72,12 @@ typedef struct {
     vec3 background; /* radiance of rays that hit nothing */
     vec3 ambient;    /* k_a I_a of Blinn-Phong: light that "comes from everywhere" */
     scene_camera camera;
+    /* The effects the integrators simulate (EFFECT_* of scene_file.h):
+     * EFFECT_ALL unless the effects analysis of a scene file narrowed them.
+     * Without EFFECT_SHADOWS every light counts as visible and no shadow ray
+     * is traced; without reflection or refraction (chapter 02) those rays
+     * are not traced and bring nothing. */
+    unsigned effects;
 } scene;
 
 void scene_init(scene *sc);
@@ -98,6 +106,27 @@ bool scene_occluded(const scene *sc, ray r, ray_counters *counters);
 
 /* k_d at a point: the checkerboard's colour there, or the plain diffuse. */
 vec3 material_diffuse_at(const material *m, vec3 point);
+
+/* The scene of a scene file (scene_file.h): materials, point lights,
+ * spheres, planes, triangles, quads, tori and meshes (OBJ + MTL Kd/Ks/Ns, or
+ * generated), camera, background, ambient. What chapters 01-02 cannot show
+ * is converted with a warning naming the line: a diffuse material becomes
+ * Blinn-Phong without highlight, a glossy one Blinn-Phong with
+ * p = 2 / alpha^2 - 2, an emissive one is shaded but does not glow, and an
+ * area light becomes a point light at its centre with intensity L_e A. The
+ * effects are left at EFFECT_ALL (the caller narrows them). False with err
+ * ("file:line:col: ...") if a mesh cannot be loaded; sc is then empty. */
+bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *err, size_t err_size);
+/* The reverse: a built-in scene as a description, so that the effects
+ * analysis runs on it as on a file (d->source is "built-in scene"). */
+void scene_describe(const scene *sc, scene_desc *d);
+/* Does the scene trace shadow rays (the effects analysis did not prove them
+ * useless, or narrow them away)? */
+static inline bool scene_traces_shadows(const scene *sc) { return (sc->effects & EFFECT_SHADOWS) != 0; }
+
+/* "sphere #2" and "material 'red' (blinn_phong)", for --explain. */
+const char *shape_kind_name(shape_kind k);
+const char *material_kind_name(material_kind k);
 
 /* The scene's camera for an image of this size. */
 camera scene_make_camera(const scene *sc, int width, int height);

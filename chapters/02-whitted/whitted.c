@@ -8,7 +8,10 @@
  */
 #include "whitted.h"
 
+#include <stdio.h>
+
 #include "01-ray-casting/ray_casting.h"
+#include "explain.h"
 
 /* ---- Snell's law ------------------------------------------------------- */
 
@@ -102,19 +105,26 @@ float fresnel_schlick(float cos_i, float eta_i, float eta_t)
 /* Trace one secondary ray leaving `hit` in `direction` (unit), counted in
  * *ray_count, unless the depth limit forbids it. */
 static vec3 trace_secondary(const scene *sc, const hit_record *hit, vec3 direction, int depth, int max_depth,
-                            ray_counters *counters, uint64_t *ray_count)
+                            ray_counters *counters, uint64_t *ray_count, const char *kind)
 {
     /* Depth limit: after max_depth bounces, return black. The light this ray
      * would have brought back (reflections of reflections, light that gets
      * through glass after more bounces) is cut off, so the image is a little
      * too dark wherever rays bounce that often. */
-    if (depth >= max_depth)
+    if (depth >= max_depth) {
+        explain_line(2 * depth + 2, "%s ray: not traced, depth limit %d reached: black", kind, max_depth);
         return vec3_splat(0.0f);
+    }
     (*ray_count)++;
     /* The new ray starts on the side it leaves to (ray.c): a reflected ray
      * above the surface, a refracted ray below it. */
-    return whitted_trace(sc, ray_spawn(hit->point, hit->normal_geometric, direction), depth + 1, max_depth,
-                         counters);
+    ray next = ray_spawn(hit->point, hit->normal_geometric, direction);
+    if (explain_on()) {
+        char label[64];
+        snprintf(label, sizeof label, "%s ray (depth %d)", kind, depth + 1);
+        explain_ray(2 * depth + 2, label, next);
+    }
+    return whitted_trace(sc, next, depth + 1, max_depth, counters);
 }
 
 vec3 whitted_trace(const scene *sc, ray r, int depth, int max_depth, ray_counters *counters)
@@ -124,9 +134,15 @@ vec3 whitted_trace(const scene *sc, ray r, int depth, int max_depth, ray_counter
         return vec3_splat(0.0f);
 
     /* Closest hit: the first surface along the ray (chapter 01) */
+    /* --explain indents each level of the recursion by two steps. */
+    int indent = 2 * depth + 1;
     hit_record hit;
-    if (!scene_intersect(sc, r, &hit, counters))
+    if (!scene_intersect(sc, r, &hit, counters)) {
+        explain_line(indent, "missed every shape: the background");
         return sc->background;
+    }
+    if (explain_on())
+        explain_hit(sc, &hit, indent);
 
     const material *m = &sc->materials[hit.material_id];
     vec3 d = vec3_normalize(r.direction);
@@ -135,12 +151,17 @@ vec3 whitted_trace(const scene *sc, ray r, int depth, int max_depth, ray_counter
     switch (m->kind) {
     case MATERIAL_BLINN_PHONG:
         /* Diffuse hit: stop, shadow rays to each light, Blinn-Phong */
-        return blinn_phong_shade(sc, &hit, vec3_neg(d), counters);
+        return blinn_phong_shade_at(sc, &hit, vec3_neg(d), indent, counters);
 
     case MATERIAL_MIRROR:
-        /* Reflection: r = d - 2 (d.n) n */
+        /* Reflection: r = d - 2 (d.n) n. Without the reflection effect (a
+         * scene that narrowed it away) the mirror brings back nothing. */
+        if (!(sc->effects & EFFECT_REFLECTION)) {
+            explain_line(indent, "mirror: reflection is off (scene effects): black");
+            return vec3_splat(0.0f);
+        }
         return trace_secondary(sc, &hit, vec3_reflect(d, n), depth, max_depth, counters,
-                               &counters->reflection_rays);
+                               &counters->reflection_rays, "reflected");
 
     case MATERIAL_GLASS: {
         /* Entering or leaving: front_face says which side of the glass the ray is on */
@@ -157,16 +178,26 @@ vec3 whitted_trace(const scene *sc, ray r, int depth, int max_depth, ray_counter
          * traced; refract_direction alone decides that, so R and the
          * refraction ray cannot disagree by a rounding error. */
         float reflectance = refracts ? fresnel_dielectric(cos_i, eta_i, eta_t) : 1.0f;
+        explain_line(indent, "glass %s (eta %g -> %g): Fresnel R = %.4g, T = %.4g%s",
+                     hit.front_face ? "entering" : "leaving", (double)eta_i, (double)eta_t, (double)reflectance,
+                     (double)(1.0f - reflectance), refracts ? "" : " (total internal reflection)");
 
         /* Reflection: r = d - 2 (d.n) n, weighted by R */
-        vec3 radiance = vec3_scale(trace_secondary(sc, &hit, vec3_reflect(d, n), depth, max_depth, counters,
-                                                   &counters->reflection_rays),
-                                   reflectance);
-        /* Refraction: weighted by T = 1 - R */
-        if (refracts && reflectance < 1.0f)
+        vec3 radiance = vec3_splat(0.0f);
+        if (sc->effects & EFFECT_REFLECTION)
+            radiance = vec3_scale(trace_secondary(sc, &hit, vec3_reflect(d, n), depth, max_depth, counters,
+                                                  &counters->reflection_rays, "reflected"),
+                                  reflectance);
+        /* Refraction: weighted by T = 1 - R. Only scenes with glass get
+         * here, so a scene without glass never traces a refraction ray. */
+        if (refracts && reflectance < 1.0f && (sc->effects & EFFECT_REFRACTION))
             radiance = vec3_add(radiance, vec3_scale(trace_secondary(sc, &hit, refracted, depth, max_depth, counters,
-                                                                     &counters->refraction_rays),
+                                                                     &counters->refraction_rays, "refracted"),
                                                      1.0f - reflectance));
+        if (explain_on()) {
+            char c[64];
+            explain_line(indent, "glass: R x reflected + T x refracted = %s", explain_vec3(c, radiance));
+        }
         return radiance;
     }
     }

@@ -3,6 +3,7 @@
 
 #include <stdlib.h>
 
+#include "explain.h"
 #include "memory.h"
 #include "timer.h"
 
@@ -127,7 +128,18 @@ vec3 accel_view_radiance(const void *view_ptr, ray r, pcg32 *rng, ray_counters *
     const accel_view *view = view_ptr;
     uint64_t cost_before = counters->box_tests + counters->primitive_tests;
     hit_record hit;
+    uint64_t boxes_before = counters->box_tests, triangles_before = counters->primitive_tests;
     bool found = accel_closest_hit(view->structure, r, &hit, counters);
+    if (explain_on()) {
+        explain_line(1, "%s: %llu nodes or cells visited, %llu triangles tested", view->structure->stats.name,
+                     (unsigned long long)(counters->box_tests - boxes_before),
+                     (unsigned long long)(counters->primitive_tests - triangles_before));
+        if (found)
+            explain_line(1, "closest hit: triangle #%d at t = %.6g; headlight shading |n . d| = %.4g", hit.shape_id,
+                         (double)hit.t, (double)fabsf(vec3_dot(hit.normal_shading, vec3_normalize(r.direction))));
+        else
+            explain_line(1, "no triangle hit: the background");
+    }
     if (view->heatmap) {
         float cost = (float)(counters->box_tests + counters->primitive_tests - cost_before);
         return accel_heat_colour(cost / view->heatmap_max_cost);

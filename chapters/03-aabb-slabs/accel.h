@@ -29,6 +29,7 @@
 #include "camera.h"
 #include "mesh.h"
 #include "rng.h"
+#include "scene_file.h"
 
 /* The triangles an accelerator is built over, with their corners copied out
  * of the mesh (the inner loop then reads 36 contiguous bytes per triangle),
@@ -125,6 +126,20 @@ ray *accel_harness_rays(aabb bounds, bool coherent, int *count);
  * a mesh's dense parts get their share of the rays (the teapot, not the
  * empty stadium). Seeded PCG32; the caller frees. */
 ray *accel_aimed_rays(const triangle_set *set, int count, uint64_t seed);
+/* ---- scene files (scene_mesh.c) ---------------------------------------------
+ * Chapters 03-06 trace triangles only, lit by a headlight: from a scene file
+ * they take the triangle, quad and mesh shapes, appended to m in order, and
+ * the camera. Each shape statement is one object (the tori field generator
+ * gives one per torus): *object_first (allocated, may be NULL to skip) gets
+ * object_count + 1 entries, object k owning faces [first[k], first[k+1]).
+ * Everything else -- spheres, planes, tori, lights, materials, effects -- is
+ * named in one warning each, not silently dropped. False with err
+ * ("file:line:col: ...") if a mesh fails to load or there are no
+ * triangles; m is then unchanged. */
+bool accel_mesh_from_desc(mesh *m, const scene_desc *d, const char *label, int **object_first, int *object_count,
+                          char *err, size_t err_size);
+/* The scene file's camera if it has one, else accel_view_camera(bounds). */
+camera accel_scene_camera(const scene_desc *d, aabb bounds, int width, int height);
 
 /* The heat map's colour for cost / max_cost. */
 vec3 accel_heat_colour(float fraction);

@@ -11,6 +11,7 @@
 
 #include "03-aabb-slabs/accel.h"
 #include "cli.h"
+#include "explain.h"
 #include "memory.h"
 #include "program.h"
 
@@ -18,8 +19,9 @@ enum { TORI = 16 };
 
 typedef struct {
     triangle_set set;
-    aabb boxes[TORI]; /* one per torus */
-    int first[TORI + 1]; /* torus k owns triangles first[k] .. first[k+1]-1 */
+    int object_count;  /* the 16 tori, or the shapes of a scene file */
+    aabb *boxes;       /* one per object */
+    int *first;        /* object k owns triangles first[k] .. first[k+1]-1 */
     bool use_boxes;
     bool draw_boxes;
 } boxed_scene;
@@ -56,10 +58,11 @@ static vec3 boxed_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *cou
     (void)rng;
     const boxed_scene *sc = ctx;
     slab_ray sr = slab_ray_make(r);
+    uint64_t tests_before = counters->primitive_tests;
     int best = -1;
     float best_t = INFINITY, best_b1 = 0, best_b2 = 0;
     vec3 overlay = vec3_splat(0.0f);
-    for (int k = 0; k < TORI; k++) {
+    for (int k = 0; k < sc->object_count; k++) {
         float t_enter, t_exit;
         if (sc->use_boxes) {
             counters->box_tests++;
@@ -86,6 +89,15 @@ static vec3 boxed_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *cou
             }
         }
     }
+    if (explain_on()) {
+        explain_line(1, "%d object boxes tested, %llu triangles tested (only inside boxes the ray entered, nearer "
+                     "than the best hit)", sc->use_boxes ? sc->object_count : 0,
+                     (unsigned long long)(counters->primitive_tests - tests_before));
+        if (best >= 0)
+            explain_line(1, "closest hit: triangle #%d at t = %.6g", best, (double)best_t);
+        else
+            explain_line(1, "no triangle hit: the background");
+    }
     vec3 colour = vec3_make(0.02f, 0.02f, 0.03f);
     if (best >= 0) {
         hit_record hit;
@@ -111,30 +123,47 @@ int main(int argc, char **argv)
     cli_spec spec = {"03-aabb-slabs",
                      "Bounding volumes and the slab test (GAMES101 lecture 13): 16 tori, 10240 triangles, one\n"
                      "axis-aligned box per torus. Rays take the slab test against a box before testing the\n"
-                     "triangles inside. Prints the box and triangle tests per ray.",
+                     "triangles inside. Prints the box and triangle tests per ray. The built-in scene is\n"
+                     "chapters/03-aabb-slabs/scenes/default.scene; with --scene, each triangle, quad or mesh\n"
+                     "statement gets one box (the tori field one per torus).",
                      extras, 2};
     cli_parse_or_exit(argc, argv, &spec, &opts);
 
     mesh m;
     mesh_init(&m);
-    mesh_tori_field(&m, 10240);
     boxed_scene sc;
+    scene_desc desc;
+    bool from_file = program_load_scene(&opts, spec.program, &desc);
+    if (from_file) {
+        char err[SCENE_ERROR_SIZE];
+        if (!accel_mesh_from_desc(&m, &desc, spec.program, &sc.first, &sc.object_count, err, sizeof err)) {
+            fprintf(stderr, "%s: %s\n", spec.program, err);
+            scene_desc_free(&desc);
+            return 1;
+        }
+    } else {
+        mesh_tori_field(&m, 10240);
+        /* mesh_tori_field builds the tori one after another, each with the
+         * same number of triangles. */
+        sc.object_count = TORI;
+        sc.first = memory_allocate(TORI + 1, sizeof(int));
+        int per_torus = m.face_count / TORI;
+        for (int k = 0; k <= TORI; k++)
+            sc.first[k] = k * per_torus;
+    }
     triangle_set_from_mesh(&sc.set, &m);
     sc.use_boxes = !no_boxes;
     sc.draw_boxes = !no_boxes && !hide_boxes;
-    /* mesh_tori_field builds the tori one after another, each with the same
-     * number of triangles. */
-    int per_torus = m.face_count / TORI;
-    for (int k = 0; k <= TORI; k++)
-        sc.first[k] = k * per_torus;
-    for (int k = 0; k < TORI; k++) {
+    sc.boxes = memory_allocate((size_t)sc.object_count, sizeof(aabb));
+    for (int k = 0; k < sc.object_count; k++) {
         sc.boxes[k] = aabb_empty();
         for (int i = sc.first[k]; i < sc.first[k + 1]; i++)
             sc.boxes[k] = aabb_union(sc.boxes[k], sc.set.boxes[i]);
     }
 
     /* The same view as the Embree harness's coherent ray set. */
-    camera cam = accel_view_camera(sc.set.bounds, opts.width, opts.height);
+    camera cam = accel_scene_camera(&desc, sc.set.bounds, opts.width, opts.height);
+    scene_desc_free(&desc);
     render_stats stats;
     int status = program_render(&opts, spec.program, boxed_radiance, &sc, &cam, &stats);
     if (status == 0 && !opts.quiet) {
@@ -146,6 +175,8 @@ int main(int argc, char **argv)
             printf("without boxes: %.1f triangle tests per ray\n", (double)stats.counters.primitive_tests / rays);
     }
     triangle_set_free(&sc.set);
+    free(sc.boxes);
+    free(sc.first);
     mesh_free(&m);
     return status;
 }

@@ -137,6 +137,24 @@ int main(int argc, char **argv)
         return 1;
     }
 
+    /* --scene: the scene file's triangles (and camera) replace the mesh. */
+    scene_desc desc;
+    if (program_load_scene(&opts, spec.program, &desc)) {
+        char err[SCENE_ERROR_SIZE];
+        if (obj_path != NULL) {
+            fprintf(stderr, "%s: --scene and --obj: choose one\n", spec.program);
+            return 2;
+        }
+        scene_name = desc.source;
+        mesh_free(&m);
+        mesh_init(&m);
+        if (!accel_mesh_from_desc(&m, &desc, spec.program, NULL, NULL, err, sizeof err)) {
+            fprintf(stderr, "%s: %s\n", spec.program, err);
+            scene_desc_free(&desc);
+            return 1;
+        }
+        stadium = false;
+    }
     triangle_set set;
     triangle_set_from_mesh(&set, &m);
     accel *a = kdtree_build_with(&set, &options);
@@ -162,7 +180,8 @@ int main(int argc, char **argv)
      * from inside it of the teapot, which from outside is below a pixel. */
     camera cam = stadium ? camera_look_at(vec3_make(7, 5, 10), vec3_make(0, 1, 0), vec3_make(0, 1, 0), 30.0f,
                                           opts.width, opts.height)
-                         : accel_view_camera(set.bounds, opts.width, opts.height);
+                         : accel_scene_camera(&desc, set.bounds, opts.width, opts.height);
+    scene_desc_free(&desc);
     render_stats stats;
     int status = program_render(&opts, spec.program, accel_view_radiance, &view, &cam, &stats);
     if (status == 0 && !opts.quiet) {

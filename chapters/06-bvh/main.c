@@ -157,6 +157,22 @@ int main(int argc, char **argv)
         usage_error("--mesh must be tori, stadium or icosphere, not", mesh_name);
     }
 
+    /* --scene: the scene file's triangles (and camera) replace the mesh. */
+    scene_desc desc;
+    if (program_load_scene(&opts, spec.program, &desc)) {
+        char err[SCENE_ERROR_SIZE];
+        if (obj_path != NULL) {
+            fprintf(stderr, "%s: --scene and --obj: choose one\n", spec.program);
+            return 2;
+        }
+        mesh_free(&m);
+        mesh_init(&m);
+        if (!accel_mesh_from_desc(&m, &desc, spec.program, NULL, NULL, err, sizeof err)) {
+            fprintf(stderr, "%s: %s\n", spec.program, err);
+            scene_desc_free(&desc);
+            return 1;
+        }
+    }
     triangle_set set;
     triangle_set_from_mesh(&set, &m);
     accel *a;
@@ -196,7 +212,8 @@ int main(int argc, char **argv)
     }
 
     accel_view view = {a, heatmap, heatmap_max};
-    camera cam = accel_view_camera(set.bounds, opts.width, opts.height);
+    camera cam = accel_scene_camera(&desc, set.bounds, opts.width, opts.height);
+    scene_desc_free(&desc);
     render_stats stats;
     int status = program_render(&opts, spec.program, accel_view_radiance, &view, &cam, &stats);
     if (status == 0 && !opts.quiet) {

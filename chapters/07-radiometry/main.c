@@ -19,6 +19,8 @@
 
 #include "07-radiometry/radiometry.h"
 #include "cli.h"
+#include "program.h"
+#include "scene_file.h"
 #include "image.h"
 #include "memory.h"
 #include "timer.h"
@@ -567,6 +569,82 @@ static bool render_floor(const cli_options *opts)
     return ok;
 }
 
+/* ---- --scene: the irradiance a scene's lights deliver --------------------------
+ * The honest use of a scene file in a chapter without a renderer: at the
+ * camera's target, on a surface facing the eye, the irradiance from each
+ * light, by its closed form (inverse square and cosine law for a point
+ * light, Lambert's polygon formula for an area light) and, for area lights,
+ * by quadrature of the area integral. Occlusion is not considered: this is
+ * radiometry, not visibility (that is chapter 01's shadow ray). */
+static dvec3 to_dvec3(vec3 v) { return dvec3_make(v.x, v.y, v.z); }
+
+static bool scene_irradiance(const scene_desc *d)
+{
+    if (!d->has_camera) {
+        fprintf(stderr, "%s: %s: no camera: the irradiance is computed at the camera's target\n", PROGRAM, d->source);
+        return false;
+    }
+    dvec3 p = to_dvec3(d->target);
+    dvec3 n = dvec3_normalize(dvec3_sub(to_dvec3(d->eye), p));
+    printf("%s: irradiance at the camera's target (%g, %g, %g), on a surface facing the eye, from each light of\n"
+           "%s (no occlusion: radiometry only). Per unit radiance or intensity, then per RGB channel.\n",
+           PROGRAM, p.x, p.y, p.z, d->source);
+    bool ok = true;
+    dvec3 total = dvec3_make(0, 0, 0);
+    for (int i = 0; i < d->light_count; i++) {
+        const scene_light *l = &d->lights[i];
+        double geometric;
+        dvec3 colour;
+        if (l->kind == SCENE_LIGHT_POINT) {
+            dvec3 to_light = dvec3_sub(to_dvec3(l->position), p);
+            double distance = dvec3_length(to_light);
+            geometric = irradiance_point_light(1.0, distance, dvec3_dot(n, to_light) / distance);
+            colour = to_dvec3(l->intensity);
+            printf("  line %d, point light: E = I cos(theta) / d^2 = %.12g x I (d = %g; a delta light, no integral)\n",
+                   l->line, geometric, distance);
+        } else {
+            dvec3 c[4];
+            for (int k = 0; k < 4; k++)
+                c[k] = to_dvec3(l->corners[k]);
+            colour = to_dvec3(l->emission);
+            dvec3 light_normal = dvec3_cross(dvec3_sub(c[1], c[0]), dvec3_sub(c[2], c[0]));
+            int above = 0;
+            for (int k = 0; k < 4; k++)
+                above += dvec3_dot(n, dvec3_sub(c[k], p)) > 0.0;
+            if (dvec3_dot(light_normal, dvec3_sub(p, c[0])) <= 0.0) {
+                geometric = 0.0;
+                printf("  line %d, area light: the point is behind it (lights emit from their front): E = 0\n", l->line);
+            } else {
+                quadrature_result q1 = irradiance_from_triangle_area(1.0, c[0], c[1], c[2], p, n, 3, TRIANGLE_N);
+                quadrature_result q2 = irradiance_from_triangle_area(1.0, c[0], c[2], c[3], p, n, 3, TRIANGLE_N);
+                double numeric = q1.value + q2.value, estimate = q1.error_estimate + q2.error_estimate;
+                geometric = numeric;
+                if (above == 4) {
+                    double closed = irradiance_polygon(1.0, c, 4, p, n);
+                    bool agrees = fabs(numeric - closed) <= estimate + 1e-12 * fabs(closed);
+                    ok &= agrees;
+                    geometric = closed;
+                    printf("  line %d, area light: Lambert's formula %.12g x L, area integral %.12g "
+                           "(estimate %.1e): %s\n", l->line, closed, numeric, estimate, agrees ? "agrees" : "NO");
+                } else {
+                    printf("  line %d, area light: straddles the surface's horizon, so Lambert's formula does not "
+                           "apply; area integral %.12g x L (estimate %.1e)\n", l->line, numeric, estimate);
+                }
+            }
+        }
+        dvec3 e = dvec3_make(geometric * colour.x, geometric * colour.y, geometric * colour.z);
+        total = dvec3_add(total, e);
+        printf("      E = (%.6g, %.6g, %.6g)\n", e.x, e.y, e.z);
+    }
+    if (d->light_count == 0)
+        printf("  the scene has no point or area light (emissive shapes are not counted here)\n");
+    printf("  total E = (%.6g, %.6g, %.6g); a white Lambertian surface there reflects L = E / pi = (%.6g, %.6g, "
+           "%.6g)\n", total.x, total.y, total.z, total.x / PI, total.y / PI, total.z / PI);
+    if (d->shape_count > 0 || d->material_count > 0)
+        printf("  (shapes and materials are not used: chapter 07 computes radiometric quantities, it renders nothing)\n");
+    return ok;
+}
+
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch07.exr", 512, 512, 1);
@@ -583,10 +661,22 @@ int main(int argc, char **argv)
                      "Radiometry (GAMES101 lectures 14-15): solid angle, intensity, irradiance, radiance, the BRDF,\n"
                      "the reflection equation and the rendering equation L = E + K L. Each quantity is computed by\n"
                      "deterministic quadrature and by its closed form; the table shows both and their difference.\n"
-                     "The picture is the irradiance on a floor under a square area light, in false colour.",
+                     "The picture is the irradiance on a floor under a square area light, in false colour.\n"
+                     "--scene FILE instead prints the irradiance at the camera's target from the scene's lights,\n"
+                     "closed form against quadrature, and writes no image.",
                      extras, 3};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     verbose = !opts.quiet;
+    if (opts.explain) {
+        fprintf(stderr, "%s: --explain: this chapter traces no rays, so there is no path to explain\n", PROGRAM);
+        return 2;
+    }
+    scene_desc desc;
+    if (program_load_scene(&opts, PROGRAM, &desc)) {
+        bool scene_ok = scene_irradiance(&desc);
+        scene_desc_free(&desc);
+        return scene_ok ? 0 : 1;
+    }
     /* --rho is read as a double (a float flag would make 0.8 into 0.800000012). */
     char *end;
     errno = 0;

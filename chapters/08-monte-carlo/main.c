@@ -158,6 +158,20 @@ int main(int argc, char **argv)
                      "shows 256 points of each point set on the square and warped onto the disk.",
                      extras, 4};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    /* The shared flags --scene and --explain have nothing to act on here:
+     * this chapter integrates four functions with known integrals, not a
+     * scene. Say so rather than ignore them. */
+    if (opts.scene != NULL) {
+        fprintf(stderr, "%s: --scene: this chapter has no scene; it estimates integrals with known values (the\n"
+                        "irradiance from a scene's lights by quadrature is chapter 07: 07-radiometry --scene FILE;\n"
+                        "the Monte Carlo render of a scene is chapter 09: 09-path-tracing --scene FILE)\n",
+                spec.program);
+        return 2;
+    }
+    if (opts.explain) {
+        fprintf(stderr, "%s: --explain: this chapter traces no rays, so there is no path to explain\n", spec.program);
+        return 2;
+    }
     /* A typo in --data should not cost the whole run: check it first. */
     struct stat info;
     if (data_dir != NULL && (stat(data_dir, &info) != 0 || !S_ISDIR(info.st_mode) || access(data_dir, W_OK | X_OK) != 0)) {

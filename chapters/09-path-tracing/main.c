@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "09-path-tracing/experiments.h"
+#include "effects.h"
 #include "09-path-tracing/path_tracer.h"
 #include "cli.h"
 #include "program.h"
@@ -28,7 +29,7 @@ static bool build_scene(pt_scene *sc, const char *name, const char *obj, char *e
     else if (strcmp(name, "point-in-sphere") == 0)
         pt_scene_build_point_in_sphere(sc, 0.5f, (float)PI);
     else {
-        snprintf(err, err_size, "--scene: unknown scene '%s' (cornell, materials, veach, furnace, "
+        snprintf(err, err_size, "--builtin: unknown scene '%s' (cornell, materials, veach, furnace, "
                                 "white-furnace, glass-furnace, point-in-sphere)", name);
         return false;
     }
@@ -38,18 +39,21 @@ static bool build_scene(pt_scene *sc, const char *name, const char *obj, char *e
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch09.exr", 512, 512, 16);
-    const char *integrator = "lecture", *rr = "fixed", *scene_name = "cornell", *obj = NULL, *data = NULL;
+    /* integrator NULL and max_depth -1: not given, so the scene file's (or the default) */
+    const char *integrator = NULL, *rr = "fixed", *scene_name = "cornell", *obj = NULL, *data = NULL;
     const char *bench_csv = NULL;
     bool bench = false;
     float rr_probability = 0.8f, time_budget = 0.0f, target_error = 0.0f;
-    int max_depth = 64, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
+    int max_depth = -1, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
     const cli_flag extras[] = {
         {"--integrator", CLI_STRING, &integrator, "NAME", "lecture (default), cosine or mis: the rung of the ladder", 0, 0},
         {"--rr", CLI_STRING, &rr, "MODE", "Russian roulette: fixed (default, P_RR), throughput, or off", 0, 0},
         {"--rr-probability", CLI_FLOAT, &rr_probability, "P", "P_RR for --rr fixed (default 0.8)", 0.01, 1.0},
         {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
-        {"--scene", CLI_STRING, &scene_name, "NAME",
-         "cornell (default), materials (glossy metal, glass), veach (glossy plates, lights of 4 sizes), furnace, white-furnace, glass-furnace, point-in-sphere", 0, 0},
+        {"--builtin", CLI_STRING, &scene_name, "NAME",
+         "cornell (default), materials (glossy metal, glass), veach (glossy plates, lights of 4 sizes), furnace, "
+         "white-furnace, glass-furnace, point-in-sphere",
+         0, 0},
         {"--obj", CLI_STRING, &obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
         {"--time-budget", CLI_FLOAT, &time_budget, "SECONDS", "progressive: passes until this much time is spent", 0.0, 1e6},
         {"--target-error", CLI_FLOAT, &target_error, "E",
@@ -67,19 +71,40 @@ int main(int argc, char **argv)
                      "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"
                      "bounce, direct light by sampling the light's area, Russian roulette. Renders the Cornell\n"
                      "box; --integrator climbs the ladder (lecture -> cosine -> mis). --time-budget or\n"
-                     "--target-error render progressively; --data DIR measures error against time.",
+                     "--target-error render progressively; --data DIR measures error against time.\n"
+                     "The built-in Cornell box is chapters/09-path-tracing/scenes/cornell.scene.",
                      extras, sizeof extras / sizeof extras[0]};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
+    if (bench_csv != NULL && !bench) {
+        fprintf(stderr, "09-path-tracing: --bench-csv %s: only with --bench\ntry --help\n", bench_csv);
+        return 2;
+    }
 
     path_tracer pt;
     pt_scene sc;
     char err[1024];
-    pt_integrator chosen;
-    if (!pt_integrator_parse(integrator, &chosen)) {
-        fprintf(stderr, "09-path-tracing: --integrator: unknown '%s' (lecture, cosine, mis)\n", integrator);
+    scene_desc desc;
+    bool from_file = program_load_scene(&opts, spec.program, &desc);
+    if (from_file && (obj != NULL || data != NULL)) {
+        fprintf(stderr, "09-path-tracing: --scene does not combine with --obj or --data\n");
+        scene_desc_free(&desc);
         return 2;
     }
+    pt_integrator chosen = PT_LECTURE;
+    if (integrator != NULL && !pt_integrator_parse(integrator, &chosen)) {
+        fprintf(stderr, "09-path-tracing: --integrator: unknown '%s' (lecture, cosine, mis)\n", integrator);
+        scene_desc_free(&desc);
+        return 2;
+    }
+    if (integrator == NULL && from_file && desc.integrator[0] != '\0' && !pt_integrator_parse(desc.integrator, &chosen)) {
+        fprintf(stderr, "09-path-tracing: %s:%d:%d: unknown integrator '%s' (lecture, cosine, mis)\n", desc.source,
+                desc.integrator_line, desc.integrator_column, desc.integrator);
+        scene_desc_free(&desc);
+        return 1;
+    }
+    if (max_depth < 0)
+        max_depth = from_file && desc.max_depth >= 0 ? desc.max_depth : 64;
     pt_russian_roulette rr_mode;
     if (strcmp(rr, "fixed") == 0)
         rr_mode = RR_FIXED;
@@ -89,13 +114,33 @@ int main(int argc, char **argv)
         rr_mode = RR_OFF;
     else {
         fprintf(stderr, "09-path-tracing: --rr: unknown '%s' (fixed, throughput, off)\n", rr);
+        scene_desc_free(&desc);
         return 2;
     }
-    if (!build_scene(&sc, scene_name, obj, err, sizeof err)) {
+    if (from_file) {
+        bool ok = pt_scene_from_desc(&sc, &desc, spec.program, err, sizeof err);
+        if (!ok) {
+            scene_desc_free(&desc);
+            fprintf(stderr, "09-path-tracing: %s\n", err);
+            return 1;
+        }
+    } else if (!build_scene(&sc, scene_name, obj, err, sizeof err)) {
         fprintf(stderr, "09-path-tracing: %s\n", err);
         return obj != NULL ? 1 : 2;
+    } else {
+        pt_scene_describe(&sc, &desc);
     }
+    /* The path tracer can simulate every effect; it simulates those the
+     * scene (file or built-in) calls for and allows. The experiments (--data)
+     * measure the integrators themselves, so they keep every effect on. */
+    effects_report e = effects_analyse(&desc);
+    unsigned effects = data != NULL ? EFFECT_ALL : effects_decide(&e, EFFECT_ALL);
+    if (!opts.quiet && data == NULL)
+        effects_print(stdout, &e, spec.program);
+    program_note_effects(&e);
+    scene_desc_free(&desc);
     pt = path_tracer_defaults(&sc);
+    pt.effects = effects;
     pt.integrator = chosen;
     pt.russian_roulette = rr_mode;
     pt.rr_probability = rr_probability;
@@ -144,6 +189,11 @@ int main(int argc, char **argv)
                 pt_scene_free(&other);
         }
     } else if (time_budget > 0.0f || target_error > 0.0f) {
+        if (opts.explain) {
+            fprintf(stderr, "09-path-tracing: --explain explains one pixel of a plain render, not a progressive one\n");
+            pt_scene_free(&sc);
+            return 2;
+        }
         camera cam = pt_scene_camera(&sc, opts.width, opts.height);
         estimate_image e = render_progressive(&pt, &cam, opts.seed, opts.threads, time_budget, target_error,
                                               opts.quiet ? NULL : stdout);
@@ -155,12 +205,18 @@ int main(int argc, char **argv)
                    pt_integrator_name(pt.integrator), e.spp, e.seconds, estimate_relative_error(&e), opts.out);
             counters_print(stdout, &e.counters, e.seconds);
         }
+        char counters_path[4096];
+        counters_path_for_image(opts.out, counters_path, sizeof counters_path);
+        if (status == 0 && !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
+            fprintf(stderr, "09-path-tracing: %s\n", err);
+            status = 1;
+        }
         estimate_image_free(&e);
     } else {
         camera cam = pt_scene_camera(&sc, opts.width, opts.height);
         render_stats stats;
         status = program_render(&opts, spec.program, path_trace_radiance, &pt, &cam, &stats);
-        if (status == 0 && !opts.quiet) {
+        if (status == 0 && !opts.quiet && !opts.explain) {
             double samples = (double)opts.width * opts.height * opts.spp;
             printf("%s: %.3f s per million camera samples (%d threads, %s, %s Russian roulette)\n",
                    pt_integrator_name(pt.integrator), stats.seconds / samples * 1e6, opts.threads,

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "09-path-tracing/bsdf.h"
+#include "explain.h"
 
 path_tracer path_tracer_defaults(const pt_scene *scene)
 {
@@ -22,6 +23,7 @@ path_tracer path_tracer_defaults(const pt_scene *scene)
     pt.rr_probability = 0.8f;
     pt.rr_start_depth = 3;
     pt.max_depth = 64;
+    pt.effects = EFFECT_ALL;
     return pt;
 }
 
@@ -40,6 +42,38 @@ bool pt_integrator_parse(const char *name, pt_integrator *out)
 }
 
 static bool is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
+
+/* ---- effects ------------------------------------------------------------------
+ * Does a path go on from a non-delta surface of this material? Diffuse
+ * surfaces pass on indirect light, glossy ones glossy reflections. */
+static bool continues_from(const path_tracer *pt, const pt_material *m)
+{
+    return (pt->effects & (m->kind == BSDF_GLOSSY ? EFFECT_GLOSSY : EFFECT_INDIRECT)) != 0;
+}
+
+/* May a path follow this delta sample (mirror reflection, glass)? */
+static bool delta_allowed(const path_tracer *pt, const bsdf_sample_result *s)
+{
+    return (pt->effects & (s->is_transmission ? EFFECT_REFRACTION : EFFECT_REFLECTION)) != 0;
+}
+
+/* ---- --explain ------------------------------------------------------------------ */
+
+static const char *bsdf_kind_name(bsdf_kind k)
+{
+    static const char *const names[] = {"diffuse", "glossy", "glass", "mirror"};
+    return (unsigned)k < 4 ? names[k] : "?";
+}
+
+static void explain_pt_hit(const pt_scene *sc, const hit_record *hit, int depth)
+{
+    char p[64];
+    const pt_material *m = &sc->materials[hit->material_id];
+    explain_line(depth, "hit %s #%d, material #%d (%s), at t = %.6g, point %s%s",
+                 hit->shape_id >= 0 ? "triangle" : "sphere", hit->shape_id >= 0 ? hit->shape_id : -1 - hit->shape_id,
+                 hit->material_id, bsdf_kind_name(m->kind), (double)hit->t, explain_vec3(p, hit->point),
+                 hit->front_face ? "" : " (back face)");
+}
 
 /* The power heuristic (Veach 1997) with exponent 2: the weight of a sample
  * drawn with density a, when density b could have drawn it too. */
@@ -64,7 +98,7 @@ static vec3 emitted(const pt_scene *sc, const hit_record *hit)
  * if the shadow ray from p to x' is not blocked. With with_mis, the sample is
  * weighted against the BSDF sampling that could also have found x'. */
 static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, vec3 wo, const pt_material *m,
-                                bool with_mis, pcg32 *rng, ray_counters *counters)
+                                bool with_mis, int explain_depth, pcg32 *rng, ray_counters *counters)
 {
     const pt_scene *sc = pt->scene;
     vec3 n = hit->normal_shading;
@@ -81,21 +115,43 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
         float cos_theta_light = -vec3_dot(n_light, wi);
         /* A light seen from behind (one-sided) or below the surface adds
          * nothing: no shadow ray needed to know it. */
+        if (!(cos_theta_light > 0.0f && cos_theta > 0.0f))
+            explain_line(explain_depth, "light sample: faces away or lies below the surface: no shadow ray");
         if (cos_theta_light > 0.0f && cos_theta > 0.0f) {
             vec3 f = bsdf_eval(m, n, wo, wi);
             if (!is_black(f)) {
                 /* The shadow ray must reach the light sample itself. */
-                ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, x_light, n_light);
-                counters->shadow_rays++;
-                if (!pt_scene_occluded(sc, shadow, counters)) {
+                /* No shadow ray when the effects analysis proved nothing can
+                 * block a light (or the scene turned shadows off). */
+                bool visible = true;
+                if (pt->effects & EFFECT_SHADOWS) {
+                    ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, x_light, n_light);
+                    counters->shadow_rays++;
+                    visible = !pt_scene_occluded(sc, shadow, counters);
+                }
+                if (visible) {
                     /* pdf 1/A per unit area is distance^2 / (cos' A) per unit solid angle
                      * (with several lights, 1/A is the density of picking x'
                      * among all of them: scene_pt.h) */
                     float pdf_light = distance2 * pt_scene_emitter_pdf_area(sc, light_material) / cos_theta_light;
                     float weight = with_mis ? power_heuristic(pdf_light, bsdf_pdf(m, n, wo, wi)) : 1.0f;
                     vec3 le = sc->materials[light_material].emission;
-                    radiance = vec3_add(radiance, vec3_scale(vec3_mul(le, f), cos_theta / pdf_light * weight));
+                    vec3 contribution = vec3_scale(vec3_mul(le, f), cos_theta / pdf_light * weight);
+                    radiance = vec3_add(radiance, contribution);
+                    if (explain_on()) {
+                        char xb[64], cb[64];
+                        explain_line(explain_depth, "light sample at %s: visible, pdf %.4g per sr (%.4g per unit "
+                                     "area), cos %.4g, MIS weight %.3g, adds %s", explain_vec3(xb, x_light),
+                                     (double)pdf_light, (double)pt_scene_emitter_pdf_area(sc, light_material), (double)cos_theta, (double)weight,
+                                     explain_vec3(cb, contribution));
+                    }
+                } else {
+                    char xb[64];
+                    if (explain_on())
+                        explain_line(explain_depth, "light sample at %s: shadow ray blocked", explain_vec3(xb, x_light));
                 }
+            } else if (explain_on()) {
+                explain_line(explain_depth, "light sample: BSDF is zero for it: no shadow ray");
             }
         }
     }
@@ -112,10 +168,23 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
         vec3 f = bsdf_eval(m, n, wo, wi);
         if (is_black(f))
             continue;
-        ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, light->position, vec3_splat(0.0f));
-        counters->shadow_rays++;
-        if (!pt_scene_occluded(sc, shadow, counters))
-            radiance = vec3_add(radiance, vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2));
+        bool visible = true;
+        if (pt->effects & EFFECT_SHADOWS) {
+            ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, light->position, vec3_splat(0.0f));
+            counters->shadow_rays++;
+            visible = !pt_scene_occluded(sc, shadow, counters);
+        }
+        if (visible) {
+            vec3 contribution = vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2);
+            radiance = vec3_add(radiance, contribution);
+            char cb[64];
+            if (explain_on())
+                explain_line(explain_depth, "point light %d: %s, cos %.4g, r^2 %.4g, adds %s", i,
+                             (pt->effects & EFFECT_SHADOWS) ? "visible" : "visible without a shadow ray (effects)",
+                             (double)cos_theta, (double)distance2, explain_vec3(cb, contribution));
+        } else {
+            explain_line(explain_depth, "point light %d: shadow ray blocked", i);
+        }
     }
     return radiance;
 }
@@ -153,24 +222,46 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
 
     /* Direct light: bounce depth + 1 */
     vec3 l_dir = vec3_splat(0.0f);
+    int indent = 2 * depth + 2; /* --explain: each bounce two steps deeper */
     if (!delta && depth + 1 <= pt->max_depth)
-        l_dir = sample_direct_light(pt, hit, wo, m, false, rng, counters);
-    if (depth + 2 > pt->max_depth && !delta)
+        l_dir = sample_direct_light(pt, hit, wo, m, false, indent, rng, counters);
+    if (explain_on()) {
+        char b[64];
+        explain_line(indent, "L_dir = %s", explain_vec3(b, l_dir));
+    }
+    if (depth + 2 > pt->max_depth && !delta) {
+        explain_line(indent, "max depth %d: no further bounce", pt->max_depth);
         return l_dir;
+    }
     if (depth + 1 > pt->max_depth)
         return l_dir;
+    /* Effects: a diffuse (glossy) surface continues only if the scene calls
+     * for indirect (glossy) light. */
+    if (!delta && !continues_from(pt, m)) {
+        explain_line(indent, "no %s effect: the path ends here", m->kind == BSDF_GLOSSY ? "glossy" : "indirect");
+        return l_dir;
+    }
 
     /* Russian roulette: continue with probability P_RR, and divide what the
      * continued path brings by P_RR, so the expectation is unchanged. */
     float p_rr = pt->russian_roulette == RR_OFF ? 1.0f : pt->rr_probability;
-    if (pt->russian_roulette != RR_OFF && pcg32_float(rng) >= p_rr)
-        return l_dir;
+    if (pt->russian_roulette != RR_OFF) {
+        float u_rr = pcg32_float(rng);
+        explain_line(indent, "Russian roulette: u = %.4f %s P_RR = %.3g: %s", (double)u_rr, u_rr >= p_rr ? ">=" : "<",
+                     (double)p_rr, u_rr >= p_rr ? "the path ends" : "continue, dividing by P_RR");
+        if (u_rr >= p_rr)
+            return l_dir;
+    }
 
     bsdf_sample_result s;
     if (delta) {
         vec2 u = vec2_make(pcg32_float(rng), pcg32_float(rng));
         if (!bsdf_sample(m, n, wo, u, pcg32_float(rng), hit->front_face, &s))
             return l_dir;
+        if (!delta_allowed(pt, &s)) {
+            explain_line(indent, "no %s effect: the path ends here", s.is_transmission ? "refraction" : "reflection");
+            return l_dir;
+        }
     } else {
         /* wi uniform on the hemisphere around n: pdf = 1 / (2 pi) */
         vec3 local = sample_uniform_hemisphere(vec2_make(pcg32_float(rng), pcg32_float(rng)));
@@ -184,25 +275,47 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
     }
     count_continuation(counters, &s);
     ray next = ray_spawn(hit->point, hit->normal_geometric, s.wi);
+    if (explain_on()) {
+        char label[96], w[64];
+        snprintf(label, sizeof label, "%s ray (bounce %d, pdf %.4g, f cos / pdf = %s)",
+                 !s.is_delta ? "indirect" : s.is_transmission ? "refracted" : "reflected", depth + 1, (double)s.pdf,
+                 explain_vec3(w, s.weight));
+        explain_ray(indent, label, next);
+    }
     hit_record q;
     vec3 incoming;
     if (pt_scene_intersect(sc, next, &q, counters)) {
+        if (explain_on())
+            explain_pt_hit(sc, &q, indent + 1);
         incoming = shade(pt, &q, vec3_neg(s.wi), depth + 1, rng, counters);
         /* Emission seen through a delta bounce was not light-sampled. */
         if (delta)
             incoming = vec3_add(incoming, emitted(sc, &q));
     } else {
+        explain_line(indent + 1, "left the scene: the environment");
         incoming = sc->environment;
     }
     vec3 l_indir = vec3_scale(vec3_mul(incoming, s.weight), 1.0f / p_rr);
+    if (explain_on()) {
+        char a[64], b[64], c[64];
+        explain_line(indent, "L_indir = incoming %s x f cos / pdf / P_RR = %s; L_dir + L_indir = %s",
+                     explain_vec3(a, incoming), explain_vec3(b, l_indir), explain_vec3(c, vec3_add(l_dir, l_indir)));
+    }
     return vec3_add(l_dir, l_indir);
 }
 
 static vec3 trace_lecture(const path_tracer *pt, ray r, pcg32 *rng, ray_counters *counters)
 {
     hit_record hit;
-    if (!pt_scene_intersect(pt->scene, r, &hit, counters))
+    if (!pt_scene_intersect(pt->scene, r, &hit, counters)) {
+        explain_line(1, "left the scene: the environment");
         return pt->scene->environment;
+    }
+    if (explain_on()) {
+        char e[64];
+        explain_pt_hit(pt->scene, &hit, 1);
+        explain_line(1, "emission seen directly: %s", explain_vec3(e, emitted(pt->scene, &hit)));
+    }
     /* What the eye sees directly: the emission at the first hit, plus the
      * light reflected there. */
     vec3 wo = vec3_normalize(vec3_neg(r.direction));
@@ -223,10 +336,17 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pcg32 *rng, ray_counte
     vec3 previous_point = r.origin;
 
     for (int depth = 0;; depth++) {
+        int indent = 2 * depth + 1; /* --explain: each bounce two steps deeper */
         hit_record hit;
         if (!pt_scene_intersect(sc, r, &hit, counters)) {
             radiance = vec3_add(radiance, vec3_mul(throughput, sc->environment));
+            explain_line(indent, "left the scene: the environment, times throughput");
             break;
+        }
+        if (explain_on()) {
+            char tb[64];
+            explain_pt_hit(sc, &hit, indent);
+            explain_line(indent, "throughput so far %s", explain_vec3(tb, throughput));
         }
         const pt_material *m = &sc->materials[hit.material_id];
         vec3 wo = vec3_normalize(vec3_neg(r.direction));
@@ -239,18 +359,36 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pcg32 *rng, ray_counte
             bool light_sampled = hit.shape_id >= 0; /* emitting triangles are in the light table */
             if (emission_counts || !light_sampled) {
                 radiance = vec3_add(radiance, vec3_mul(throughput, le));
+                explain_line(indent, "emission counted in full (%s)",
+                             emission_counts ? "seen directly or through a delta bounce" : "not in the light table");
             } else if (mis) {
                 float distance2 = vec3_length_squared(vec3_sub(hit.point, previous_point));
                 float cos_light = fabsf(vec3_dot(hit.normal_geometric, wo));
                 float pdf_light = distance2 * pt_scene_emitter_pdf_area(sc, hit.material_id) / cos_light;
-                radiance = vec3_add(radiance, vec3_scale(vec3_mul(throughput, le), power_heuristic(previous_pdf, pdf_light)));
+                float weight = power_heuristic(previous_pdf, pdf_light);
+                radiance = vec3_add(radiance, vec3_scale(vec3_mul(throughput, le), weight));
+                explain_line(indent, "emission found by the BSDF sample: MIS weight %.3g (BSDF pdf %.4g, light pdf %.4g)",
+                             (double)weight, (double)previous_pdf, (double)pdf_light);
+            } else {
+                explain_line(indent, "emission not counted: the light sample at the previous vertex did");
             }
         }
         bool delta = bsdf_is_delta(m);
         if (depth + 1 > pt->max_depth)
             break;
-        if (!delta)
-            radiance = vec3_add(radiance, vec3_mul(throughput, sample_direct_light(pt, &hit, wo, m, mis, rng, counters)));
+        /* Effects: a diffuse (glossy) vertex passes light on only if the
+         * scene calls for indirect (glossy) light. A vertex that ends the
+         * path takes its direct light from light sampling alone (weight 1):
+         * the BSDF sample that MIS would weigh against is never drawn. */
+        bool goes_on = delta || continues_from(pt, m);
+        if (!delta) {
+            vec3 direct = sample_direct_light(pt, &hit, wo, m, mis && goes_on, indent + 1, rng, counters);
+            radiance = vec3_add(radiance, vec3_mul(throughput, direct));
+        }
+        if (!goes_on) {
+            explain_line(indent, "no %s effect: the path ends here", m->kind == BSDF_GLOSSY ? "glossy" : "indirect");
+            break;
+        }
         /* Continue if the next vertex can still add light within max_depth:
          * its light samples are bounce depth + 2; with MIS, the emission it
          * finds is bounce depth + 1, the BSDF's share of the direct light. */
@@ -276,22 +414,41 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pcg32 *rng, ray_counte
         }
         if (is_black(s.weight))
             break;
+        if (s.is_delta && !delta_allowed(pt, &s)) {
+            explain_line(indent, "no %s effect: the path ends here", s.is_transmission ? "refraction" : "reflection");
+            break;
+        }
         throughput = vec3_mul(throughput, s.weight);
 
         /* Russian roulette */
         if (pt->russian_roulette == RR_FIXED) {
-            if (pcg32_float(rng) >= pt->rr_probability)
+            float u_rr = pcg32_float(rng);
+            explain_line(indent, "Russian roulette: u = %.4f %s P_RR = %.3g: %s", (double)u_rr,
+                         u_rr >= pt->rr_probability ? ">=" : "<", (double)pt->rr_probability,
+                         u_rr >= pt->rr_probability ? "the path ends" : "continue, throughput / P_RR");
+            if (u_rr >= pt->rr_probability)
                 break;
             throughput = vec3_scale(throughput, 1.0f / pt->rr_probability);
         } else if (pt->russian_roulette == RR_THROUGHPUT && depth + 1 >= pt->rr_start_depth) {
             /* Continue in proportion to what the path can still carry: a
              * path through dark surfaces ends sooner. */
             float q = fminf(1.0f, vec3_max_component(throughput));
-            if (pcg32_float(rng) >= q)
+            float u_rr = pcg32_float(rng);
+            explain_line(indent, "Russian roulette on throughput: u = %.4f %s q = %.3g: %s", (double)u_rr,
+                         u_rr >= q ? ">=" : "<", (double)q, u_rr >= q ? "the path ends" : "continue, throughput / q");
+            if (u_rr >= q)
                 break;
             throughput = vec3_scale(throughput, 1.0f / q);
         }
         count_continuation(counters, &s);
+        if (explain_on()) {
+            char label[96], w[64], total[64];
+            snprintf(label, sizeof label, "%s ray (bounce %d, pdf %.4g, f cos / pdf = %s)",
+                     !s.is_delta ? "indirect" : s.is_transmission ? "refracted" : "reflected", depth + 1, (double)s.pdf,
+                     explain_vec3(w, s.weight));
+            explain_line(indent, "radiance so far %s", explain_vec3(total, radiance));
+            explain_ray(indent, label, ray_spawn(hit.point, hit.normal_geometric, s.wi));
+        }
         previous_point = hit.point;
         previous_pdf = s.pdf;
         emission_counts = s.is_delta;

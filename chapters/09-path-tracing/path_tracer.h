@@ -21,6 +21,7 @@
 
 #include "09-path-tracing/scene_pt.h"
 #include "rng.h"
+#include "scene_file.h"
 
 typedef enum { PT_LECTURE, PT_COSINE, PT_MIS } pt_integrator;
 typedef enum {
@@ -39,6 +40,13 @@ typedef struct {
      * Russian roulette this is only a guard (0.8^64 = 6e-7 of the paths get
      * that far); without it, it is the truncation. */
     int max_depth;
+    /* The effects to simulate (EFFECT_* of scene_file.h; EFFECT_ALL unless a
+     * scene file's effects analysis narrowed them). Without EFFECT_SHADOWS
+     * light samples are not tested for occlusion; without EFFECT_INDIRECT
+     * (or EFFECT_GLOSSY) a path ends after the direct light at a diffuse (or
+     * glossy) vertex; without EFFECT_REFLECTION or EFFECT_REFRACTION a
+     * mirror's or glass's sample in that lobe ends the path. */
+    unsigned effects;
 } path_tracer;
 
 path_tracer path_tracer_defaults(const pt_scene *scene);

@@ -24,6 +24,7 @@
 #include "camera.h"
 #include "counters.h"
 #include "mesh.h"
+#include "scene_file.h"
 
 typedef enum {
     BSDF_DIFFUSE, /* Lambertian: f = albedo / pi */
@@ -135,5 +136,18 @@ void pt_scene_build_point_in_sphere(pt_scene *sc, float albedo, float intensity)
 /* An OBJ file's triangles with its MTL colours (Kd albedo, Ke emission; Ni > 1
  * makes glass), and a camera from its bounds. False with err on failure. */
 bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_size);
+
+/* The scene of a scene file (scene_file.h; scene_pt_file.c): diffuse,
+ * glossy, mirror, glass and emissive materials, point and area lights (an
+ * area light is a one-sided emitting quad), spheres, triangles, quads and
+ * meshes (OBJ with MTL: Kd albedo, Ke emission, Ni > 1 glass), camera,
+ * background (the environment). Blinn-Phong becomes diffuse k_d, with a
+ * warning naming the line; planes and implicit tori are errors (the path
+ * tracer intersects triangles and spheres only). Runs pt_scene_finish. False
+ * with err ("file:line:col: ...") on failure, sc then empty. */
+bool pt_scene_from_desc(pt_scene *sc, const scene_desc *d, const char *label, char *err, size_t err_size);
+/* The reverse: a built-in scene as a description (every triangle a shape),
+ * so that the effects analysis runs on it as on a file. */
+void pt_scene_describe(const pt_scene *sc, scene_desc *d);
 
 #endif

@@ -249,7 +249,9 @@ bench-deps:
 # in headless Chromium and checks images, links and math.
 DOCS := $(BUILD)/docs
 DOCS_TEST := $(BUILD)/docs-test
-DOC_PAGES := $(patsubst %,$(DOCS)/%.html,$(CHAPTERS)) $(DOCS)/index.html $(DOCS)/coverage.html
+DOC_NOTES := scene-format hard-cases
+DOC_PAGES := $(patsubst %,$(DOCS)/%.html,$(CHAPTERS)) $(DOCS)/index.html $(DOCS)/coverage.html \
+  $(patsubst %,$(DOCS)/%.html,$(DOC_NOTES))
 DOC_FIGURES := $(patsubst %,$(BUILD)/%,$(shell sed -n 's|^\(out/[^ ]*\.png\).*|\1|p' docs/figures.txt))
 DOC_PLOTS_STAMP := $(BUILD)/plots/.made
 DOC_SOURCES := $(wildcard common/*.[ch] chapters/*/*.[ch] tests/*.c)
@@ -287,6 +289,10 @@ $(DOCS)/%.html: chapters/%/README.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_ST
 
 $(DOCS)/index.html: docs/index.md $(DOC_INPUTS) $(DOCS)/book.css
 	$(DOC_PANDOC) -f gfm -M page=index -M chapter= $< -o $@
+
+# The notes beside the chapters: the scene format and the hard-case catalog.
+$(patsubst %,$(DOCS)/%.html,$(DOC_NOTES)): $(DOCS)/%.html: docs/%.md $(DOC_INPUTS) $(DOCS)/book.css
+	$(DOC_PANDOC) -f gfm -M page=note -M chapter= $< -o $@
 
 $(DOCS)/coverage.html: docs/coverage.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(DOCS)/book.css
 	$(DOC_PANDOC) -f gfm -M page=coverage -M chapter= $< -o $@

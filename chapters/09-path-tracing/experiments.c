@@ -390,7 +390,10 @@ bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char
     camera cam = pt_scene_camera(&sc, size, size);
     double million_samples = (double)size * (double)size * (double)spp * 1e-6;
     FILE *csv = NULL;
-    if (csv_path != NULL && (csv = fopen(csv_path, "w")) == NULL) {
+    char csv_temp[4200];
+    if (csv_path != NULL)
+        csv_temp_path(csv_path, csv_temp, sizeof csv_temp);
+    if (csv_path != NULL && (csv = fopen(csv_temp, "w")) == NULL) {
         snprintf(err, err_size, "%s: %s", csv_path, strerror(errno));
         pt_scene_free(&sc);
         return false;

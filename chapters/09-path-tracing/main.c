@@ -91,6 +91,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "09-path-tracing: --rr: unknown '%s' (fixed, throughput, off)\n", rr);
         return 2;
     }
+    if (bench_csv != NULL && !bench) { /* it would write nothing, silently */
+        fprintf(stderr, "09-path-tracing: --bench-csv %s: needs --bench\n", bench_csv);
+        return 2;
+    }
     if (!build_scene(&sc, scene_name, obj, err, sizeof err)) {
         fprintf(stderr, "09-path-tracing: %s\n", err);
         return obj != NULL ? 1 : 2;

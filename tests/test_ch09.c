@@ -1,9 +1,10 @@
 /* test_ch09.c -- the path tracer against scenes whose answer is known in
  * closed form, the rungs against each other, and the estimator's variance
- * against the 1/N law. Statistical checks use fixed seeds and compare
- * within 5 standard errors of the pixel's own estimate (a correct
- * implementation fails one pixel with probability ~6e-7); each has a twin
- * showing the same check catches a biased image. */
+ * against the 1/N law. Statistical checks use fixed seeds (test_seed) and
+ * image-level statistics with a false-alarm budget of 1e-6 per test (see
+ * "image-level statistics" below); the light-picking and Russian roulette
+ * tests, on well-behaved estimators, still compare per pixel within 5
+ * standard errors. Each check has a twin showing it catches a biased image. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -12,6 +13,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "09-path-tracing/bsdf.h"
@@ -22,7 +24,8 @@
 #include "stats.h"
 #include "test_support.h"
 
-/* How many standard errors a pixel may be from the truth. */
+/* How many standard errors a pixel may be from the truth, in the per-pixel
+ * comparisons (count_disagreements) that are left. */
 static const double STANDARD_ERRORS = 5.0;
 /* Standard errors below this are float rounding, not noise (zero-variance
  * estimators): compare with this instead. */
@@ -52,16 +55,148 @@ static void render_result_free(render_result *r)
     image_free(&r->standard_error);
 }
 
-/* How many pixel channels are farther than 5 standard errors from `expected`. */
-static int count_outliers(const render_result *r, double expected)
+/* ---- image-level statistics ------------------------------------------------
+ * Why not "every pixel within 5 of its own standard errors": the lecture's
+ * uniform hemisphere sampling gives a skewed per-sample distribution (rare
+ * bright paths). A pixel whose 64 samples missed them has both a low mean
+ * and a small estimated error, so its studentized error has a heavy tail:
+ * over 200 seeds 1.5 to 3.5 % of the runs failed, against the ~1e-4 the
+ * normal tail at 5 sigma promises (docs/hard-cases.md, section 9).
+ *
+ * What replaces it, for each colour channel separately (in a grey scene
+ * the three are equal, so Sidak over them is merely conservative):
+ *  - where every pixel has the same expected value (furnaces, the point
+ *    light in a sphere), the per-sample variance is pooled over the pixels:
+ *    V = mean over pixels of se^2, an estimate from pixels x spp samples
+ *    (thousands) instead of 64, and E[V] = mean of the pixels' true
+ *    variances even where they differ a little (the icosphere's facets);
+ *  - two statistics, each with a p-value from a distribution that holds
+ *    without normality of one pixel's mean:
+ *      the image mean, z = (mean of pixel means - expected) / sqrt(V / n):
+ *        the mean of n x spp samples, normal by the central limit theorem,
+ *        and the most sensitive test of a bias shared by all pixels;
+ *      X = sum over pixels of (m_i - expected)^2 / V, chi-square with n
+ *        degrees of freedom: sees a bias in some pixels only. A pixel with
+ *        a 7-sigma fluke adds 49 to it, against a 1e-7 quantile of 142 at
+ *        n = 64, so one skewed pixel no longer decides the test;
+ *  - the test's family-wise false-alarm budget FAMILY_ALPHA is split over
+ *    all the p-values it looks at with Sidak (stats_sidak_alpha), so a
+ *    correct implementation fails a test with probability ~1e-6.
+ * Estimators of zero variance (glass, depth 0) are compared exactly,
+ * within ROUNDING_FLOOR. */
+static const double FAMILY_ALPHA = 1e-6;
+
+typedef struct {
+    double p;     /* the smallest p-value of the checks made */
+    double z;     /* the image mean's z-score in the channel with the smallest p */
+    double chi2;  /* and the chi-square, with its degrees of freedom */
+    int dof;
+} image_check;
+
+/* Each image check looks at 2 p-values in each of 3 channels. */
+enum { CHECKS_PER_IMAGE = 6 };
+
+static void image_check_take(image_check *c, double p, double z, double chi2, int dof)
 {
-    int outliers = 0;
-    for (int i = 0; i < r->mean.width * r->mean.height * 3; i++) {
-        double tolerance = fmax(STANDARD_ERRORS * r->standard_error.rgb[i], ROUNDING_FLOOR);
-        outliers += !(fabs(r->mean.rgb[i] - expected) <= tolerance);
+    if (p < c->p) {
+        c->p = p;
+        c->z = z;
+        c->chi2 = chi2;
+        c->dof = dof;
     }
-    return outliers;
 }
+
+/* The pixels x in [x0, x1), y in [y0, y1) of r against the constant
+ * `expected`, with the variance pooled over those pixels. */
+static image_check check_uniform(const render_result *r, int x0, int y0, int x1, int y1, double expected)
+{
+    image_check c = {.p = 2.0};
+    int w = r->mean.width, n = (x1 - x0) * (y1 - y0);
+    for (int ch = 0; ch < 3; ch++) {
+        double sum = 0, pooled = 0;
+        for (int y = y0; y < y1; y++)
+            for (int x = x0; x < x1; x++) {
+                int i = (y * w + x) * 3 + ch;
+                sum += r->mean.rgb[i];
+                pooled += (double)r->standard_error.rgb[i] * r->standard_error.rgb[i];
+            }
+        pooled /= n;
+        double p_mean, p_chi2, z, chi2 = 0;
+        if (pooled <= ROUNDING_FLOOR * ROUNDING_FLOOR) { /* no noise: exact */
+            int off = 0;
+            for (int y = y0; y < y1; y++)
+                for (int x = x0; x < x1; x++)
+                    off += !(fabs(r->mean.rgb[(y * w + x) * 3 + ch] - expected) <= ROUNDING_FLOOR);
+            p_mean = p_chi2 = off ? 0.0 : 1.0;
+            z = off ? INFINITY : 0.0;
+        } else {
+            z = (sum / n - expected) / sqrt(pooled / n);
+            for (int y = y0; y < y1; y++)
+                for (int x = x0; x < x1; x++) {
+                    double d = r->mean.rgb[(y * w + x) * 3 + ch] - expected;
+                    chi2 += d * d / pooled;
+                }
+            p_mean = erfc(fabs(z) / sqrt(2.0));
+            p_chi2 = stats_chi_square_p_value(chi2, n);
+        }
+        image_check_take(&c, fmin(p_mean, p_chi2), z, chi2, n);
+    }
+    return c;
+}
+
+static image_check check_uniform_image(const render_result *r, double expected)
+{
+    return check_uniform(r, 0, 0, r->mean.width, r->mean.height, expected);
+}
+
+/* Two renders of one scene (e.g. two rungs) against each other. Pixels
+ * differ, so nothing can be pooled: pixel i's difference d_i has variance
+ * v_i = se_a^2 + se_b^2 from its own samples. The same two statistics:
+ * z = sum d_i / sqrt(sum v_i) (the image means agree; the sum of variances
+ * is estimated from all samples, so it is as reliable as a pooled one), and
+ * X = sum d_i^2 / v_i, chi-square with one degree of freedom per noisy
+ * pixel, whose sum of many terms one underestimated v_i cannot dominate.
+ * Pixels with no noise in either render must agree within ROUNDING_FLOOR. */
+static image_check check_agree(const render_result *a, const render_result *b)
+{
+    image_check c = {.p = 2.0};
+    int n = a->mean.width * a->mean.height;
+    for (int ch = 0; ch < 3; ch++) {
+        double sum = 0, variance = 0, chi2 = 0;
+        int dof = 0, off = 0;
+        for (int k = 0; k < n; k++) {
+            int i = k * 3 + ch;
+            double d = (double)a->mean.rgb[i] - b->mean.rgb[i];
+            double v = (double)a->standard_error.rgb[i] * a->standard_error.rgb[i] +
+                       (double)b->standard_error.rgb[i] * b->standard_error.rgb[i];
+            if (v <= ROUNDING_FLOOR * ROUNDING_FLOOR) {
+                off += !(fabs(d) <= ROUNDING_FLOOR);
+                continue;
+            }
+            sum += d;
+            variance += v;
+            chi2 += d * d / v;
+            dof++;
+        }
+        double z = dof ? sum / sqrt(variance) : 0.0;
+        double p = off ? 0.0 : dof ? fmin(erfc(fabs(z) / sqrt(2.0)), stats_chi_square_p_value(chi2, dof)) : 1.0;
+        image_check_take(&c, p, z, chi2, dof);
+    }
+    return c;
+}
+
+/* The Sidak level for one of `images` image checks in a test. */
+static double image_check_alpha(int images)
+{
+    return stats_sidak_alpha(FAMILY_ALPHA, CHECKS_PER_IMAGE * images);
+}
+
+#define assert_image_check(c, images, what)                                                                          \
+    do {                                                                                                             \
+        if (!((c).p >= image_check_alpha(images)))                                                                   \
+            fail_msg("%s: p = %.3g < %.3g (image mean z = %.2f, chi-square %.1f on %d)", (what), (c).p,            \
+                     image_check_alpha(images), (c).z, (c).chi2, (c).dof);                                            \
+    } while (0)
 
 static path_tracer tracer(const pt_scene *sc, pt_integrator integrator, pt_russian_roulette rr)
 {
@@ -85,12 +220,26 @@ static void test_furnace_every_pixel_is_one(void **state)
     for (int k = 0; k < 3; k++) {
         path_tracer pt = tracer(&sc, all_rungs[k], RR_FIXED);
         render_result r = render(&pt, 8, 8, 64, 11, 2);
-        int outliers = count_outliers(&r, 1.0);
-        if (outliers != 0)
-            fail_msg("%s: %d pixel channels are not 1 within 5 standard errors", pt_integrator_name(all_rungs[k]),
-                     outliers);
+        image_check c = check_uniform_image(&r, 1.0);
+        assert_image_check(c, 3, pt_integrator_name(all_rungs[k]));
         render_result_free(&r);
     }
+    pt_scene_free(&sc);
+    /* The twin: an albedo 4 % low (0.48: radiance 0.5 / 0.52 = 0.96), with
+     * MIS. Not with the lecture's rung: its light samples on the
+     * icosphere's facets have a geometry term ~ 1 / r^2 near the edges
+     * they share with the shading point's facet, an estimator of infinite
+     * variance, and the pooled variance swings with the rare huge sample:
+     * over 200 seeds this twin's z ranged from -0.7 to -10.8 with it and
+     * missed 8 times. (The cosine rung samples lights the same way.) That costs the test power (not false alarms: 0 of
+     * 200 with a correct tracer). */
+    pt_scene_build_furnace(&sc, 0.48f, 0.5f);
+    path_tracer pt = tracer(&sc, PT_MIS, RR_FIXED);
+    render_result r = render(&pt, 8, 8, 64, 12, 2);
+    image_check c = check_uniform_image(&r, 1.0);
+    print_message("twin, albedo 0.48: p = %.3g (image mean z = %.1f)\n", c.p, c.z);
+    assert_true(c.p < image_check_alpha(3));
+    render_result_free(&r);
     pt_scene_free(&sc);
 }
 
@@ -110,12 +259,21 @@ static void test_furnace_truncated_at_depth_is_the_partial_sum(void **state)
             pt.max_depth = depths[d];
             render_result r = render(&pt, 6, 6, 64, 21, 2);
             double partial = 0.5 * (1.0 - pow(0.5, depths[d] + 1)) / (1.0 - 0.5);
-            int outliers = count_outliers(&r, partial);
-            if (outliers != 0)
-                fail_msg("%s, depth %d: %d pixel channels differ from %.6f", pt_integrator_name(all_rungs[k]),
-                         depths[d], outliers, partial);
-            if (depths[d] == 2) /* the twin: stopping at 2 bounces (0.875) is caught */
-                assert_true(count_outliers(&r, 1.0) > 0);
+            image_check c = check_uniform_image(&r, partial);
+            if (!(c.p >= image_check_alpha(12)))
+                fail_msg("%s, depth %d: p = %.3g against %.6f (image mean z = %.2f)",
+                         pt_integrator_name(all_rungs[k]), depths[d], c.p, partial, c.z);
+            /* the twin: stopping at 2 bounces (0.875) is caught; asserted
+             * for MIS only: the other two rungs' light samples have
+             * infinite variance here (see the test above), and one huge
+             * sample hid the bias (z = -2.1) in 1 seed of 200 */
+            if (depths[d] == 2) {
+                image_check twin = check_uniform_image(&r, 1.0);
+                print_message("%s: twin, depth 2 against 1: p = %.3g (image mean z = %.1f)\n",
+                              pt_integrator_name(all_rungs[k]), twin.p, twin.z);
+                if (all_rungs[k] == PT_MIS)
+                    assert_true(twin.p < image_check_alpha(12));
+            }
             render_result_free(&r);
         }
     pt_scene_free(&sc);
@@ -132,9 +290,15 @@ static void test_point_light_in_a_sphere_gives_radiance_one(void **state)
     for (int k = 0; k < 3; k++) {
         path_tracer pt = tracer(&sc, all_rungs[k], RR_FIXED);
         render_result r = render(&pt, 8, 8, 64, 31, 2);
-        assert_int_equal(count_outliers(&r, 1.0), 0);
+        /* By symmetry every point of the sphere sees the same light and the
+         * same sphere: all pixels share one distribution, pooled. */
+        image_check c = check_uniform_image(&r, 1.0);
+        assert_image_check(c, 3, pt_integrator_name(all_rungs[k]));
         /* the twin: the direct light counted twice (radiance 1.5) is caught */
-        assert_true(count_outliers(&r, 1.5) > 0);
+        image_check twin = check_uniform_image(&r, 1.5);
+        print_message("%s: twin, radiance 1.5: p = %.3g (image mean z = %.1f)\n", pt_integrator_name(all_rungs[k]),
+                      twin.p, twin.z);
+        assert_true(twin.p < image_check_alpha(3));
         render_result_free(&r);
     }
     pt_scene_free(&sc);
@@ -150,13 +314,22 @@ static void test_white_furnace_diffuse_and_glass(void **state)
     pt_scene_build_white_furnace(&sc, pt_diffuse(vec3_splat(0.5f)), vec3_splat(2.0f));
     for (int k = 0; k < 3; k++) {
         path_tracer pt = tracer(&sc, all_rungs[k], RR_FIXED);
-        render_result r = render(&pt, 16, 16, 64, 41, 2);
-        /* The centre 4x4 pixels all see the sphere. */
-        for (int y = 6; y < 10; y++)
-            for (int x = 6; x < 10; x++) {
-                vec3 m = image_get(&r.mean, x, y), se = image_get(&r.standard_error, x, y);
-                assert_true(fabs(m.x - 1.0) <= fmax(STANDARD_ERRORS * se.x, ROUNDING_FLOOR));
-            }
+        render_result r = render(&pt, 16, 16, 256, 41, 2);
+        /* The sphere's image has a radius of 5.7 pixels (half-angle
+         * asin(1/4) in a 40 degree field): the centre 6x6 pixels see
+         * nothing else. A convex sphere sees
+         * the uniform sky in its whole hemisphere at every point: one
+         * distribution for all, pooled. */
+        image_check c = check_uniform(&r, 5, 5, 11, 11, 1.0);
+        assert_image_check(c, 3, pt_integrator_name(all_rungs[k]));
+        /* the twin: an albedo 10 % high (radiance 1.1) is caught. (5 % is
+         * not, reliably: the lecture's rung has a per-sample standard
+         * deviation near 2 / sqrt(12) = 0.58, so 9216 samples resolve
+         * 0.05 at only ~7 standard errors, against a threshold of 5.4.) */
+        image_check twin = check_uniform(&r, 5, 5, 11, 11, 1.1);
+        print_message("%s: twin, radiance 1.1: p = %.3g (image mean z = %.1f)\n", pt_integrator_name(all_rungs[k]),
+                      twin.p, twin.z);
+        assert_true(twin.p < image_check_alpha(3));
         render_result_free(&r);
     }
     pt_scene_free(&sc);
@@ -186,16 +359,16 @@ static int count_disagreements(const render_result *a, const render_result *b)
     return n;
 }
 
-static void check_rungs_agree(pt_scene *sc, int spp)
+/* images: how many comparisons the calling test makes in all (Sidak). */
+static void check_rungs_agree(pt_scene *sc, int spp, int images)
 {
     path_tracer reference = tracer(sc, PT_MIS, RR_THROUGHPUT);
     render_result ref = render(&reference, 8, 8, spp, 51, 2);
     for (int k = 0; k < 3; k++) {
         path_tracer pt = tracer(sc, all_rungs[k], RR_FIXED);
         render_result r = render(&pt, 8, 8, spp, 52 + (uint64_t)k, 2);
-        int n = count_disagreements(&r, &ref);
-        if (n != 0)
-            fail_msg("%s disagrees with MIS in %d pixel channels", pt_integrator_name(all_rungs[k]), n);
+        image_check c = check_agree(&r, &ref);
+        assert_image_check(c, images, pt_integrator_name(all_rungs[k]));
         render_result_free(&r);
     }
     render_result_free(&ref);
@@ -206,10 +379,33 @@ static void test_every_rung_converges_to_the_same_image(void **state)
     (void)state;
     pt_scene sc;
     pt_scene_build_cornell_box(&sc);
-    check_rungs_agree(&sc, 256);
+    check_rungs_agree(&sc, 256, 6); /* 3 rungs x 2 scenes */
+    {
+        /* The twin: the cosine rung with every albedo 10 % low, against a
+         * correct MIS (chi-square ~370 on 64 where ~64 is expected). 3 % is
+         * below what 8x8 pixels at 256 spp resolve (chi-square 86, p = 0.03).
+         * The materials are shared with sc: restored after. */
+        path_tracer reference = tracer(&sc, PT_MIS, RR_THROUGHPUT);
+        render_result ref = render(&reference, 8, 8, 256, 51, 2);
+        pt_material *kept = malloc((size_t)sc.material_count * sizeof *kept);
+        assert_non_null(kept);
+        memcpy(kept, sc.materials, (size_t)sc.material_count * sizeof *kept);
+        for (int m = 0; m < sc.material_count; m++)
+            sc.materials[m].albedo = vec3_scale(sc.materials[m].albedo, 0.90f);
+        path_tracer wrong = tracer(&sc, PT_COSINE, RR_FIXED);
+        render_result r = render(&wrong, 8, 8, 256, 53, 2);
+        memcpy(sc.materials, kept, (size_t)sc.material_count * sizeof *kept);
+        free(kept);
+        image_check twin = check_agree(&r, &ref);
+        print_message("twin, albedo 10 %% low: p = %.3g (image mean z = %.1f, chi-square %.0f on %d)\n", twin.p,
+                      twin.z, twin.chi2, twin.dof);
+        assert_true(twin.p < image_check_alpha(6));
+        render_result_free(&r);
+        render_result_free(&ref);
+    }
     pt_scene_free(&sc);
     pt_scene_build_cornell_box_materials(&sc); /* glossy metal and glass */
-    check_rungs_agree(&sc, 256);
+    check_rungs_agree(&sc, 256, 6);
     pt_scene_free(&sc);
 }
 
@@ -244,7 +440,7 @@ static void test_lights_are_picked_by_power(void **state)
     build_two_lights(&sc);
     /* 4096 spp: at 256, an MIS that weighs its BSDF hits with 1/(total
      * area) instead still passed; at 4096 it fails in 21 channels. */
-    check_rungs_agree(&sc, 4096);
+    check_rungs_agree(&sc, 4096, 3);
     {
         /* The twin: light samples with a pdf off by 2 are caught. */
         path_tracer right = tracer(&sc, PT_MIS, RR_THROUGHPUT);

@@ -374,13 +374,35 @@ static void test_degenerate_collinear_triangles_are_never_hit(void **state)
                 fail_msg("triangle %zu hit (t = %g)", k, (double)hit.t);
             if (triangle_intersect_barycentric(tri, &r, &t, &b1, &b2))
                 fail_msg("triangle %zu hit by Moller-Trumbore (t = %g)", k, (double)t);
-            /* triangle_intersect_watertight is not asked: after the shear
-             * the projected vertices are rounded and no longer collinear, so
-             * its determinant U + V + W is rounding noise, not zero, and it
-             * reports some of these rays as hits (docs/hard-cases.md,
-             * "degenerate triangles": an open item). */
+            if (triangle_intersect_watertight(tri, &r, &t, &b1, &b2))
+                fail_msg("triangle %zu hit by the watertight test (t = %g)", k, (double)t);
         }
     }
+}
+
+/* The zero-area check must not swallow thin triangles that are not
+ * degenerate: a sliver one float step (2^-23 at size 1) high is a real
+ * triangle. Rays along -z and +z through points inside it (x anywhere in the
+ * middle half, y a quarter of the height: exact floats, and the shear of an
+ * axis-aligned ray is exact) must all hit it, from above and from below. A
+ * tilted ray aimed at it would not do: its rounded direction wanders by more
+ * than 2^-23 before it gets there. */
+static void test_sliver_one_float_step_thick_is_still_hit(void **state)
+{
+    (void)state;
+    const float height = 0x1p-23f;
+    const triangle sliver = {{0, 0, 0}, {2, 0, 0}, {1, height, 0}};
+    pcg32 rng = pcg32_for_pixel(test_seed(78), 8);
+    long missed = 0;
+    for (int i = 0; i < 20000; i++) {
+        float x = 0.5f + pcg32_float(&rng);
+        float side = (i % 2) ? 1.0f : -1.0f;
+        ray r = ray_make(vec3_make(x, 0.25f * height, side * (0.5f + 4 * pcg32_float(&rng))), vec3_make(0, 0, -side));
+        float t = NAN, b1 = NAN, b2 = NAN;
+        if (!triangle_intersect_watertight(&sliver, &r, &t, &b1, &b2))
+            missed++;
+    }
+    assert_int_equal(missed, 0);
 }
 
 /* ---- implicit surface (sphere-traced torus) ------------------------------- */
@@ -817,6 +839,7 @@ int main(void)
         cmocka_unit_test(test_shadow_rays_do_not_hit_the_light_they_aim_at),
         cmocka_unit_test(test_unoffset_shadow_rays_hit_the_light_they_aim_at),
         cmocka_unit_test(test_degenerate_collinear_triangles_are_never_hit),
+        cmocka_unit_test(test_sliver_one_float_step_thick_is_still_hit),
         cmocka_unit_test(test_demo_is_bit_identical_for_one_and_two_threads),
         cmocka_unit_test(test_default_scene_file_renders_the_built_in_image),
         cmocka_unit_test(test_one_unoccluded_light_needs_no_shadow_ray),

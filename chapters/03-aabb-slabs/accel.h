@@ -27,6 +27,7 @@
 #include "03-aabb-slabs/aabb.h"
 #include "counters.h"
 #include "camera.h"
+#include "cli.h"
 #include "mesh.h"
 #include "rng.h"
 #include "scene_file.h"
@@ -140,6 +141,32 @@ bool accel_mesh_from_desc(mesh *m, const scene_desc *d, const char *label, int *
                           char *err, size_t err_size);
 /* The scene file's camera if it has one, else accel_view_camera(bounds). */
 camera accel_scene_camera(const scene_desc *d, aabb bounds, int width, int height);
+
+/* ---- what the programs of chapters 04-06 share (accel_program.c) -------------
+ * The mesh their flags ask for: --scene FILE (its triangles and camera),
+ * else --obj FILE, else the procedural --mesh NAME: "tori" (the harness's
+ * field of tori_triangles), "stadium" (the teapot in a stadium) or
+ * "icosphere". On bad input prints "program: message" and returns the exit
+ * status (1: a bad or empty file, 2: a bad flag), with nothing left to free;
+ * 0 on success, and then accel_input_free releases it. */
+typedef struct {
+    mesh m;
+    scene_desc desc;  /* --scene's description (empty without --scene) */
+    const char *name; /* what was loaded, for messages */
+    bool stadium;     /* the teapot in a stadium: seen by a spectator */
+} accel_input;
+
+int accel_input_load(accel_input *in, cli_options *opts, const char *program, const char *mesh_name,
+                     const char *obj_path, int tori_triangles, int icosphere_subdivisions);
+/* The scene file's camera, a spectator's in the stadium, else the harness's
+ * view of the bounds. */
+camera accel_input_camera(const accel_input *in, aabb bounds, int width, int height);
+void accel_input_free(accel_input *in);
+/* Times the harness's coherent or incoherent ray set (accel_harness_rays)
+ * on one thread: the median of 3 runs of closest hit and of any hit, by the
+ * wall clock and by this thread's CPU time, with the hit fraction, the sum of
+ * t (to compare with Embree's) and the tests per ray. */
+void accel_bench_harness(const accel *a, bool coherent);
 
 /* The heat map's colour for cost / max_cost. */
 vec3 accel_heat_colour(float fraction);

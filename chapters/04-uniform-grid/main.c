@@ -8,20 +8,12 @@
  * stadium", where a uniform grid fails; --density C changes C. */
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 
 #include "04-uniform-grid/grid.h"
 #include "cli.h"
-#include "memory.h"
 #include "program.h"
 #include "rng.h"
 #include "timer.h"
-
-static void usage_error(const char *message, const char *value)
-{
-    fprintf(stderr, "04-uniform-grid: %s '%s'\ntry --help\n", message, value);
-    exit(2);
-}
 
 /* The cost of rays aimed at the mesh itself (accel_aimed_rays), one thread,
  * timed. */
@@ -94,53 +86,12 @@ int main(int argc, char **argv)
                      extras, (int)(sizeof extras / sizeof extras[0])};
     cli_parse_or_exit(argc, argv, &spec, &opts);
 
-    mesh m;
-    mesh_init(&m);
-    bool stadium = false;
-    if (obj_path != NULL) {
-        char err[MESH_ERROR_SIZE];
-        if (!mesh_load_obj(&m, obj_path, err, sizeof err)) {
-            fprintf(stderr, "04-uniform-grid: %s\n", err);
-            mesh_free(&m); /* the load left m as it was, but its arrays may have grown */
-            return 1;
-        }
-        if (m.face_count == 0) {
-            fprintf(stderr, "04-uniform-grid: %s: no triangles\n", obj_path);
-            mesh_free(&m);
-            return 1;
-        }
-    } else if (strcmp(mesh_name, "tori") == 0) {
-        mesh_tori_field(&m, triangles);
-    } else if (strcmp(mesh_name, "stadium") == 0) {
-        /* 81920 triangles of teapot (a sphere of radius 1), 10 of stadium
-         * 200 x 50 x 200 */
-        mesh_teapot_in_stadium(&m, 6, 200.0f);
-        stadium = true;
-    } else if (strcmp(mesh_name, "icosphere") == 0) {
-        mesh_icosphere(&m, vec3_make(0, 0, 0), 1.0f, 6, -1);
-    } else {
-        usage_error("--mesh must be tori, stadium or icosphere, not", mesh_name);
-    }
-
-    /* --scene: the scene file's triangles (and camera) replace the mesh. */
-    scene_desc desc;
-    if (program_load_scene(&opts, spec.program, &desc)) {
-        char err[SCENE_ERROR_SIZE];
-        if (obj_path != NULL) {
-            fprintf(stderr, "%s: --scene and --obj: choose one\n", spec.program);
-            return 2;
-        }
-        mesh_free(&m);
-        mesh_init(&m);
-        if (!accel_mesh_from_desc(&m, &desc, spec.program, NULL, NULL, err, sizeof err)) {
-            fprintf(stderr, "%s: %s\n", spec.program, err);
-            scene_desc_free(&desc);
-            return 1;
-        }
-        stadium = false;
-    }
+    accel_input in;
+    int load_status = accel_input_load(&in, &opts, spec.program, mesh_name, obj_path, triangles, 6);
+    if (load_status != 0)
+        return load_status;
     triangle_set set;
-    triangle_set_from_mesh(&set, &m);
+    triangle_set_from_mesh(&set, &in.m);
     accel *a = grid_build(&set, density);
     if (!opts.quiet)
         print_grid(a);
@@ -148,13 +99,7 @@ int main(int argc, char **argv)
         probe(a, probe_rays, opts.seed);
 
     accel_view view = {a, heatmap, heatmap_max};
-    /* The harness's view of the whole bounds; in the stadium that makes the
-     * teapot two pixels wide, so there a spectator looks at it from 12 units
-     * away, with the ground and the far walls behind. */
-    camera cam = stadium ? camera_look_at(vec3_make(7, 5, 10), vec3_make(0, 1, 0), vec3_make(0, 1, 0), 30.0f,
-                                          opts.width, opts.height)
-                         : accel_scene_camera(&desc, set.bounds, opts.width, opts.height);
-    scene_desc_free(&desc);
+    camera cam = accel_input_camera(&in, set.bounds, opts.width, opts.height);
     render_stats stats;
     int status = program_render(&opts, spec.program, accel_view_radiance, &view, &cam, &stats);
     if (status == 0 && !opts.quiet) {
@@ -164,6 +109,6 @@ int main(int argc, char **argv)
     }
     accel_destroy(a);
     triangle_set_free(&set);
-    mesh_free(&m);
+    accel_input_free(&in);
     return status;
 }

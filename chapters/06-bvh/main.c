@@ -8,78 +8,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "06-bvh/bvh.h"
 #include "06-bvh/bvh4.h"
 #include "cli.h"
-#include "memory.h"
 #include "program.h"
-#include "timer.h"
-
-/* ---- the Embree harness's ray sets, for --bench ----------------------------- */
-
-enum { BENCH_REPEATS = 3 };
-
-/* CPU time of this thread: on a machine shared with other work it counts
- * only the time this thread ran, which the wall clock does not. */
-static double thread_cpu_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int compare_doubles(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-/* Median of BENCH_REPEATS timings of closest hit and of any hit, one thread. */
-static void bench(const accel *a, bool coherent)
-{
-    int count;
-    ray *rays = accel_harness_rays(a->set->bounds, coherent, &count);
-    double closest[BENCH_REPEATS], any[BENCH_REPEATS], closest_cpu[BENCH_REPEATS], any_cpu[BENCH_REPEATS];
-    long hits = 0;
-    double t_sum = 0.0;
-    ray_counters counters = {0};
-    for (int rep = 0; rep < BENCH_REPEATS; rep++) {
-        hits = 0;
-        t_sum = 0.0;
-        double start = timer_seconds(), start_cpu = thread_cpu_seconds();
-        for (int i = 0; i < count; i++) {
-            hit_record hit;
-            if (accel_closest_hit(a, rays[i], &hit, &counters)) {
-                hits++;
-                t_sum += hit.t;
-            }
-        }
-        closest[rep] = timer_seconds() - start;
-        closest_cpu[rep] = thread_cpu_seconds() - start_cpu;
-        start = timer_seconds();
-        start_cpu = thread_cpu_seconds();
-        for (int i = 0; i < count; i++)
-            accel_any_hit(a, rays[i], &counters);
-        any[rep] = timer_seconds() - start;
-        any_cpu[rep] = thread_cpu_seconds() - start_cpu;
-    }
-    qsort(closest, BENCH_REPEATS, sizeof *closest, compare_doubles);
-    qsort(any, BENCH_REPEATS, sizeof *any, compare_doubles);
-    qsort(closest_cpu, BENCH_REPEATS, sizeof *closest_cpu, compare_doubles);
-    qsort(any_cpu, BENCH_REPEATS, sizeof *any_cpu, compare_doubles);
-    int m = BENCH_REPEATS / 2;
-    printf("bench %-10s %7d rays, 1 thread: closest hit %.2f Mrays/s, any hit %.2f Mrays/s (by CPU time: %.2f and "
-           "%.2f)\n",
-           coherent ? "coherent" : "incoherent", count, count / closest[m] * 1e-6, count / any[m] * 1e-6,
-           count / closest_cpu[m] * 1e-6, count / any_cpu[m] * 1e-6);
-    printf("      hit fraction %.4f, sum of t %.6e\n", (double)hits / count, t_sum);
-    double tests = (double)count * BENCH_REPEATS * 2;
-    printf("      %.2f nodes visited and %.2f triangles tested per ray (closest and any hit together)\n",
-           (double)counters.box_tests / tests, (double)counters.primitive_tests / tests);
-    free(rays);
-}
 
 /* ---- the program -------------------------------------------------------------- */
 
@@ -133,48 +66,12 @@ int main(int argc, char **argv)
     else if (strcmp(order_name, "sign") != 0)
         usage_error("--order must be sign or distance, not", order_name);
 
-    mesh m;
-    mesh_init(&m);
-    if (obj_path != NULL) {
-        char err[MESH_ERROR_SIZE];
-        if (!mesh_load_obj(&m, obj_path, err, sizeof err)) {
-            fprintf(stderr, "06-bvh: %s\n", err);
-            mesh_free(&m);
-            return 1;
-        }
-        if (m.face_count == 0) {
-            fprintf(stderr, "06-bvh: %s: no triangles\n", obj_path);
-            mesh_free(&m);
-            return 1;
-        }
-    } else if (strcmp(mesh_name, "tori") == 0) {
-        mesh_tori_field(&m, triangles);
-    } else if (strcmp(mesh_name, "stadium") == 0) {
-        mesh_teapot_in_stadium(&m, 6, 200.0f);
-    } else if (strcmp(mesh_name, "icosphere") == 0) {
-        mesh_icosphere(&m, vec3_make(0, 0, 0), 1.0f, 7, -1);
-    } else {
-        usage_error("--mesh must be tori, stadium or icosphere, not", mesh_name);
-    }
-
-    /* --scene: the scene file's triangles (and camera) replace the mesh. */
-    scene_desc desc;
-    if (program_load_scene(&opts, spec.program, &desc)) {
-        char err[SCENE_ERROR_SIZE];
-        if (obj_path != NULL) {
-            fprintf(stderr, "%s: --scene and --obj: choose one\n", spec.program);
-            return 2;
-        }
-        mesh_free(&m);
-        mesh_init(&m);
-        if (!accel_mesh_from_desc(&m, &desc, spec.program, NULL, NULL, err, sizeof err)) {
-            fprintf(stderr, "%s: %s\n", spec.program, err);
-            scene_desc_free(&desc);
-            return 1;
-        }
-    }
+    accel_input in;
+    int load_status = accel_input_load(&in, &opts, spec.program, mesh_name, obj_path, triangles, 7);
+    if (load_status != 0)
+        return load_status;
     triangle_set set;
-    triangle_set_from_mesh(&set, &m);
+    triangle_set_from_mesh(&set, &in.m);
     accel *a;
     if (wide) {
         a = bvh4_build(&set, split);
@@ -207,13 +104,12 @@ int main(int argc, char **argv)
                s->nodes, s->leaves, n / s->leaves, s->max_depth, (double)s->references / n, bvh_sah_cost(b));
     }
     if (run_bench) {
-        bench(a, true);
-        bench(a, false);
+        accel_bench_harness(a, true);
+        accel_bench_harness(a, false);
     }
 
     accel_view view = {a, heatmap, heatmap_max};
-    camera cam = accel_scene_camera(&desc, set.bounds, opts.width, opts.height);
-    scene_desc_free(&desc);
+    camera cam = accel_input_camera(&in, set.bounds, opts.width, opts.height);
     render_stats stats;
     int status = program_render(&opts, spec.program, accel_view_radiance, &view, &cam, &stats);
     if (status == 0 && !opts.quiet) {
@@ -228,6 +124,6 @@ int main(int argc, char **argv)
     }
     accel_destroy(a);
     triangle_set_free(&set);
-    mesh_free(&m);
+    accel_input_free(&in);
     return status;
 }

@@ -19,6 +19,7 @@
 
 #include "mesh.h"
 #include "test_support.h"
+#include "test_temp_dir.h"
 
 #include <dirent.h>
 #include <float.h>
@@ -92,29 +93,6 @@ static int count_temp_files(const char *dir)
     return count;
 }
 
-static void remove_tree(const char *path)
-{
-    struct stat st;
-    if (lstat(path, &st) != 0)
-        return;
-    if (S_ISDIR(st.st_mode)) {
-        DIR *d = opendir(path);
-        if (d != NULL) {
-            for (struct dirent *e; (e = readdir(d)) != NULL;) {
-                if (strcmp(e->d_name, ".") == 0 || strcmp(e->d_name, "..") == 0)
-                    continue;
-                char child[PATH_SIZE];
-                snprintf(child, sizeof child, "%s/%s", path, e->d_name);
-                remove_tree(child);
-            }
-            closedir(d);
-        }
-        rmdir(path);
-    } else {
-        unlink(path);
-    }
-}
-
 static int make_test_dir(void **state)
 {
     (void)state;
@@ -124,7 +102,7 @@ static int make_test_dir(void **state)
 static int remove_test_dir(void **state)
 {
     (void)state;
-    remove_tree(test_dir);
+    test_remove_tree(test_dir);
     return 0;
 }
 

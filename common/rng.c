@@ -1,18 +1,7 @@
-/* rng.c -- PCG32: a 64-bit linear congruential step, output permuted by an
- * xorshift and a random rotation (XSH RR). Checked against the reference
+/* rng.c -- PCG32's seeding and the less frequent draws (pcg32_next and
+ * pcg32_float are inline in rng.h). Checked against the reference
  * implementation's published output in tests/test_common.c. */
 #include "rng.h"
-
-static const uint64_t PCG32_MULTIPLIER = 6364136223846793005ULL;
-
-uint32_t pcg32_next(pcg32 *rng)
-{
-    uint64_t old = rng->state;
-    rng->state = old * PCG32_MULTIPLIER + rng->increment;
-    uint32_t xorshifted = (uint32_t)(((old >> 18u) ^ old) >> 27u);
-    uint32_t rotation = (uint32_t)(old >> 59u);
-    return (xorshifted >> rotation) | (xorshifted << ((-rotation) & 31u));
-}
 
 void pcg32_seed(pcg32 *rng, uint64_t initial_state, uint64_t stream)
 {
@@ -21,11 +10,6 @@ void pcg32_seed(pcg32 *rng, uint64_t initial_state, uint64_t stream)
     pcg32_next(rng);
     rng->state += initial_state;
     pcg32_next(rng);
-}
-
-float pcg32_float(pcg32 *rng)
-{
-    return (float)(pcg32_next(rng) >> 8) * 0x1.0p-24f;
 }
 
 double pcg32_double(pcg32 *rng)

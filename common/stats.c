@@ -2,14 +2,6 @@
 
 #include <math.h>
 
-void welford_add(welford *w, double x)
-{
-    w->count++;
-    double delta = x - w->mean;
-    w->mean += delta / (double)w->count;
-    w->m2 += delta * (x - w->mean);
-}
-
 void welford_merge(welford *into, const welford *other)
 {
     if (other->count == 0)

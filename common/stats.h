@@ -16,7 +16,14 @@ typedef struct {
     double m2; /* sum of squared differences from the current mean */
 } welford;
 
-void welford_add(welford *w, double x);
+/* Inline: the render loop adds three channels per camera sample. */
+static inline void welford_add(welford *w, double x)
+{
+    w->count++;
+    double delta = x - w->mean;
+    w->mean += delta / (double)w->count;
+    w->m2 += delta * (x - w->mean);
+}
 /* Combine two partial results (Chan et al.), e.g. from two threads. */
 void welford_merge(welford *into, const welford *other);
 double welford_mean(const welford *w);

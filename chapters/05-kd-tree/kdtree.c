@@ -23,10 +23,11 @@
  * the new events of the triangles that straddle the plane need sorting. That
  * is what this file does: O(N log N) overall, not O(N log^2 N).
  *
- * Events come from each triangle's bounding box clipped to the node's box
- * (not from the triangle clipped to the box, which Wald and Havran call
- * "perfect splits"): cheaper, at the price of a few references to cells the
- * triangle's box reaches but the triangle itself does not.
+ * Events come from the box of the part of each triangle inside the node:
+ * when a triangle straddles a split, the triangle itself is clipped to each
+ * child (Wald and Havran's "perfect splits", see triangle_clip_box), not
+ * just its bounding box, so a cell the triangle's box reaches but the
+ * triangle does not gets no reference to it.
  */
 #include "kdtree.h"
 

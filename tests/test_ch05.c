@@ -2,8 +2,9 @@
  * SAH cost against the formula, and the hard cases of spatial splits, each
  * with its answer worked out by hand: coincident triangles, a ray lying in a
  * split plane, a triangle straddling into the far cell, planar triangles on
- * a split plane; plus the naive "stop at the first leaf with a hit" failing
- * the case that exists for it. */
+ * a split plane, perfect splits keeping a slanted triangle out of cells it
+ * misses without losing any of it; plus the naive "stop at the first leaf
+ * with a hit" failing the case that exists for it. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -660,6 +661,101 @@ static void test_empty_and_degenerate_meshes(void **state)
     scene_free(&s);
 }
 
+/* ---- perfect splits ------------------------------------------------------- */
+
+/* A big triangle T lying in the plane x = y, slanted across the cube
+ * [0, 4]^3, among 512 small triangles on a lattice that make the tree cut
+ * the cube into many cells. T's bounding box is the whole cube; T itself
+ * passes only through the cells the plane x = y crosses. */
+static void make_slanted_scene(scene *s)
+{
+    enum { SMALL_PER_AXIS = 8 };
+    vec3 corners[1 + SMALL_PER_AXIS * SMALL_PER_AXIS * SMALL_PER_AXIS][3];
+    /* In plane coordinates (u, u, z): the corners (-1, -1), (9, -1),
+     * (-1, 9) cover u, z in [0, 4]. */
+    corners[0][0] = vec3_make(-1, -1, -1);
+    corners[0][1] = vec3_make(9, 9, -1);
+    corners[0][2] = vec3_make(-1, -1, 9);
+    int n = 1;
+    for (int i = 0; i < SMALL_PER_AXIS; i++)
+        for (int j = 0; j < SMALL_PER_AXIS; j++)
+            for (int k = 0; k < SMALL_PER_AXIS; k++) {
+                vec3 c = vec3_make(0.5f * ((float)i + 0.3f), 0.5f * ((float)j + 0.6f), 0.5f * ((float)k + 0.4f));
+                corners[n][0] = c;
+                corners[n][1] = vec3_add(c, vec3_make(0.1f, 0, 0));
+                corners[n][2] = vec3_add(c, vec3_make(0, 0.1f, 0.05f));
+                n++;
+            }
+    scene_make(s, corners, n, NULL);
+}
+
+/* Count the leaves holding triangle t, and those among them whose box the
+ * plane x = y misses (x - y > 0 or < 0 all over the box). */
+static void count_leaves_holding(const kd_tree *tree, uint32_t node, aabb box, int t, int *holding, int *off_plane)
+{
+    const kd_node *n = &tree->nodes[node];
+    if (kd_node_is_leaf(n)) {
+        for (uint32_t i = 0; i < kd_node_triangle_count(n); i++)
+            if ((int)tree->references[n->first_reference + i] == t) {
+                (*holding)++;
+                *off_plane += box.lo.x - box.hi.y > 0.0f || box.hi.x - box.lo.y < 0.0f;
+            }
+        return;
+    }
+    aabb below = box, above = box;
+    int axis = kd_node_axis(n);
+    if (axis == 0)
+        below.hi.x = above.lo.x = n->split;
+    else if (axis == 1)
+        below.hi.y = above.lo.y = n->split;
+    else
+        below.hi.z = above.lo.z = n->split;
+    count_leaves_holding(tree, node + 1, below, t, holding, off_plane);
+    count_leaves_holding(tree, kd_node_above_child(n), above, t, holding, off_plane);
+}
+
+/* Perfect splits: T is referenced only by cells it passes through. With
+ * its bounding box clipped instead, every cell of the cube would hold it,
+ * most of them off the plane. */
+static void test_perfect_splits_keep_a_slanted_triangle_out_of_cells_it_misses(void **state)
+{
+    (void)state;
+    scene s;
+    make_slanted_scene(&s);
+    const kd_tree *tree = as_tree(s.tree);
+    int holding = 0, off_plane = 0;
+    count_leaves_holding(tree, 0, tree->bounds, 0, &holding, &off_plane);
+    assert_true(holding > 1);
+    assert_int_equal(off_plane, 0);
+    scene_free(&s);
+}
+
+/* The clipping must never cut away a piece of T a ray can hit: rays aimed
+ * at a lattice of points of T, many of them on split planes and cell
+ * corners (the lattice's planes are the small triangles' box faces), from
+ * both sides, get brute force's answer, bit for bit. */
+static void test_perfect_splits_lose_no_part_of_the_triangle(void **state)
+{
+    (void)state;
+    scene s;
+    make_slanted_scene(&s);
+    const vec3 origins[4] = {{12, -3, 2}, {-5, 9, 1}, {8, -6, 11}, {-2, 7, -4}};
+    int checked = 0;
+    for (int o = 0; o < 4; o++)
+        for (int i = 0; i <= 32; i++)
+            for (int k = 0; k <= 32; k++) {
+                vec3 target = vec3_make(0.125f * (float)i, 0.125f * (float)i, 0.125f * (float)k);
+                ray r = ray_make(origins[o], vec3_sub(target, origins[o]));
+                trace_result got = trace(s.tree, r), want = trace(s.brute, r);
+                assert_int_equal(got.found, want.found);
+                assert_int_equal(got.triangle, want.triangle);
+                assert_true(got.t == want.t);
+                checked++;
+            }
+    assert_int_equal(checked, 4 * 33 * 33);
+    scene_free(&s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -678,6 +774,8 @@ int main(void)
         cmocka_unit_test(test_naive_stop_at_first_leaf_hit_returns_the_wrong_triangle),
         cmocka_unit_test(test_planar_triangles_on_a_split_plane),
         cmocka_unit_test(test_empty_and_degenerate_meshes),
+        cmocka_unit_test(test_perfect_splits_keep_a_slanted_triangle_out_of_cells_it_misses),
+        cmocka_unit_test(test_perfect_splits_lose_no_part_of_the_triangle),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -33,7 +33,13 @@ void triangle_set_free(triangle_set *set)
 
 void triangle_set_fill_hit(const triangle_set *set, int index, ray r, float t, float b1, float b2, hit_record *hit)
 {
-    triangle_fill_hit(&set->triangles[index], r, t, b1, b2, hit);
+    triangle_set_fill_hit_from(set, &set->triangles[index], index, r, t, b1, b2, hit);
+}
+
+void triangle_set_fill_hit_from(const triangle_set *set, const triangle *tri, int index, ray r, float t, float b1,
+                                float b2, hit_record *hit)
+{
+    triangle_fill_hit(tri, r, t, b1, b2, hit);
     hit->shape_id = index;
     hit->material_id = -1;
     const mesh *m = set->source;

@@ -36,7 +36,6 @@ void *memory_allocate(size_t count, size_t size)
     void *p = calloc(count == 0 ? 1 : count, size == 0 ? 1 : size);
     if (p == NULL)
         out_of_memory(count * size);
-    memory_advise_huge(p, count * size);
     return p;
 }
 

@@ -12,6 +12,8 @@ void triangle_set_from_mesh(triangle_set *set, const mesh *m)
     set->count = m->face_count;
     set->triangles = memory_allocate((size_t)m->face_count, sizeof *set->triangles);
     set->boxes = memory_allocate((size_t)m->face_count, sizeof *set->boxes);
+    /* every closest hit may read a triangle, at random: 2 MB pages (memory.h) */
+    memory_advise_huge(set->triangles, (size_t)m->face_count * sizeof *set->triangles);
     set->bounds = aabb_empty();
     set->source = m;
     for (int i = 0; i < m->face_count; i++) {

@@ -684,7 +684,7 @@ static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth,
             int lane = 4 * first + i;
             assert_true(lane < 4 * b->packet_count);
             const bvh4_packet *p = &b->packets[first + i / 4];
-            int t = p->index[i % 4];
+            int t = bvh4_lane_triangle(p->index[i % 4]);
             if (i >= count) {
                 assert_int_equal(t, -1);
                 assert_true(p->e1[0][i % 4] == 0.0f && p->e2[2][i % 4] == 0.0f);
@@ -696,6 +696,13 @@ static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth,
             const triangle *tri = &b->base.set->triangles[t];
             assert_true(p->p0[0][i % 4] == tri->p0.x && p->e1[1][i % 4] == tri->p1.y - tri->p0.y &&
                         p->e2[2][i % 4] == tri->p2.z - tri->p0.z);
+            if (p->index[i % 4] & BVH4_LANE_EXACT) { /* P0 + E1 and P0 + E2 are P1 and P2, bit for bit */
+                vec3 p0 = vec3_make(p->p0[0][i % 4], p->p0[1][i % 4], p->p0[2][i % 4]);
+                vec3 p1 = vec3_add(p0, vec3_make(p->e1[0][i % 4], p->e1[1][i % 4], p->e1[2][i % 4]));
+                vec3 p2 = vec3_add(p0, vec3_make(p->e2[0][i % 4], p->e2[1][i % 4], p->e2[2][i % 4]));
+                assert_memory_equal(&p1, &tri->p1, sizeof p1);
+                assert_memory_equal(&p2, &tri->p2, sizeof p2);
+            }
         }
         return;
     }
@@ -787,6 +794,54 @@ static void test_bvh4_more_coincident_triangles_than_a_leaf_holds(void **state)
     accel_destroy(a);
     triangle_set_free(&set);
     mesh_free(&m);
+}
+
+/* The hit record of a lane marked BVH4_LANE_EXACT is made from the packet's
+ * P0, E1, E2 instead of the set's triangle: it must be the very record the
+ * set's triangle gives (point, normals, material, bit for bit), on every
+ * mesh, and both kinds of lane must occur, so that both paths are checked. */
+static void test_bvh4_hit_records_equal_the_sets(void **state)
+{
+    (void)state;
+    long exact_hits = 0, other_hits = 0;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+        const bvh4 *b = (const bvh4 *)a;
+        bool *exact = calloc((size_t)set.count + 1, sizeof *exact);
+        for (int lane = 0; lane < 4 * b->packet_count; lane++) {
+            int32_t index = b->packets[lane / 4].index[lane % 4];
+            if (index >= 0)
+                exact[bvh4_lane_triangle(index)] = (index & BVH4_LANE_EXACT) != 0;
+        }
+        pcg32 rng = pcg32_for_pixel(6, 45 + kind);
+        for (int i = 0; i < 4000; i++) {
+            ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+            hit_record got, want;
+            ray_counters counters = {0};
+            if (!accel_closest_hit(a, r, &got, &counters))
+                continue;
+            triangle_set_fill_hit(&set, got.shape_id, r, got.t, got.u, got.v, &want);
+            if (exact[got.shape_id])
+                exact_hits++;
+            else
+                other_hits++;
+            assert_memory_equal(&got.point, &want.point, sizeof want.point);
+            assert_memory_equal(&got.normal_geometric, &want.normal_geometric, sizeof want.normal_geometric);
+            assert_memory_equal(&got.normal_shading, &want.normal_shading, sizeof want.normal_shading);
+            assert_int_equal(got.material_id, want.material_id);
+            assert_int_equal(got.front_face, want.front_face);
+        }
+        free(exact);
+        accel_destroy(a);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    print_message("bvh4 hit records: %ld from exact lanes, %ld from the set's triangles\n", exact_hits, other_hits);
+    assert_true(exact_hits > 0 && other_hits > 0);
 }
 
 /* The SSE and the scalar kernel: the same hits, the same floats, the same
@@ -1093,6 +1148,7 @@ int main(void)
         cmocka_unit_test(test_bvh4_every_triangle_in_exactly_one_lane_and_boxes_nest),
         cmocka_unit_test(test_bvh4_more_coincident_triangles_than_a_leaf_holds),
         cmocka_unit_test(test_bvh4_kernels_give_identical_answers),
+        cmocka_unit_test(test_bvh4_hit_records_equal_the_sets),
         cmocka_unit_test(test_bvh4_slab_test_matches_chapter_03),
         cmocka_unit_test(test_bvh4_triangle_test_matches_chapter_01),
         cmocka_unit_test(test_bvh4_empty_set_builds_and_misses),

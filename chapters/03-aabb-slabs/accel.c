@@ -12,6 +12,8 @@ void triangle_set_from_mesh(triangle_set *set, const mesh *m)
     set->count = m->face_count;
     set->triangles = memory_allocate((size_t)m->face_count, sizeof *set->triangles);
     set->boxes = memory_allocate((size_t)m->face_count, sizeof *set->boxes);
+    /* every closest hit may read a triangle, at random: 2 MB pages (memory.h) */
+    memory_advise_huge(set->triangles, (size_t)m->face_count * sizeof *set->triangles);
     set->bounds = aabb_empty();
     set->source = m;
     for (int i = 0; i < m->face_count; i++) {
@@ -33,7 +35,13 @@ void triangle_set_free(triangle_set *set)
 
 void triangle_set_fill_hit(const triangle_set *set, int index, ray r, float t, float b1, float b2, hit_record *hit)
 {
-    triangle_fill_hit(&set->triangles[index], r, t, b1, b2, hit);
+    triangle_set_fill_hit_from(set, &set->triangles[index], index, r, t, b1, b2, hit);
+}
+
+void triangle_set_fill_hit_from(const triangle_set *set, const triangle *tri, int index, ray r, float t, float b1,
+                                float b2, hit_record *hit)
+{
+    triangle_fill_hit(tri, r, t, b1, b2, hit);
     hit->shape_id = index;
     hit->material_id = -1;
     const mesh *m = set->source;

@@ -49,6 +49,11 @@ void triangle_set_free(triangle_set *set);
  * geometric normal, the interpolated vertex normal where the mesh has them,
  * and the material. */
 void triangle_set_fill_hit(const triangle_set *set, int index, ray r, float t, float b1, float b2, hit_record *hit);
+/* The same, from a copy of triangle `index` the caller already holds (equal
+ * to set->triangles[index], bit for bit): a structure that stores the
+ * vertices in its leaves saves the read of the set's copy. */
+void triangle_set_fill_hit_from(const triangle_set *set, const triangle *tri, int index, ray r, float t, float b1,
+                                float b2, hit_record *hit);
 
 typedef struct {
     const char *name;

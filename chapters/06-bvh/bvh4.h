@@ -76,7 +76,15 @@ _Static_assert(sizeof(bvh4_node) == 128, "a 4-wide node is two cache lines");
  * and E2 = P2 - P0, by coordinate then by lane (p0[1][k] is lane k's P0.y),
  * and which triangle of the set each lane is (right there, in the cache
  * lines just read, when a hit needs it). An empty lane is all zeros, with
- * index -1: its determinant is 0, so it never hits. 160 bytes. */
+ * index -1: its determinant is 0, so it never hits. 160 bytes.
+ *
+ * A lane's index also carries BVH4_LANE_EXACT when P0 + E1 and P0 + E2
+ * give back P1 and P2 bit for bit (the subtractions were exact, as they
+ * are for most small triangles: Sterbenz's lemma). The hit record of such
+ * a lane is made from the packet alone; for the others the set's copy of
+ * the triangle is read, elsewhere in memory. */
+enum { BVH4_LANE_EXACT = 0x40000000 };
+static inline int bvh4_lane_triangle(int32_t index) { return index < 0 ? index : index & (BVH4_LANE_EXACT - 1); }
 typedef struct {
     _Alignas(16) float p0[3][4];
     float e1[3][4], e2[3][4];

@@ -274,19 +274,22 @@ static inline void prefetch_child(const bvh4 *b, uint32_t ref)
 #endif
 }
 
-/* A hit will be turned into a hit record from the set's copy of the
- * triangle and the mesh's face: ask for them as soon as a hit is found, so
- * they are in the cache by the end of the traversal (usually the first hit
- * found is the closest). */
-static inline void prefetch_hit(const bvh4 *b, int index)
+/* A hit will be turned into a hit record from the mesh's face and, unless
+ * the packet gives the vertices back exactly (BVH4_LANE_EXACT), the set's
+ * copy of the triangle: ask for them as soon as a hit is found, so they are
+ * in the cache by the end of the traversal (usually the first hit found is
+ * the closest). */
+static inline void prefetch_hit(const bvh4 *b, int32_t lane_index)
 {
 #if defined(__GNUC__)
-    __builtin_prefetch(&b->base.set->triangles[index]);
+    int index = bvh4_lane_triangle(lane_index);
+    if (!(lane_index & BVH4_LANE_EXACT))
+        __builtin_prefetch(&b->base.set->triangles[index]);
     if (b->base.set->source != NULL)
         __builtin_prefetch(&b->base.set->source->faces[index]);
 #else
     (void)b;
-    (void)index;
+    (void)lane_index;
 #endif
 }
 
@@ -420,7 +423,17 @@ static bool finish_closest(const bvh4 *b, const bvh4_found *found, const ray *r,
 {
     if (found->lane < 0)
         return false;
-    triangle_set_fill_hit(b->base.set, b->packets[found->lane / 4].index[found->lane % 4], *r, found->t, found->b1, found->b2, record);
+    const bvh4_packet *p = &b->packets[found->lane / 4];
+    int k = found->lane % 4, index = bvh4_lane_triangle(p->index[k]);
+    if (!(p->index[k] & BVH4_LANE_EXACT)) {
+        triangle_set_fill_hit(b->base.set, index, *r, found->t, found->b1, found->b2, record);
+        return true;
+    }
+    /* the set's triangle, bit for bit, from the cache lines the test read */
+    vec3 p0 = vec3_make(p->p0[0][k], p->p0[1][k], p->p0[2][k]);
+    triangle tri = {p0, vec3_add(p0, vec3_make(p->e1[0][k], p->e1[1][k], p->e1[2][k])),
+                    vec3_add(p0, vec3_make(p->e2[0][k], p->e2[1][k], p->e2[2][k]))};
+    triangle_set_fill_hit_from(b->base.set, &tri, index, *r, found->t, found->b1, found->b2, record);
     return true;
 }
 

@@ -411,22 +411,25 @@ bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char
         pt.max_depth = SPEED_MAX_DEPTH;
         if (speed_cases[k].rr_start_depth > 0)
             pt.rr_start_depth = speed_cases[k].rr_start_depth;
-        double one_thread = 0.0;
-        for (int threads = 1; threads <= 2; threads++) {
-            double best_wall = INFINITY, best_cpu = INFINITY, rays = 0.0;
-            for (int r = 0; r < repeats; r++) {
+        /* 1 and 2 threads take turns, repeat after repeat, so that both see
+         * the same machine: on a shared or virtual machine the speed drifts
+         * by 10 % over seconds, and the best of runs taken back to back
+         * would put that drift into the scaling. */
+        double best_wall[2] = {INFINITY, INFINITY}, best_cpu[2] = {INFINITY, INFINITY}, rays = 0.0;
+        for (int r = 0; r < repeats; r++) {
+            for (int threads = 1; threads <= 2; threads++) {
                 double cpu_start = cpu_seconds();
                 estimate_image e = render_estimate(&pt, &cam, spp, 1, threads);
                 double cpu = cpu_seconds() - cpu_start;
-                best_wall = fmin(best_wall, e.seconds);
-                best_cpu = fmin(best_cpu, cpu);
+                best_wall[threads - 1] = fmin(best_wall[threads - 1], e.seconds);
+                best_cpu[threads - 1] = fmin(best_cpu[threads - 1], cpu);
                 rays = (double)counters_total_rays(&e.counters) / (million_samples * 1e6);
                 estimate_image_free(&e);
             }
-            double wall = best_wall / million_samples, cpu = best_cpu / million_samples;
-            if (threads == 1)
-                one_thread = wall;
-            double scaling = one_thread / wall;
+        }
+        for (int threads = 1; threads <= 2; threads++) {
+            double wall = best_wall[threads - 1] / million_samples, cpu = best_cpu[threads - 1] / million_samples;
+            double scaling = best_wall[0] / best_wall[threads - 1];
             printf("%-42s %7d %12.3f %12.3f %10.2f %7.2fx\n", speed_cases[k].label, threads, wall, cpu, rays, scaling);
             if (csv != NULL)
                 fprintf(csv, "\"%s\",%d,%.4f,%.4f,%.3f,%.3f\n", speed_cases[k].label, threads, wall, cpu, rays, scaling);

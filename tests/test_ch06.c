@@ -619,7 +619,7 @@ static void test_slab_test_matches_chapter_03(void **state)
                      (double)enter06);
         hits += hit03;
     }
-    print_message("slab tests: 200000 rays, %d hit, %d axes with 0 * inf\n", hits, nan_cases);
+    print_message("slab tests: 200000 rays, %d hit, %d axes with 0 * inf\n", 50000 * BVH4_WIDTH, hits, nan_cases);
     assert_true(hits > 10000 && nan_cases > 10000);
 }
 
@@ -675,7 +675,7 @@ static void test_bvh4_scalar_kernel_agrees_with_brute_force(void **state)
 static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth, int *seen, int *leaves,
                                int *nodes_seen)
 {
-    assert_true(depth < BVH4_STACK_SIZE / 3);
+    assert_true(depth < BVH4_STACK_SIZE / (BVH4_WIDTH - 1));
     if (bvh4_is_leaf(ref)) {
         int count = bvh4_leaf_triangles(ref), first = bvh4_leaf_first_packet(ref);
         assert_true(count >= 1);
@@ -710,7 +710,7 @@ static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth,
     (*nodes_seen)++;
     const bvh4_node *node = &b->nodes[ref];
     bool empty_seen = false;
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < BVH4_WIDTH; k++) {
         aabb child = {vec3_make(node->bounds[0][k], node->bounds[1][k], node->bounds[2][k]),
                       vec3_make(node->bounds[3][k], node->bounds[4][k], node->bounds[5][k])};
         if (node->child[k] == BVH4_EMPTY) {
@@ -896,8 +896,8 @@ static void test_bvh4_slab_test_matches_chapter_03(void **state)
     for (int i = 0; i < 50000; i++) {
         bvh4_node node;
         memset(&node, 0, sizeof node);
-        aabb boxes[4];
-        for (int k = 0; k < 4; k++) {
+        aabb boxes[BVH4_WIDTH];
+        for (int k = 0; k < BVH4_WIDTH; k++) {
             vec3 a = vec3_make(pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2);
             vec3 b = vec3_make(pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2);
             boxes[k] = (aabb){vec3_min(a, b), vec3_max(a, b)};
@@ -931,9 +931,9 @@ static void test_bvh4_slab_test_matches_chapter_03(void **state)
         r.t_max = (i % 3 == 0) ? INFINITY : 5.0f;
         slab_ray sr = slab_ray_make(r);
         for (int kernel = 0; kernel < 2; kernel++) {
-            float enter4[4];
+            float enter4[BVH4_WIDTH];
             int mask = bvh4_slab_test(&node, r, r.t_min, r.t_max, enter4, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
-            for (int k = 0; k < 4; k++) {
+            for (int k = 0; k < BVH4_WIDTH; k++) {
                 float enter03 = 0.0f, exit03 = 0.0f;
                 bool hit03 = aabb_slab_test(&boxes[k], &sr, r.t_min, r.t_max, &enter03, &exit03);
                 bool hit4 = mask >> k & 1;
@@ -945,16 +945,16 @@ static void test_bvh4_slab_test_matches_chapter_03(void **state)
         }
         /* an empty slot's box is missed by every ray */
         bvh4_node empty;
-        for (int k = 0; k < 4; k++)
+        for (int k = 0; k < BVH4_WIDTH; k++)
             for (int axis = 0; axis < 3; axis++) {
                 empty.bounds[axis][k] = INFINITY;
                 empty.bounds[3 + axis][k] = -INFINITY;
             }
-        float enter4[4];
+        float enter4[BVH4_WIDTH];
         assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SSE), 0);
         assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SCALAR), 0);
     }
-    print_message("bvh4 slab tests: 200000 boxes, %d hit, %d axes with 0 * inf\n", hits, nan_cases);
+    print_message("bvh4 slab tests: %d boxes, %d hit, %d axes with 0 * inf\n", 50000 * BVH4_WIDTH, hits, nan_cases);
     assert_true(hits > 10000 && nan_cases > 3000);
 }
 

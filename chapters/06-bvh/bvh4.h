@@ -64,13 +64,16 @@ static inline int bvh4_leaf_first_packet(uint32_t ref) { return (int)(ref & ((1u
  * the order of bvh_node.bounds), and the four child references. Children
  * come first, empty slots last. 112 bytes would do, but then half the
  * nodes would straddle three cache lines instead of two. */
+#ifndef BVH4_WIDTH
+#define BVH4_WIDTH 4
+#endif
+_Static_assert(BVH4_WIDTH == 4 || BVH4_WIDTH == 8, "a node holds 4 or 8 children");
 typedef struct {
-    _Alignas(64) float bounds[6][4]; /* one SSE load per plane; a node is two whole cache lines */
-    uint32_t child[4];
-    uint32_t unused[4];
+    _Alignas(64) float bounds[6][BVH4_WIDTH]; /* one SSE load per plane and group of 4 */
+    uint32_t child[BVH4_WIDTH];
 } bvh4_node;
 
-_Static_assert(sizeof(bvh4_node) == 128, "a 4-wide node is two cache lines");
+_Static_assert(sizeof(bvh4_node) % 64 == 0, "a node is whole cache lines");
 
 /* Four triangles as the 4-lane Moller-Trumbore reads them: P0, E1 = P1 - P0
  * and E2 = P2 - P0, by coordinate then by lane (p0[1][k] is lane k's P0.y),
@@ -120,13 +123,13 @@ bool bvh4_set_kernel(accel *a, bvh4_kernel kernel);
  * the mask of boxes hit and their t_enter; and Moller-Trumbore on a packet's
  * four lanes in (r.t_min, t_max), as the scalar test, returning the mask of
  * lanes hit and their t, b1, b2 (lanes not hit are left as they were). */
-int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float t_enter[4], bvh4_kernel kernel);
+int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float t_enter[BVH4_WIDTH], bvh4_kernel kernel);
 int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
                        bvh4_kernel kernel);
 
 /* The traversal's stack: each 4-wide node pushes at most 3 entries, and the
  * 4-wide tree is no deeper than the binary one plus the levels that split
  * leaves of more than BVH4_LEAF_MAX triangles. */
-enum { BVH4_STACK_SIZE = 3 * BVH_STACK_SIZE + 64 };
+enum { BVH4_STACK_SIZE = (BVH4_WIDTH - 1) * BVH_STACK_SIZE + 64 };
 
 #endif

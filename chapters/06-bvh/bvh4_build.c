@@ -68,7 +68,7 @@ static int new_node(collapser *c)
         c->node_capacity = capacity;
     }
     bvh4_node *node = &c->nodes[c->node_count];
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < BVH4_WIDTH; k++) {
         set_child_box(node, k, (aabb){vec3_make(INFINITY, INFINITY, INFINITY), vec3_make(-INFINITY, -INFINITY, -INFINITY)});
         node->child[k] = BVH4_EMPTY;
     }
@@ -84,8 +84,8 @@ static uint32_t emit_leaf(collapser *c, int first, int count, aabb box, int dept
     if (depth > c->max_depth)
         c->max_depth = depth;
     if (count > BVH4_LEAF_MAX) {
-        int n = new_node(c), part = (count + 3) / 4;
-        for (int k = 0; k < 4 && k * part < count; k++) {
+        int n = new_node(c), part = (count + BVH4_WIDTH - 1) / BVH4_WIDTH;
+        for (int k = 0; k < BVH4_WIDTH && k * part < count; k++) {
             int size = count - k * part < part ? count - k * part : part;
             uint32_t ref = emit_leaf(c, first + k * part, size, box, depth + 1);
             set_child_box(&c->nodes[n], k, box);
@@ -173,9 +173,9 @@ static void collapse_interior(collapser *c, int binary_node, int n, int depth)
     if (depth > c->max_depth)
         c->max_depth = depth;
     const bvh_node *nodes = c->binary->nodes;
-    int kids[4] = {nodes[binary_node].first, nodes[binary_node].first + 1};
+    int kids[BVH4_WIDTH] = {nodes[binary_node].first, nodes[binary_node].first + 1};
     int count = 2;
-    while (count < 4) {
+    while (count < BVH4_WIDTH) {
         int best = -1;
         double best_area = -1.0;
         for (int k = 0; k < count; k++) {
@@ -197,10 +197,9 @@ static void collapse_interior(collapser *c, int binary_node, int n, int depth)
         kids[best + 1] = first + 1;
         count++;
     }
-    int kid_node[4] = {-1, -1, -1, -1};
+    int kid_node[BVH4_WIDTH];
     for (int k = 0; k < count; k++)
-        if (!bvh_node_is_leaf(&nodes[kids[k]]))
-            kid_node[k] = new_node(c);
+        kid_node[k] = bvh_node_is_leaf(&nodes[kids[k]]) ? -1 : new_node(c);
     for (int k = 0; k < count; k++) {
         const bvh_node *kid = &nodes[kids[k]];
         uint32_t ref;

@@ -51,11 +51,11 @@ static inline bvh4_ray bvh4_ray_make(const ray *r)
  * on t_exit). Returns a 4-bit mask of the boxes hit, with their t_enter. */
 
 static inline int slab_test4_scalar(const bvh4_node *node, const bvh4_ray *r, float t_min, float t_max,
-                                    float t_enter[4])
+                                    float t_enter[BVH4_WIDTH])
 {
     const bvh_ray *s = &r->scalar;
     int mask = 0;
-    for (int k = 0; k < 4; k++) {
+    for (int k = 0; k < BVH4_WIDTH; k++) {
         float near_x = (node->bounds[s->near_x][k] - s->origin.x) * s->inverse_direction.x;
         float far_x = (node->bounds[r->far_x][k] - s->origin.x) * s->inverse_direction.x;
         float near_y = (node->bounds[s->near_y][k] - s->origin.y) * s->inverse_direction.y;
@@ -82,26 +82,30 @@ static inline int slab_test4_scalar(const bvh4_node *node, const bvh4_ray *r, fl
  * operand order included (with a NaN, they return b): exactly the scalar
  * selections above. */
 static inline int slab_test4_sse(const bvh4_node *node, const bvh4_ray *r, float t_min, float t_max,
-                                 float t_enter[4])
+                                 float t_enter[BVH4_WIDTH])
 {
     const bvh_ray *s = &r->scalar;
-    __m128 near_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[s->near_x]), r->origin[0]), r->inverse_direction[0]);
-    __m128 far_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[r->far_x]), r->origin[0]), r->inverse_direction[0]);
-    __m128 near_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[s->near_y]), r->origin[1]), r->inverse_direction[1]);
-    __m128 far_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[r->far_y]), r->origin[1]), r->inverse_direction[1]);
-    __m128 near_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[s->near_z]), r->origin[2]), r->inverse_direction[2]);
-    __m128 far_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(node->bounds[r->far_z]), r->origin[2]), r->inverse_direction[2]);
-    __m128 enter = _mm_set1_ps(t_min), exit = _mm_set1_ps(INFINITY);
-    enter = _mm_max_ps(near_x, enter);
-    enter = _mm_max_ps(near_y, enter);
-    enter = _mm_max_ps(near_z, enter);
-    exit = _mm_min_ps(far_x, exit);
-    exit = _mm_min_ps(far_y, exit);
-    exit = _mm_min_ps(far_z, exit);
-    exit = _mm_mul_ps(exit, _mm_set1_ps(BVH_SLAB_ROUNDING_PAD));
-    exit = _mm_min_ps(_mm_set1_ps(t_max), exit);
-    _mm_storeu_ps(t_enter, enter);
-    return _mm_movemask_ps(_mm_cmple_ps(enter, exit));
+    int mask = 0;
+    for (int g = 0; g < BVH4_WIDTH; g += 4) {
+        __m128 near_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[s->near_x][g]), r->origin[0]), r->inverse_direction[0]);
+        __m128 far_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[r->far_x][g]), r->origin[0]), r->inverse_direction[0]);
+        __m128 near_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[s->near_y][g]), r->origin[1]), r->inverse_direction[1]);
+        __m128 far_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[r->far_y][g]), r->origin[1]), r->inverse_direction[1]);
+        __m128 near_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[s->near_z][g]), r->origin[2]), r->inverse_direction[2]);
+        __m128 far_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[r->far_z][g]), r->origin[2]), r->inverse_direction[2]);
+        __m128 enter = _mm_set1_ps(t_min), exit = _mm_set1_ps(INFINITY);
+        enter = _mm_max_ps(near_x, enter);
+        enter = _mm_max_ps(near_y, enter);
+        enter = _mm_max_ps(near_z, enter);
+        exit = _mm_min_ps(far_x, exit);
+        exit = _mm_min_ps(far_y, exit);
+        exit = _mm_min_ps(far_z, exit);
+        exit = _mm_mul_ps(exit, _mm_set1_ps(BVH_SLAB_ROUNDING_PAD));
+        exit = _mm_min_ps(_mm_set1_ps(t_max), exit);
+        _mm_storeu_ps(&t_enter[g], enter);
+        mask |= _mm_movemask_ps(_mm_cmple_ps(enter, exit)) << g;
+    }
+    return mask;
 }
 #endif
 
@@ -189,7 +193,7 @@ static inline int triangle_test4_sse(const bvh4_packet *p, const bvh4_ray *r4, c
 }
 #endif
 
-int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float t_enter[4], bvh4_kernel kernel)
+int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float t_enter[BVH4_WIDTH], bvh4_kernel kernel)
 {
     bvh4_ray r4 = bvh4_ray_make(&r);
 #if BVH4_HAVE_SSE
@@ -256,8 +260,8 @@ static inline void prefetch_child(const bvh4 *b, uint32_t ref)
 #if defined(__GNUC__)
     if (!bvh4_is_leaf(ref)) {
         const char *p = (const char *)&b->nodes[ref];
-        __builtin_prefetch(p);
-        __builtin_prefetch(p + 64);
+        for (size_t line = 0; line < sizeof(bvh4_node); line += 64)
+            __builtin_prefetch(p + line);
         return;
     }
     const char *p = (const char *)&b->packets[bvh4_leaf_first_packet(ref)];
@@ -331,7 +335,10 @@ static ALWAYS_INLINE bool test_leaf4(const bvh4 *b, uint32_t ref, const bvh4_ray
 /* Real children of a node (the empty slots come last). */
 static inline int child_count(const bvh4_node *node)
 {
-    return 1 + (node->child[1] != BVH4_EMPTY) + (node->child[2] != BVH4_EMPTY) + (node->child[3] != BVH4_EMPTY);
+    int count = 1;
+    for (int k = 1; k < BVH4_WIDTH; k++)
+        count += node->child[k] != BVH4_EMPTY;
+    return count;
 }
 
 static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_first, bool sse, ray_counters *counters)
@@ -347,7 +354,7 @@ static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop
     for (;;) {
         if (!bvh4_is_leaf(current)) {
             const bvh4_node *node = &b->nodes[current];
-            float t_enter[4];
+            float t_enter[BVH4_WIDTH];
             float cull = found.t * BVH_CULL_SLACK;
             int mask;
 #if BVH4_HAVE_SSE
@@ -379,7 +386,7 @@ static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop
                 mask |= 1 << k2;
                 /* Three or four: sort them by t_enter, nearest last
                  * (insertion sort), push all but the nearest, visit it. */
-                bvh4_entry hits[4];
+                bvh4_entry hits[BVH4_WIDTH];
                 int n = 0;
                 hits[n++] = (bvh4_entry){node->child[k], t_enter[k]};
                 prefetch_child(b, node->child[k]);

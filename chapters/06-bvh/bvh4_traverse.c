@@ -104,6 +104,8 @@ static inline int slab_test4_sse(const bvh4_node *node, const bvh4_ray *r, float
         exit = _mm_min_ps(_mm_set1_ps(t_max), exit);
         _mm_storeu_ps(&t_enter[g], enter);
         mask |= _mm_movemask_ps(_mm_cmple_ps(enter, exit)) << g;
+        if (g + 4 < BVH4_WIDTH && node->child[g + 4] == BVH4_EMPTY)
+            break; /* the next four slots are empty: no box there to hit */
     }
     return mask;
 }

@@ -16,17 +16,25 @@
  * Moller-Trumbore that does, per lane, exactly the scalar test's
  * arithmetic: the same t, bit for bit.
  *
+ * The width is a compile-time constant, BVH4_WIDTH: 4, or 8 (build with
+ * -DBVH4_WIDTH=8; `make test-bvh8`). An 8-wide node is two groups of four
+ * boxes, each tested by the same SSE slab test: a tree half as deep again,
+ * so fewer dependent fetches (incoherent rays on large scenes gain), but
+ * twice the box arithmetic per node (coherent rays on small scenes lose).
+ * The README's 4-wide section has the figures.
+ *
  * Usage:
  *   accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
  *   if (accel_closest_hit(a, r, &hit, &counters)) ...   same as any accel
  *   bvh4_set_kernel(a, BVH4_KERNEL_SCALAR);              the plain C path (tests)
  *   accel_destroy(a);
  *
- * Counters: box_tests counts the child boxes slab-tested (2 to 4 per node
- * visited: the real children, not the empty slots of a node with fewer);
+ * Counters: box_tests counts the child boxes slab-tested (2 to BVH4_WIDTH
+ * per node visited: the real children, not the empty slots of a node with
+ * fewer);
  * primitive_tests the triangles tested (not the empty lanes of a packet).
  * Both are therefore comparable with the binary BVH's; the number of nodes
- * fetched is about box_tests / 3.5.
+ * fetched is about box_tests / 3.5 (4-wide).
  */
 #ifndef BVH4_H
 #define BVH4_H
@@ -59,11 +67,12 @@ static inline bool bvh4_is_leaf(uint32_t ref) { return (ref & BVH4_LEAF) != 0; }
 static inline int bvh4_leaf_triangles(uint32_t ref) { return (int)((ref >> BVH4_PACKET_SHIFT) & 0xFFu); }
 static inline int bvh4_leaf_first_packet(uint32_t ref) { return (int)(ref & ((1u << BVH4_PACKET_SHIFT) - 1u)); }
 
-/* One node, 128 bytes: the boxes of its four children, by plane then by
- * child (bounds[0][k] is child k's lo.x; 0..2 lo x, y, z, 3..5 hi x, y, z,
- * the order of bvh_node.bounds), and the four child references. Children
- * come first, empty slots last. 112 bytes would do, but then half the
- * nodes would straddle three cache lines instead of two. */
+/* One node: the boxes of its BVH4_WIDTH children, by plane then by child
+ * (bounds[0][k] is child k's lo.x; 0..2 lo x, y, z, 3..5 hi x, y, z, the
+ * order of bvh_node.bounds), and the child references. Children come
+ * first, empty slots last. Aligned to a cache line and a whole number of
+ * them: 128 bytes for 4 children (112 would do, but then half the nodes
+ * would straddle three cache lines instead of two), 256 for 8 (224). */
 #ifndef BVH4_WIDTH
 #define BVH4_WIDTH 4
 #endif
@@ -119,7 +128,7 @@ accel *bvh4_build(const triangle_set *set, bvh_split split);
 bool bvh4_set_kernel(accel *a, bvh4_kernel kernel);
 
 /* The two tests the traversal runs, on their own (for the tests): the slab
- * test of a node's four boxes, as bvh_slab_test() does for one, returning
+ * test of a node's BVH4_WIDTH boxes, as bvh_slab_test() does for one, returning
  * the mask of boxes hit and their t_enter; and Moller-Trumbore on a packet's
  * four lanes in (r.t_min, t_max), as the scalar test, returning the mask of
  * lanes hit and their t, b1, b2 (lanes not hit are left as they were). */
@@ -127,8 +136,8 @@ int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float
 int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
                        bvh4_kernel kernel);
 
-/* The traversal's stack: each 4-wide node pushes at most 3 entries, and the
- * 4-wide tree is no deeper than the binary one plus the levels that split
+/* The traversal's stack: each node pushes at most BVH4_WIDTH - 1 entries,
+ * and the wide tree is no deeper than the binary one plus the levels that split
  * leaves of more than BVH4_LEAF_MAX triangles. */
 enum { BVH4_STACK_SIZE = (BVH4_WIDTH - 1) * BVH_STACK_SIZE + 64 };
 

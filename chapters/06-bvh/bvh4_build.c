@@ -56,7 +56,7 @@ static bvh4_node *nodes_allocate(int count)
     return nodes;
 }
 
-/* A new node, all four slots empty: a box no ray hits, and no triangles. */
+/* A new node, all slots empty: a box no ray hits, and no triangles. */
 static int new_node(collapser *c)
 {
     if (c->node_count == c->node_capacity) {
@@ -77,8 +77,8 @@ static int new_node(collapser *c)
 
 /* Copy triangles [first, first + count) of the binary tree's leaf order into
  * new packets; returns the leaf's reference, or, for more than BVH4_LEAF_MAX
- * triangles (only ever many coincident triangles), a node over up to four
- * smaller leaves with the same box. */
+ * triangles (only ever many coincident triangles), a node over up to
+ * BVH4_WIDTH smaller leaves with the same box. */
 static uint32_t emit_leaf(collapser *c, int first, int count, aabb box, int depth)
 {
     if (depth > c->max_depth)
@@ -162,8 +162,8 @@ static void *huge_copy(const void *data, size_t bytes)
 
 /* Fill node n, already allocated, as the 4-wide node standing for binary
  * interior node `binary_node`: start from its two children and, while there
- * are fewer than four, replace the interior one with the largest surface
- * area (the one a ray is most likely to enter) by its two children. Order
+ * are fewer than BVH4_WIDTH, replace the interior one with the largest
+ * surface area (the one a ray is most likely to enter) by its two children. Order
  * is kept: a child's two children take its place, side by side. The nodes
  * of its interior children are allocated together, before any of their
  * own children: a node's children are neighbours in memory, so the fetches

@@ -1,7 +1,7 @@
 /* bvh4_traverse.c -- a ray through a 4-wide BVH: at each node, slab-test
- * the four children's boxes at once, go on with the nearest child hit and
- * put the others on the stack, farthest deepest; in a leaf, test its
- * triangles four at a time. Both tests exist twice, with SSE intrinsics and
+ * the children's boxes at once (four, or eight: BVH4_WIDTH), go on with the
+ * nearest child hit and put the others on the stack, farthest deepest; in
+ * a leaf, test its triangles four at a time. Both tests exist twice, with SSE intrinsics and
  * as a plain C loop over the lanes; the two do the same float operations in
  * the same order, so they give the same answers (test_ch06 runs both). */
 #include <stdlib.h>
@@ -44,11 +44,13 @@ static inline bvh4_ray bvh4_ray_make(const ray *r)
     return b;
 }
 
-/* ---- four slab tests ---------------------------------------------------------------
- * bvh_slab_test() (bvh.h) for the four children: the same operations in the
- * same order, so the same answer for every box, including its IEEE rules
- * (NaN from 0 * inf leaves t_enter and t_exit as they are; the flat-box pad
- * on t_exit). Returns a 4-bit mask of the boxes hit, with their t_enter. */
+/* ---- four (or eight) slab tests ----------------------------------------------------
+ * bvh_slab_test() (bvh.h) for the BVH4_WIDTH children: the same operations
+ * in the same order, so the same answer for every box, including its IEEE
+ * rules (NaN from 0 * inf leaves t_enter and t_exit as they are; the
+ * flat-box pad on t_exit). Returns a BVH4_WIDTH-bit mask of the boxes hit,
+ * with their t_enter. The SSE version tests four boxes per instruction, a
+ * group of four at a time: one group for a 4-wide node, two for 8-wide. */
 
 static inline int slab_test4_scalar(const bvh4_node *node, const bvh4_ray *r, float t_min, float t_max,
                                     float t_enter[BVH4_WIDTH])
@@ -253,7 +255,7 @@ typedef struct {
 
 static inline int lowest_bit(unsigned mask) { return __builtin_ctz(mask); }
 
-/* Ask for a child's memory before it is needed: a node's two cache lines,
+/* Ask for a child's memory before it is needed: a node's cache lines,
  * or a leaf's packets (160 bytes each). The children hit at a node are all
  * fetched at once, in parallel, instead of one after the other as the
  * traversal reaches them. */
@@ -386,7 +388,7 @@ static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop
                     continue;
                 }
                 mask |= 1 << k2;
-                /* Three or four: sort them by t_enter, nearest last
+                /* Three or more: sort them by t_enter, nearest last
                  * (insertion sort), push all but the nearest, visit it. */
                 bvh4_entry hits[BVH4_WIDTH];
                 int n = 0;

@@ -87,9 +87,9 @@ int main(int argc, char **argv)
                "(nodes %.1f, packets of 4 triangles with their indices %.1f)\n",
                s->name, set.count, s->build_seconds * 1e3, (double)s->bytes / n,
                (double)b->node_count * sizeof(bvh4_node) / n, (double)b->packet_count * sizeof(bvh4_packet) / n);
-        printf("%d nodes of 4 (%.2f children each), %d leaves (%.2f triangles per leaf, %.0f %% of packet lanes "
+        printf("%d nodes of %d (%.2f children each), %d leaves (%.2f triangles per leaf, %.0f %% of packet lanes "
                "used), depth %d\n",
-               s->nodes, (double)(s->nodes - 1 + s->leaves) / s->nodes, s->leaves, n / s->leaves,
+               s->nodes, BVH4_WIDTH, (double)(s->nodes - 1 + s->leaves) / s->nodes, s->leaves, n / s->leaves,
                100.0 * n / (4.0 * b->packet_count), s->max_depth);
     } else if (!opts.quiet) {
         const bvh *b = (const bvh *)a;

@@ -192,7 +192,9 @@ static const embree_figures *embree_find(const embree_figures *e, int n, int tri
  * densities C: a finer grid helps only slowly, and costs memory. */
 static void stadium_study(const char *path, int reps)
 {
-    FILE *csv = fopen(path, "w");
+    char temp[4096];
+    snprintf(temp, sizeof temp, "%s.part", path); /* renamed when complete */
+    FILE *csv = fopen(temp, "w");
     if (csv == NULL) {
         fprintf(stderr, "bench_accel: cannot write '%s'\n", path);
         exit(1);
@@ -248,7 +250,11 @@ static void stadium_study(const char *path, int reps)
         triangle_set_free(&set);
         mesh_free(&m);
     }
-    fclose(csv);
+    if (fclose(csv) != 0 || rename(temp, path) != 0) {
+        fprintf(stderr, "bench_accel: cannot write '%s'\n", path);
+        remove(temp);
+        exit(1);
+    }
     printf("wrote %s\n", path);
 }
 
@@ -260,7 +266,8 @@ static void usage(void)
            "                   [--threads N] [--out FILE.csv] [--embree FILE] [--stadium FILE.csv]\n\n"
            "Times every acceleration structure on the tori field of ../shared/anchors/embree_bench.c,\n"
            "with the harness's coherent and incoherent ray sets: build ms, bytes per triangle, and\n"
-           "Mrays/s for closest hit and any hit, on one thread and on all. --embree reads the\n"
+           "Mrays/s for closest hit and any hit, on one thread and on all; --out also writes them as\n"
+           "CSV (make bench: build/data/accel.csv, which make plots draws). --embree reads the\n"
            "harness's output ('embree_bench embree N medium 1 R' lines) and prints ratios.\n"
            "--stadium also runs the teapot in a stadium (the grid at several C, every hierarchy)\n"
            "and writes its figures to FILE.csv.\n"
@@ -271,7 +278,7 @@ int main(int argc, char **argv)
 {
     long sizes[8] = {1024, 10240, 102400, 1048576};
     int size_count = 4, reps = 3, threads = 1;
-    const char *out_path = "build/data/accel.csv", *embree_path = NULL, *only = NULL, *stadium_path = NULL;
+    const char *out_path = NULL, *embree_path = NULL, *only = NULL, *stadium_path = NULL;
 #ifdef _OPENMP
     threads = omp_get_max_threads();
 #endif
@@ -313,20 +320,30 @@ int main(int argc, char **argv)
     embree_figures embree[8];
     int embree_count = embree_path ? embree_load(embree_path, embree, 8) : 0;
 
-    FILE *csv = fopen(out_path, "w");
-    if (csv == NULL) {
-        fprintf(stderr, "bench_accel: cannot write '%s'\n", out_path);
-        return 1;
+    /* The CSV only with --out: a quick run of one structure must not replace
+     * the full benchmark's figures that `make plots` draws. Written to a
+     * temporary file and renamed at the end, so an interrupted run leaves
+     * the old file whole. */
+    char out_temp[4096] = "";
+    FILE *csv = NULL;
+    if (out_path != NULL) {
+        snprintf(out_temp, sizeof out_temp, "%s.part", out_path);
+        if ((csv = fopen(out_temp, "w")) == NULL) {
+            fprintf(stderr, "bench_accel: cannot write '%s'\n", out_path);
+            return 1;
+        }
     }
-    fprintf(csv, "structure,triangles,build_ms,bytes_per_triangle,nodes,leaves,max_depth,threads,"
+    if (csv != NULL)
+        fprintf(csv, "structure,triangles,build_ms,bytes_per_triangle,nodes,leaves,max_depth,threads,"
                  "coherent_closest_mrays,coherent_any_mrays,incoherent_closest_mrays,incoherent_any_mrays,"
                  "coherent_closest_mrays_all,incoherent_closest_mrays_all,"
                  "boxes_per_ray,triangles_per_ray,coherent_hits,incoherent_hits\n");
     /* Embree's own figures go into the same CSV, so plots draw it beside ours. */
     for (int i = 0; i < embree_count; i++)
-        fprintf(csv, "embree,%d,%.3f,,,,,1,%.4f,%.4f,%.4f,%.4f,,,,,,\n", embree[i].triangles, embree[i].build_ms,
-                embree[i].coherent_closest, embree[i].coherent_any, embree[i].incoherent_closest,
-                embree[i].incoherent_any);
+        if (csv != NULL)
+            fprintf(csv, "embree,%d,%.3f,,,,,1,%.4f,%.4f,%.4f,%.4f,,,,,,\n", embree[i].triangles,
+                    embree[i].build_ms, embree[i].coherent_closest, embree[i].coherent_any,
+                    embree[i].incoherent_closest, embree[i].incoherent_any);
     printf("%-10s %9s %9s %7s | %-23s | %-23s | %-15s | %s\n", "structure", "triangles", "build ms", "B/tri",
            "coherent Mrays/s 1 thr", "incoherent Mrays/s 1 thr", "closest, all thr", "tests/ray (inc.)");
     printf("%-10s %9s %9s %7s | %11s %11s | %11s %11s | %7s %7s |\n", "", "", "", "", "closest", "any", "closest",
@@ -392,7 +409,8 @@ int main(int argc, char **argv)
                        mrays_ic / e->incoherent_closest, mrays_ia / e->incoherent_any,
                        fabs(cc.t_sum - e->coherent_t_sum) / e->coherent_t_sum,
                        fabs(ic.t_sum - e->incoherent_t_sum) / e->incoherent_t_sum);
-            fprintf(csv, "%s,%d,%.3f,%.2f,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%ld,%ld\n", st->name,
+            if (csv != NULL)
+                fprintf(csv, "%s,%d,%.3f,%.2f,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%ld,%ld\n", st->name,
                     set.count, build_ms, bytes_per_triangle, a->stats.nodes, a->stats.leaves, a->stats.max_depth,
                     threads, mrays_cc, mrays_ca, mrays_ic, mrays_ia, mrays_cc_all, mrays_ic_all, boxes, tris, cc.hits,
                     ic.hits);
@@ -428,8 +446,14 @@ int main(int argc, char **argv)
         triangle_set_free(&set);
         mesh_free(&m);
     }
-    fclose(csv);
-    printf("wrote %s\n", out_path);
+    if (csv != NULL) {
+        if (fclose(csv) != 0 || rename(out_temp, out_path) != 0) {
+            fprintf(stderr, "bench_accel: cannot write '%s'\n", out_path);
+            remove(out_temp);
+            return 1;
+        }
+        printf("wrote %s\n", out_path);
+    }
     if (stadium_path != NULL)
         stadium_study(stadium_path, reps);
     return 0;

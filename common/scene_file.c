@@ -30,6 +30,9 @@
  * arithmetic on them would overflow to Inf in a ray-sphere test). */
 static const double SCENE_MAX_COORDINATE = 1e7;
 static const double SCENE_MAX_RADIANCE = 1e9;
+/* A camera's vertical field of view in degrees: open, and short of 180 where
+ * tan(fov / 2), the image plane's half height, goes to infinity. */
+static const double SCENE_MIN_FOV = 0.01, SCENE_MAX_FOV = 179.0;
 
 enum { MAX_TOKENS = 64, MAX_KEYS = 16 };
 
@@ -283,7 +286,7 @@ static bool add_shape(const parse_context *pc, scene_desc *d, scene_shape *s, in
 static bool statement_camera(const parse_context *pc, scene_desc *d, const token *t, int n)
 {
     static const key_spec spec[] = {
-        {"eye", ARG_VEC3, COORD}, {"target", ARG_VEC3, COORD}, {"up", ARG_VEC3, COORD}, {"fov", ARG_NUMBER, 0.01, 179.0}};
+        {"eye", ARG_VEC3, COORD}, {"target", ARG_VEC3, COORD}, {"up", ARG_VEC3, COORD}, {"fov", ARG_NUMBER, SCENE_MIN_FOV, SCENE_MAX_FOV}};
     key_value v[4];
     if (d->has_camera)
         return fail(pc, t[0].column, "a second camera (a scene has one)");

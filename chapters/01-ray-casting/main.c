@@ -19,24 +19,11 @@ int main(int argc, char **argv)
 
     scene sc;
     scene_desc desc;
-    if (program_load_scene(&opts, spec.program, &desc)) {
-        char err[SCENE_ERROR_SIZE];
-        if (!scene_from_desc(&sc, &desc, spec.program, err, sizeof err)) {
-            fprintf(stderr, "%s: %s\n", spec.program, err);
-            scene_desc_free(&desc);
-            return 1;
-        }
-        /* Ray casting shows shadows and nothing that needs a second bounce. */
-    } else {
-        scene_build_ray_casting_demo(&sc);
-        scene_describe(&sc, &desc);
-    }
-    /* The effects analysis, on the file or on the built-in scene alike. */
-    effects_report e = effects_analyse(&desc);
-    sc.effects = effects_decide(&e, EFFECT_SHADOWS);
-    if (!opts.quiet)
-        effects_print(stdout, &e, spec.program);
-    program_note_effects(&e);
+    /* Ray casting shows shadows and nothing that needs a second bounce. */
+    int load_status = scene_load_for_program(&sc, &desc, &opts, spec.program, scene_build_ray_casting_demo,
+                                             EFFECT_SHADOWS);
+    if (load_status != 0)
+        return load_status;
     scene_desc_free(&desc);
     camera cam = scene_make_camera(&sc, opts.width, opts.height);
     int status = program_render(&opts, spec.program, ray_cast_radiance, &sc, &cam, NULL);

@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "effects.h"
 #include "memory.h"
 #include "program.h"
 
@@ -372,4 +373,27 @@ void scene_describe(const scene *sc, scene_desc *d)
         d->lights = memory_grow(d->lights, &d->light_capacity, d->light_count + 1, sizeof l);
         d->lights[d->light_count++] = l;
     }
+}
+
+int scene_load_for_program(scene *sc, scene_desc *desc, cli_options *opts, const char *program,
+                           void (*build_built_in)(scene *), unsigned supported)
+{
+    if (program_load_scene(opts, program, desc)) {
+        char err[SCENE_ERROR_SIZE];
+        if (!scene_from_desc(sc, desc, program, err, sizeof err)) {
+            fprintf(stderr, "%s: %s\n", program, err);
+            scene_desc_free(desc);
+            return 1;
+        }
+    } else {
+        build_built_in(sc);
+        scene_describe(sc, desc);
+    }
+    /* The effects analysis, on the file or on the built-in scene alike. */
+    effects_report e = effects_analyse(desc);
+    sc->effects = effects_decide(&e, supported);
+    if (!opts->quiet)
+        effects_print(stdout, &e, program);
+    program_note_effects(&e);
+    return 0;
 }

@@ -16,6 +16,7 @@
 #include <stdbool.h>
 
 #include "camera.h"
+#include "cli.h"
 #include "counters.h"
 #include "ray.h"
 #include "scene_file.h"
@@ -120,6 +121,14 @@ bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *er
 /* The reverse: a built-in scene as a description, so that the effects
  * analysis runs on it as on a file (d->source is "built-in scene"). */
 void scene_describe(const scene *sc, scene_desc *d);
+/* What the programs of chapters 01 and 02 do first: the scene of --scene
+ * FILE, or else the built-in one (build_built_in) described as if it were a
+ * file; then the effects analysis on it, narrowed to what the chapter can
+ * simulate (supported), printed unless --quiet and noted for the counters
+ * file. desc is left for the caller to read (max_depth, say) and free.
+ * Returns 0, or the exit status after printing the error. */
+int scene_load_for_program(scene *sc, scene_desc *desc, cli_options *opts, const char *program,
+                           void (*build_built_in)(scene *), unsigned supported);
 /* Does the scene trace shadow rays (the effects analysis did not prove them
  * useless, or narrow them away)? */
 static inline bool scene_traces_shadows(const scene *sc) { return (sc->effects & EFFECT_SHADOWS) != 0; }

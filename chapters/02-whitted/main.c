@@ -27,23 +27,10 @@ int main(int argc, char **argv)
 
     scene sc;
     scene_desc desc;
-    if (program_load_scene(&opts, spec.program, &desc)) {
-        char err[SCENE_ERROR_SIZE];
-        if (!scene_from_desc(&sc, &desc, spec.program, err, sizeof err)) {
-            fprintf(stderr, "%s: %s\n", spec.program, err);
-            scene_desc_free(&desc);
-            return 1;
-        }
-    } else {
-        scene_build_whitted_demo(&sc);
-        scene_describe(&sc, &desc);
-    }
-    /* The effects analysis, on the file or on the built-in scene alike. */
-    effects_report e = effects_analyse(&desc);
-    sc.effects = effects_decide(&e, EFFECT_SHADOWS | EFFECT_REFLECTION | EFFECT_REFRACTION);
-    if (!opts.quiet)
-        effects_print(stdout, &e, spec.program);
-    program_note_effects(&e);
+    int load_status = scene_load_for_program(&sc, &desc, &opts, spec.program, scene_build_whitted_demo,
+                                             EFFECT_SHADOWS | EFFECT_REFLECTION | EFFECT_REFRACTION);
+    if (load_status != 0)
+        return load_status;
     if (max_depth < 0 && desc.max_depth >= 0)
         max_depth = desc.max_depth > 64 ? 64 : desc.max_depth;
     scene_desc_free(&desc);

@@ -116,6 +116,7 @@ $(DOC_PROGRAMS): $(BUILD)/bin/%: $(BUILD)/obj/docs/figures/%.o $(ALL_LIBS)
 
 # ---------------------------------------------------------------- targets --
 all: $(PROGRAMS) $(TESTS) $(DOC_PROGRAMS)
+	@mkdir -p $(BUILD)/out
 
 demo: $(PROGRAMS)
 	@$(MAKE) --no-print-directory $(DEMOS)

@@ -19,6 +19,7 @@
 #include "ray.h"
 #include "render.h"
 #include "rng.h"
+#include "splat_film.h"
 #include "stats.h"
 #include "test_support.h"
 
@@ -440,6 +441,100 @@ static void test_cli_help_and_extras(void **state)
     assert_int_equal(parse(3, extra, &o, err), CLI_OK);
 }
 
+/* ---- splat_film ---------------------------------------------------------- */
+
+enum { SPLAT_SIDE = 8, SPLAT_COUNT = 200000 };
+
+/* The k-th splat of a fixed random sequence: many land on the same pixel,
+ * with values over six orders of magnitude, so float sums depend on order. */
+static void splat_number(int k, float *x, float *y, vec3 *value)
+{
+    pcg32 rng = pcg32_for_pixel(test_seed(11), (uint64_t)k);
+    *x = pcg32_float(&rng) * SPLAT_SIDE;
+    *y = pcg32_float(&rng) * SPLAT_SIDE;
+    float scale = powf(10.0f, 3.0f - 6.0f * pcg32_float(&rng));
+    *value = vec3_make(scale * pcg32_float(&rng), scale * pcg32_float(&rng), scale * pcg32_float(&rng));
+}
+
+/* The same splats, added by 1 thread in order and by 2 threads in reverse
+ * order, give the same film bit for bit; and the sum is the exact sum to
+ * within the rounding of each splat (2^-25 each). */
+static void test_splat_film_is_the_same_for_any_order_and_thread_count(void **state)
+{
+    (void)state;
+    splat_film forward, backward;
+    assert_true(splat_film_init(&forward, SPLAT_SIDE, SPLAT_SIDE));
+    assert_true(splat_film_init(&backward, SPLAT_SIDE, SPLAT_SIDE));
+    double exact[SPLAT_SIDE * SPLAT_SIDE] = {0};
+    int count[SPLAT_SIDE * SPLAT_SIDE] = {0};
+    for (int k = 0; k < SPLAT_COUNT; k++) {
+        float x, y;
+        vec3 v;
+        splat_number(k, &x, &y, &v);
+        splat_film_add(&forward, x, y, v, NULL);
+        exact[(int)y * SPLAT_SIDE + (int)x] += v.x;
+        count[(int)y * SPLAT_SIDE + (int)x]++;
+    }
+#pragma omp parallel for num_threads(2) schedule(dynamic, 64)
+    for (int k = SPLAT_COUNT - 1; k >= 0; k--) {
+        float x, y;
+        vec3 v;
+        splat_number(k, &x, &y, &v);
+        splat_film_add(&backward, x, y, v, NULL);
+    }
+    assert_memory_equal(forward.sum, backward.sum, sizeof(int64_t) * SPLAT_SIDE * SPLAT_SIDE * 3);
+    for (int p = 0; p < SPLAT_SIDE * SPLAT_SIDE; p++) {
+        double got = (double)forward.sum[3 * p] / (double)(1LL << SPLAT_FILM_FRACTION_BITS);
+        assert_true(fabs(got - exact[p]) <= count[p] * 0x1.0p-25 + 1e-9);
+    }
+    splat_film_free(&forward);
+    splat_film_free(&backward);
+}
+
+/* Its twin: the same splats summed in float, forward and backward, do not
+ * agree: the film's fixed point is what makes the order not matter. */
+static void test_splat_float_sums_depend_on_order(void **state)
+{
+    (void)state;
+    float forward[SPLAT_SIDE * SPLAT_SIDE] = {0}, backward[SPLAT_SIDE * SPLAT_SIDE] = {0};
+    for (int k = 0; k < SPLAT_COUNT; k++) {
+        float x, y;
+        vec3 v;
+        splat_number(k, &x, &y, &v);
+        forward[(int)y * SPLAT_SIDE + (int)x] += v.x;
+    }
+    for (int k = SPLAT_COUNT - 1; k >= 0; k--) {
+        float x, y;
+        vec3 v;
+        splat_number(k, &x, &y, &v);
+        backward[(int)y * SPLAT_SIDE + (int)x] += v.x;
+    }
+    assert_true(memcmp(forward, backward, sizeof forward) != 0);
+}
+
+/* NaN, Inf and values too large for the sums are dropped and counted;
+ * points off the film are ignored. */
+static void test_splat_film_drops_nonfinite_and_ignores_points_outside(void **state)
+{
+    (void)state;
+    splat_film film;
+    assert_true(splat_film_init(&film, 2, 2));
+    ray_counters counters = {0};
+    splat_film_add(&film, 0.5f, 0.5f, vec3_make(NAN, 0.0f, 0.0f), &counters);
+    splat_film_add(&film, 0.5f, 0.5f, vec3_make(0.0f, INFINITY, 0.0f), &counters);
+    splat_film_add(&film, 0.5f, 0.5f, vec3_make(0.0f, 0.0f, 2.0f * SPLAT_FILM_MAX_VALUE), &counters);
+    assert_int_equal(counters.nonfinite_samples, 3);
+    splat_film_add(&film, -0.5f, 0.5f, vec3_make(1.0f, 1.0f, 1.0f), &counters);
+    splat_film_add(&film, 2.0f, 0.5f, vec3_make(1.0f, 1.0f, 1.0f), &counters);
+    splat_film_add(&film, 0.5f, NAN, vec3_make(1.0f, 1.0f, 1.0f), &counters);
+    for (int i = 0; i < 12; i++)
+        assert_int_equal(film.sum[i], 0);
+    splat_film_add(&film, 1.999f, 1.0f, vec3_make(0.25f, -0.5f, 3.0f), &counters);
+    vec3 v = splat_film_get(&film, 1, 1, 2.0);
+    assert_true(v.x == 0.5f && v.y == -1.0f && v.z == 6.0f);
+    splat_film_free(&film);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -465,6 +560,9 @@ int main(void)
         cmocka_unit_test(test_cli_help_and_extras),
         cmocka_unit_test(test_cli_rejects_nan_and_inf_for_an_unranged_float),
         cmocka_unit_test(test_cli_checks_a_directory_flag_at_once),
+        cmocka_unit_test(test_splat_film_is_the_same_for_any_order_and_thread_count),
+        cmocka_unit_test(test_splat_float_sums_depend_on_order),
+        cmocka_unit_test(test_splat_film_drops_nonfinite_and_ignores_points_outside),
     };
     return cmocka_run_group_tests_name("common", tests, NULL, NULL);
 }

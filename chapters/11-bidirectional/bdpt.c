@@ -331,6 +331,11 @@ static vec3 end_factor(const bdpt *b, const bdpt_vertex *v, const bdpt_vertex *b
     return bsdf_eval(&b->scene->materials[v->material], v->normal, w, wo);
 }
 
+/* The shadow ray between two vertices. It leaves from the eye side and ends
+ * at the light side, as chapter 09's light samples do: shot the other way,
+ * from the light to the surface, it lost 0.6 % of the direct light of the
+ * Cornell box (measured at --max-depth 1 against chapter 09; the cause is
+ * not yet found -- an exercise below). */
 static bool visible(const bdpt *b, const bdpt_vertex *a, const bdpt_vertex *c, ray_counters *counters)
 {
     counters->shadow_rays++;
@@ -390,7 +395,7 @@ static vec3 connect(const bdpt *b, const bdpt_vertex *light, int s, const bdpt_v
         if (b->fault == BDPT_FAULT_NO_LIGHT_COSINE && s == 1)
             cos_y = 1.0f;
         float g = cos_y * cos_z / distance2;
-        if (!(g > 0.0f) || !visible(b, y, z, counters))
+        if (!(g > 0.0f) || !visible(b, z, y, counters))
             return vec3_splat(0.0f);
         c = vec3_scale(vec3_mul(vec3_mul(y->beta, f_y), vec3_mul(f_z, z->beta)), g);
     }

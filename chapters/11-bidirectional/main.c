@@ -80,10 +80,10 @@ static int run_experiments(const char *data, int size, int reference_spp, double
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch11.exr", 256, 256, 16);
-    const char *scene_name = "cornell", *strategy = NULL, *heuristic = "power", *data = NULL;
+    const char *scene_name = "cornell", *strategy = NULL, *heuristic = "power", *data = NULL, *integrator = "bdpt";
     bool unweighted = false;
-    int max_depth = -1, experiment_size = 48, reference_spp = 4096;
-    float experiment_seconds = 12.0f;
+    int max_depth = -1, experiment_size = 32, reference_spp = 32768;
+    float experiment_seconds = 8.0f;
     const cli_flag extras[] = {
         {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, BDPT_MAX_DEPTH},
         {"--builtin", CLI_STRING, &scene_name, "NAME",
@@ -93,14 +93,17 @@ int main(int argc, char **argv)
          "--unweighted", 0, 0},
         {"--unweighted", CLI_BOOL, &unweighted, NULL, "with --strategy: each strategy's full estimate, no MIS weight",
          0, 0},
+        {"--integrator", CLI_STRING, &integrator, "NAME",
+         "bdpt (default), or pt: chapter 09's path tracer (MIS, RR on throughput) on the same scene, for "
+         "equal-time pictures", 0, 0},
         {"--heuristic", CLI_STRING, &heuristic, "NAME", "MIS weights: power (default) or balance", 0, 0},
         {"--data", CLI_DIR, &data, "DIR",
          "equal-time error against chapter 09's path tracer (Cornell box and ceiling-lamp), CSV into DIR", 0, 0},
-        {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 48)", 8, 1024},
-        {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached references (default 4096)", 16,
+        {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 32)", 8, 1024},
+        {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached references (default 32768)", 16,
          1 << 20},
         {"--experiment-seconds", CLI_FLOAT, &experiment_seconds, "S",
-         "CPU seconds each method gets per scene (default 12)", 0.1, 1e5},
+         "CPU seconds each method gets per scene (default 8)", 0.1, 1e5},
     };
     cli_spec spec = {"11-bidirectional",
                      "Bidirectional path tracing (Veach 1997, ch. 10): a path from the eye and one from the light,\n"
@@ -124,6 +127,15 @@ int main(int argc, char **argv)
         chosen_heuristic = BDPT_BALANCE;
     else {
         fprintf(stderr, "11-bidirectional: --heuristic: unknown '%s' (power, balance)\n", heuristic);
+        return 2;
+    }
+    bool path_trace = strcmp(integrator, "pt") == 0;
+    if (!path_trace && strcmp(integrator, "bdpt") != 0) {
+        fprintf(stderr, "11-bidirectional: --integrator: unknown '%s' (bdpt, pt)\n", integrator);
+        return 2;
+    }
+    if (path_trace && strategy != NULL) {
+        fprintf(stderr, "11-bidirectional: --strategy: only with --integrator bdpt\n");
         return 2;
     }
     int only_s = -1, only_t = -1;
@@ -169,7 +181,13 @@ int main(int argc, char **argv)
     b.unweighted = unweighted;
     estimate_image e;
     int status = 0;
-    if (!bdpt_render(&b, opts.spp, opts.seed, opts.threads, opts.quiet, &e)) {
+    if (path_trace) {
+        path_tracer pt = path_tracer_defaults(&sc);
+        pt.integrator = PT_MIS;
+        pt.russian_roulette = RR_THROUGHPUT;
+        pt.max_depth = max_depth;
+        e = render_estimate(&pt, &cam, opts.spp, opts.seed, opts.threads);
+    } else if (!bdpt_render(&b, opts.spp, opts.seed, opts.threads, opts.quiet, &e)) {
         fprintf(stderr, "11-bidirectional: out of memory\n");
         pt_scene_free(&sc);
         return 1;
@@ -185,8 +203,8 @@ int main(int argc, char **argv)
         status = 1;
     }
     if (status == 0 && !opts.quiet) {
-        printf("11-bidirectional: %dx%d, %d spp, %.2f s -> %s\n", opts.width, opts.height, opts.spp, e.seconds,
-               opts.out);
+        printf("11-bidirectional: %s, %dx%d, %d spp, %.2f s -> %s\n", path_trace ? "path tracing" : "bidirectional",
+               opts.width, opts.height, opts.spp, e.seconds, opts.out);
         counters_print(stdout, &e.counters, e.seconds);
     }
     estimate_image_free(&e);

@@ -60,14 +60,15 @@ static int run_experiments(const char *data, int size, int reference_spp, double
         snprintf(reference_path, sizeof reference_path, "%s/ch11_reference_%s_%d.exr", data, names[k], size);
         path_tracer pt = path_tracer_defaults(&sc);
         estimate_image reference;
+        memset(&reference, 0, sizeof reference);
         bdpt_experiment_result result;
         printf("\n== scene %s\n", names[k]);
         bool ok = experiment_reference(&pt, &cam, reference_spp, threads, reference_path, &reference, err, sizeof err);
-        if (ok) {
+        if (ok)
             ok = bdpt_experiment_equal_time(&sc, names[k], &cam, &reference, seconds, threads, data, &result, err,
                                             sizeof err);
-            estimate_image_free(&reference);
-        }
+        /* filled even when writing it failed */
+        estimate_image_free(&reference);
         pt_scene_free(&sc);
         if (!ok) {
             fprintf(stderr, "11-bidirectional: %s\n", err);

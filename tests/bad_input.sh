@@ -211,7 +211,11 @@ for program in "$bin"/[0-9][0-9]-*; do
         fresh_dir; touch "$dir/file"; keep="file"
         expect_failure "$p --data is a file" "$dir/file" -- run --out "$dir/out.exr" --data "$dir/file"
         fresh_dir; mkdir "$dir/data"; keep="data"
-        case $p in 09-*) data_args="--experiment-size 8 --reference-spp 16 --experiment-spp 2" ;; *) data_args="" ;; esac
+        case $p in
+        09-*) data_args="--experiment-size 8 --reference-spp 16 --experiment-spp 2" ;;
+        11-*) data_args="--experiment-size 8 --reference-spp 16 --experiment-seconds 0.1" ;;
+        *) data_args="" ;;
+        esac
         # Nothing can be written: whichever file comes first (image or table)
         # must fail, and nothing may be left in either directory.
         expect_failure "$p --data on a full disk" "$dir/" -- full_disk 0 "$program" $args $data_args --out "$dir/out.exr" --data "$dir/data"

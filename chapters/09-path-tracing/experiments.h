@@ -54,6 +54,21 @@ estimate_image render_progressive(const path_tracer *pt, const camera *cam, uint
 bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int threads, const char *path,
                           estimate_image *out, char *err, size_t err_size);
 
+/* The error of e against the reference: RMSE and relMSE over pixels and
+ * channels, less the reference's own variance (its squared standard
+ * error), which would otherwise add to every measured MSE. */
+void experiment_measure_error(const estimate_image *e, const estimate_image *ref, double *rmse, double *relmse);
+
+/* CPU time of the whole process (all threads), in seconds. */
+double experiment_cpu_seconds(void);
+
+/* A CSV file DIR/NAME, written as NAME.tmp and renamed into place only by a
+ * close that finds every write succeeded (discard: remove it unwritten).
+ * open: NULL with err on failure; path receives DIR/NAME. */
+FILE *experiment_csv_open(const char *dir, const char *name, char *path, size_t path_size, char *err, size_t err_size);
+bool experiment_csv_close(FILE *f, const char *path, char *err, size_t err_size);
+void experiment_csv_discard(FILE *f, const char *path);
+
 /* Writes DIR/ch09_convergence_NAME.csv (RMSE and relMSE of each rung at 1,
  * 2, 4, ... max_spp samples, with wall and CPU seconds) and
  * DIR/ch09_time_to_error_NAME.csv, and prints a table of the CPU time each

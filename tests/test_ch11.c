@@ -1,0 +1,393 @@
+/* test_ch11.c -- bidirectional path tracing: against chapter 09's path
+ * tracer on the Cornell box, each strategy alone against it, the MIS
+ * weights of every strategy summing to one, the same image on any number
+ * of threads, NaN and Inf dropped. Each statistical check has a twin on a
+ * deliberately wrong variant (bdpt.fault) that it catches. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "09-path-tracing/bsdf.h"
+#include "11-bidirectional/bdpt.h"
+#include "render.h"
+#include "stats.h"
+#include "test_support.h"
+
+/* How many standard errors (combined in quadrature) a pixel may be from
+ * the other estimate. */
+static const double STANDARD_ERRORS = 5.0;
+/* Standard errors below this are float rounding (black pixels): compare
+ * with this instead. */
+static const double ROUNDING_FLOOR = 1e-5;
+/* A sum of weights may differ from 1 by float rounding: a few ulps per
+ * strategy, over at most a dozen strategies. */
+static const double WEIGHT_SUM_TOLERANCE = 1e-4;
+
+enum { SIZE = 16 };
+
+/* Chapter 09's best rung, spp samples per pixel: mean and standard error. */
+static estimate_image path_traced(const pt_scene *sc, const camera *cam, int spp, uint64_t seed)
+{
+    path_tracer pt = path_tracer_defaults(sc);
+    pt.integrator = PT_MIS;
+    pt.russian_roulette = RR_THROUGHPUT;
+    return render_estimate(&pt, cam, spp, test_seed(seed), 2);
+}
+
+/* `renders` independent BDPT images of spp samples, averaged: the standard
+ * error per pixel from their spread (the splats of light tracing land on
+ * any pixel, so the per-pixel sample variance of one render misses them). */
+static estimate_image bidirectional(const bdpt *b, int spp, int renders, uint64_t seed)
+{
+    const camera *cam = b->cam;
+    size_t n = (size_t)cam->width * (size_t)cam->height * 3;
+    welford *w = calloc(n, sizeof *w);
+    assert_non_null(w);
+    estimate_image total;
+    memset(&total, 0, sizeof total);
+    for (int k = 0; k < renders; k++) {
+        estimate_image e;
+        assert_true(bdpt_render(b, spp, test_seed(seed) + (uint64_t)k * 7919u, 2, true, &e));
+        for (size_t i = 0; i < n; i++)
+            welford_add(&w[i], e.mean.rgb[i]);
+        counters_add(&total.counters, &e.counters);
+        estimate_image_free(&e);
+    }
+    total.mean = image_make(cam->width, cam->height);
+    total.standard_error = image_make(cam->width, cam->height);
+    for (size_t i = 0; i < n; i++) {
+        total.mean.rgb[i] = (float)welford_mean(&w[i]);
+        total.standard_error.rgb[i] = (float)welford_standard_error(&w[i]);
+    }
+    total.spp = (long)spp * renders;
+    free(w);
+    return total;
+}
+
+/* Pixels (channels) further apart than STANDARD_ERRORS combined standard errors. */
+static int count_disagreements(const estimate_image *a, const estimate_image *b)
+{
+    size_t n = (size_t)a->mean.width * (size_t)a->mean.height * 3;
+    int count = 0;
+    for (size_t i = 0; i < n; i++) {
+        double sa = a->standard_error.rgb[i], sb = b->standard_error.rgb[i];
+        double se = fmax(sqrt(sa * sa + sb * sb), ROUNDING_FLOOR);
+        if (!(fabs((double)a->mean.rgb[i] - (double)b->mean.rgb[i]) <= STANDARD_ERRORS * se))
+            count++;
+    }
+    return count;
+}
+
+/* ---- against chapter 09 -------------------------------------------------------- */
+
+static void test_converges_to_path_tracing_on_the_cornell_box(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    camera cam = pt_scene_camera(&sc, SIZE, SIZE);
+    estimate_image reference = path_traced(&sc, &cam, 512, 11);
+    bdpt b = bdpt_defaults(&sc, &cam);
+    estimate_image e = bidirectional(&b, 16, 16, 12);
+    int bad = count_disagreements(&e, &reference);
+    print_message("BDPT against chapter 09: %d of %d channels beyond 5 standard errors\n", bad, SIZE * SIZE * 3);
+    assert_int_equal(bad, 0);
+    assert_int_equal(e.counters.nonfinite_samples, 0);
+    /* The twin: the cosine at the light left out of the joins (s = 1, t = 1) */
+    b.fault = BDPT_FAULT_NO_LIGHT_COSINE;
+    estimate_image twin = bidirectional(&b, 16, 16, 12);
+    int twin_bad = count_disagreements(&twin, &reference);
+    print_message("twin, no cosine at the light: %d channels beyond 5 standard errors\n", twin_bad);
+    assert_true(twin_bad > 20);
+    estimate_image_free(&twin);
+    estimate_image_free(&e);
+    estimate_image_free(&reference);
+    pt_scene_free(&sc);
+}
+
+/* Each strategy family alone, unweighted, is an unbiased estimator of the
+ * paths it can make: light tracing (t = 1, every s) and camera paths that
+ * hit the light (s = 0, every t) each make every path of a diffuse scene,
+ * so each alone converges to the whole image. */
+static void test_light_tracing_alone_and_camera_paths_alone(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    camera cam = pt_scene_camera(&sc, SIZE, SIZE);
+    estimate_image reference = path_traced(&sc, &cam, 512, 21);
+    bdpt b = bdpt_defaults(&sc, &cam);
+    b.unweighted = true;
+    b.only_t = 1;
+    estimate_image light = bidirectional(&b, 16, 16, 22);
+    int bad_light = count_disagreements(&light, &reference);
+    b.only_t = -1;
+    b.only_s = 0;
+    estimate_image eye = bidirectional(&b, 256, 16, 23);
+    int bad_eye = count_disagreements(&eye, &reference);
+    print_message("light tracing alone: %d, camera paths alone: %d channels beyond 5 standard errors\n", bad_light,
+                  bad_eye);
+    assert_int_equal(bad_light, 0);
+    assert_int_equal(bad_eye, 0);
+    /* The twins: light tracing without the cosine at the light vertex, and
+     * camera paths cut after one bounce, are caught. */
+    b.only_s = -1;
+    b.only_t = 1;
+    b.fault = BDPT_FAULT_NO_LIGHT_COSINE;
+    estimate_image light_twin = bidirectional(&b, 16, 16, 22);
+    int twin_light = count_disagreements(&light_twin, &reference);
+    b.fault = BDPT_FAULT_NONE;
+    b.only_t = -1;
+    b.only_s = 0;
+    b.max_depth = 1;
+    estimate_image eye_twin = bidirectional(&b, 256, 16, 23);
+    int twin_eye = count_disagreements(&eye_twin, &reference);
+    print_message("twins: light tracing without the light's cosine %d, camera paths of one bounce %d\n", twin_light,
+                  twin_eye);
+    assert_true(twin_light > 20);
+    assert_true(twin_eye > 20);
+    estimate_image_free(&light);
+    estimate_image_free(&eye);
+    estimate_image_free(&light_twin);
+    estimate_image_free(&eye_twin);
+    estimate_image_free(&reference);
+    pt_scene_free(&sc);
+}
+
+/* ---- the weights ------------------------------------------------------------------
+ * A path of n vertices can be made by n strategies; their MIS weights must
+ * sum to one, or the estimate counts the path too much or too little. The
+ * paths here are built by hand: an eye path through a random pixel, a few
+ * cosine-sampled bounces, then a random point on the light (visibility does
+ * not enter the weights). Each strategy then sees the path as its own two
+ * subpaths, with the densities its random walks would have stored. */
+
+static bdpt_vertex surface_vertex(const hit_record *h)
+{
+    bdpt_vertex v;
+    memset(&v, 0, sizeof v);
+    v.kind = BDPT_VERTEX_SURFACE;
+    v.point = h->point;
+    v.normal = h->normal_shading;
+    v.normal_geometric = h->normal_geometric;
+    v.material = h->material_id;
+    v.front_face = h->front_face;
+    return v;
+}
+
+/* Builds x_0 (light) .. x_{n-1} (eye) into path; false if the walk missed
+ * or some density is zero (the path is then of no strategy). */
+static bool random_path(const bdpt *b, int n, pcg32 *rng, bdpt_vertex *path)
+{
+    const pt_scene *sc = b->scene;
+    ray_counters counters;
+    memset(&counters, 0, sizeof counters);
+    bdpt_vertex eye_side[BDPT_MAX_VERTICES];
+    memset(&eye_side[0], 0, sizeof eye_side[0]);
+    eye_side[0].kind = BDPT_VERTEX_CAMERA;
+    eye_side[0].point = b->cam->eye;
+    eye_side[0].normal = b->cam->forward;
+    ray r = camera_ray(b->cam, pcg32_float(rng) * (float)b->cam->width, pcg32_float(rng) * (float)b->cam->height);
+    for (int k = 1; k < n - 1; k++) {
+        hit_record h;
+        if (!pt_scene_intersect(sc, r, &h, &counters))
+            return false;
+        eye_side[k] = surface_vertex(&h);
+        vec3 w = frame_to_world(h.normal_shading, sample_cosine_hemisphere(vec2_make(pcg32_float(rng), pcg32_float(rng))));
+        r = ray_spawn(h.point, h.normal_geometric, w);
+    }
+    bdpt_vertex light;
+    memset(&light, 0, sizeof light);
+    light.kind = BDPT_VERTEX_LIGHT;
+    if (!pt_scene_sample_emitter(sc, pcg32_float(rng), pcg32_float(rng), pcg32_float(rng), &light.point, &light.normal,
+                                 &light.material))
+        return false;
+    light.normal_geometric = light.normal;
+    light.front_face = true;
+    path[0] = light;
+    for (int k = 0; k < n - 1; k++)
+        path[n - 1 - k] = eye_side[k];
+    /* every density along the path, both ways, must be positive */
+    bdpt_vertex forward[2 * BDPT_MAX_VERTICES], backward[2 * BDPT_MAX_VERTICES];
+    for (int i = 0; i < n; i++) {
+        forward[i] = path[i];
+        backward[i] = path[n - 1 - i];
+    }
+    bdpt_subpath_fill_pdfs(b, forward, n);
+    bdpt_subpath_fill_pdfs(b, backward, n);
+    for (int i = 0; i < n; i++)
+        if (!(forward[i].pdf_fwd > 0.0f) || !(backward[i].pdf_fwd > 0.0f))
+            return false;
+    return true;
+}
+
+/* The sum over s of strategy (s, n - s)'s weight for this path. */
+static double weight_sum(const bdpt *b, const bdpt_vertex *path, int n)
+{
+    double sum = 0.0;
+    for (int s = 0; s <= n - 1; s++) {
+        int t = n - s;
+        bdpt_vertex light[BDPT_MAX_VERTICES], camera[BDPT_MAX_VERTICES];
+        for (int i = 0; i < s; i++)
+            light[i] = path[i];
+        for (int j = 0; j < t; j++)
+            camera[j] = path[n - 1 - j];
+        if (s == 0)
+            camera[t - 1].kind = BDPT_VERTEX_SURFACE; /* the eye path hit the light */
+        bdpt_subpath_fill_pdfs(b, light, s);
+        bdpt_subpath_fill_pdfs(b, camera, t);
+        sum += bdpt_mis_weight(b, light, s, camera, t);
+    }
+    return sum;
+}
+
+static void test_weights_of_all_strategies_sum_to_one(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_veach(&sc); /* glossy plates: pdfs that are not symmetric */
+    pt_scene sc2;
+    pt_scene_build_cornell_box(&sc2);
+    const pt_scene *scenes[2] = {&sc2, &sc};
+    for (int k = 0; k < 2; k++) {
+        camera cam = pt_scene_camera(scenes[k], SIZE, SIZE);
+        bdpt b = bdpt_defaults(scenes[k], &cam);
+        pcg32 rng = pcg32_for_pixel(test_seed(31), (uint64_t)k);
+        for (int heuristic = 0; heuristic < 2; heuristic++) {
+            b.heuristic = heuristic == 0 ? BDPT_POWER : BDPT_BALANCE;
+            /* the Veach scene is open to a black world: long paths are rare */
+            int longest = k == 0 ? 7 : 4;
+            for (int n = 2; n <= longest; n++) {
+                int tested = 0;
+                double worst = 0.0, worst_twin = 0.0;
+                for (int attempt = 0; attempt < 20000 && tested < 50; attempt++) {
+                    bdpt_vertex path[2 * BDPT_MAX_VERTICES];
+                    if (!random_path(&b, n, &rng, path))
+                        continue;
+                    tested++;
+                    b.fault = BDPT_FAULT_NONE;
+                    worst = fmax(worst, fabs(weight_sum(&b, path, n) - 1.0));
+                    /* The twin: one join's pdf left per unit solid angle */
+                    b.fault = BDPT_FAULT_SOLID_ANGLE_PDF;
+                    worst_twin = fmax(worst_twin, fabs(weight_sum(&b, path, n) - 1.0));
+                    b.fault = BDPT_FAULT_NONE;
+                }
+                print_message("%s, %s, n = %d: %d paths, largest |sum - 1| %.2g (twin %.2g)\n",
+                              k == 0 ? "cornell" : "veach", heuristic == 0 ? "power" : "balance", n, tested, worst,
+                              worst_twin);
+                assert_true(tested >= 10);
+                assert_true(worst <= WEIGHT_SUM_TOLERANCE);
+                assert_true(worst_twin > 0.01);
+            }
+        }
+    }
+    pt_scene_free(&sc);
+    pt_scene_free(&sc2);
+}
+
+/* ---- threads, NaN, refusals ------------------------------------------------------ */
+
+static void test_same_image_for_one_and_two_threads(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    camera cam = pt_scene_camera(&sc, SIZE, SIZE);
+    bdpt b = bdpt_defaults(&sc, &cam);
+    estimate_image one, two;
+    assert_true(bdpt_render(&b, 4, 41, 1, true, &one));
+    assert_true(bdpt_render(&b, 4, 41, 2, true, &two));
+    assert_memory_equal(one.mean.rgb, two.mean.rgb, SIZE * SIZE * 3 * sizeof(float));
+    estimate_image_free(&one);
+    estimate_image_free(&two);
+    pt_scene_free(&sc);
+}
+
+/* A light whose emission is infinite makes every path through it Inf or
+ * NaN: they are counted and dropped, and the image stays finite. */
+static void test_nonfinite_samples_are_counted_and_dropped(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    for (int i = 0; i < sc.material_count; i++)
+        if (sc.materials[i].emission.x > 0.0f)
+            sc.materials[i].emission.x = INFINITY;
+    camera cam = pt_scene_camera(&sc, 8, 8);
+    bdpt b = bdpt_defaults(&sc, &cam);
+    estimate_image e;
+    assert_true(bdpt_render(&b, 4, 51, 2, true, &e));
+    print_message("non-finite samples dropped: %llu\n", (unsigned long long)e.counters.nonfinite_samples);
+    assert_true(e.counters.nonfinite_samples > 0);
+    for (int i = 0; i < 8 * 8 * 3; i++)
+        assert_true(isfinite(e.mean.rgb[i]));
+    estimate_image_free(&e);
+    pt_scene_free(&sc);
+}
+
+static void test_delta_materials_are_refused(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    char err[256];
+    pt_scene_build_cornell_box_materials(&sc);
+    assert_false(bdpt_supports(&sc, err, sizeof err));
+    assert_non_null(strstr(err, "glass"));
+    pt_scene_free(&sc);
+    pt_scene_build_cornell_box(&sc);
+    assert_true(bdpt_supports(&sc, err, sizeof err));
+    pt_scene_free(&sc);
+    bdpt_scene_build_ceiling_lamp(&sc);
+    assert_true(bdpt_supports(&sc, err, sizeof err));
+    pt_scene_free(&sc);
+}
+
+/* The camera's sampling density and its projection agree: a ray through
+ * pixel position (px, py) projects back there, and the density integrates
+ * to one over the image (a Monte Carlo sum over uniform directions). */
+static void test_camera_projection_and_density(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    camera cam = pt_scene_camera(&sc, 20, 10);
+    pcg32 rng = pcg32_for_pixel(test_seed(61), 0);
+    for (int i = 0; i < 1000; i++) {
+        float px = pcg32_float(&rng) * 20.0f, py = pcg32_float(&rng) * 10.0f, qx, qy;
+        ray r = camera_ray(&cam, px, py);
+        assert_true(bdpt_camera_project(&cam, ray_at(r, 100.0f), &qx, &qy));
+        assert_close(qx, px, 1e-3);
+        assert_close(qy, py, 1e-3);
+    }
+    /* integral of pdf over the sphere = 1: uniform sphere directions, 4 pi / N sum */
+    welford w = {0};
+    for (int i = 0; i < 200000; i++) {
+        float z = 1.0f - 2.0f * pcg32_float(&rng), phi = 2.0f * (float)PI * pcg32_float(&rng);
+        float rxy = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+        vec3 d = vec3_make(rxy * cosf(phi), rxy * sinf(phi), z);
+        welford_add(&w, 4.0 * PI * bdpt_camera_pdf_direction(&cam, d));
+    }
+    print_message("integral of the camera's density: %.4f +- %.4f\n", welford_mean(&w), welford_standard_error(&w));
+    assert_close(welford_mean(&w), 1.0, 5.0 * welford_standard_error(&w));
+    pt_scene_free(&sc);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_weights_of_all_strategies_sum_to_one),
+        cmocka_unit_test(test_camera_projection_and_density),
+        cmocka_unit_test(test_converges_to_path_tracing_on_the_cornell_box),
+        cmocka_unit_test(test_light_tracing_alone_and_camera_paths_alone),
+        cmocka_unit_test(test_same_image_for_one_and_two_threads),
+        cmocka_unit_test(test_nonfinite_samples_are_counted_and_dropped),
+        cmocka_unit_test(test_delta_materials_are_refused),
+    };
+    return cmocka_run_group_tests_name("ch11 bidirectional path tracing", tests, NULL, NULL);
+}

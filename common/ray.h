@@ -112,9 +112,27 @@ static inline ray ray_spawn(vec3 point, vec3 n, vec3 direction)
     return ray_make(ray_offset_origin(point, side), direction);
 }
 
+/* The far end of a segment of length `length`, on a surface with normal
+ * `side` (facing the segment's start), pulled off that surface. The
+ * intersection test's t for the far end's own surface is rounded in units
+ * of the whole segment: its error along the ray is a few ulps of `length`,
+ * not of the end's coordinates. Far from zero ray_offset_origin's 256 ulps
+ * of each coordinate cover that; near zero (a wall in the plane x = 0 and a
+ * light 500 units away) its fixed 2^-16 does not, and a shadow ray would
+ * stop on the wall it aims at. So the end moves at least ORIGIN_OFFSET_ULPS
+ * ulps of the length along the normal, whichever is farther. */
+static inline vec3 ray_offset_far_end(vec3 target, vec3 side, float length)
+{
+    vec3 by_coordinates = ray_offset_origin(target, side);
+    float minimum = length * (ORIGIN_OFFSET_ULPS * 0x1.0p-24f);
+    if (vec3_dot(vec3_sub(by_coordinates, target), side) >= minimum)
+        return by_coordinates;
+    return vec3_add(target, vec3_scale(side, minimum));
+}
+
 /* A shadow ray from `point` towards `target`, ending just short of it (the
- * end is offset the same way, so a ray to a light sample on a surface does
- * not hit that surface). t runs from 0 to 1 along direction = target - origin. */
+ * end is offset too, so a ray to a light sample on a surface does not hit
+ * that surface). t runs from 0 to 1 along direction = target - origin. */
 static inline ray ray_spawn_to(vec3 point, vec3 n, vec3 target, vec3 target_normal)
 {
     vec3 to_target = vec3_sub(target, point);
@@ -124,7 +142,7 @@ static inline ray ray_spawn_to(vec3 point, vec3 n, vec3 target, vec3 target_norm
         /* A target on a surface (an area light sample): pull it to the side
          * facing the origin, so the shadow ray stops before that surface. */
         vec3 target_side = vec3_dot(vec3_sub(origin, target), target_normal) < 0.0f ? vec3_neg(target_normal) : target_normal;
-        target = ray_offset_origin(target, target_side);
+        target = ray_offset_far_end(target, target_side, vec3_length(to_target));
     }
     ray r = ray_make(origin, vec3_sub(target, origin));
     r.t_max = 1.0f;

@@ -11,9 +11,9 @@
 #include "10-distribution/distribution.h"
 #include "render.h"
 
-enum { EXPERIMENT_SIZE = 64, REFERENCE_SPP = 1024, EXPERIMENT_DEPTH = 4 };
+enum { EXPERIMENT_SIZE = 64, REFERENCE_SPP = 16384, EXPERIMENT_DEPTH = 4 };
 /* Each setting doubles its samples per pixel until a render takes this long. */
-static const double CPU_SECONDS_PER_SETTING = 4.0;
+static const double CPU_SECONDS_PER_SETTING = 3.0;
 
 /* CPU time of the process: all threads' work, not the neighbours'. */
 static double cpu_seconds(void)
@@ -75,7 +75,7 @@ bool experiment_rays_per_bounce(const motion_scene *ms, int threads, const char 
             fprintf(f, "%d,%d,%.6f,%.6g,%.4f,%.4f,%.4f\n", settings[k], spp, seconds, rmse, per_camera,
                     (double)counters.shadow_rays / cam_rays, (double)counters.indirect_rays / cam_rays);
             printf("%4d %6d %10.3f %10.4g %14.2f\n", settings[k], spp, seconds, rmse, per_camera);
-            if (seconds > CPU_SECONDS_PER_SETTING || spp >= REFERENCE_SPP / 8)
+            if (seconds > CPU_SECONDS_PER_SETTING || spp >= 1024)
                 break;
         }
     }

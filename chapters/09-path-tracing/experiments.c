@@ -174,7 +174,7 @@ static void measure_error(const estimate_image *e, const estimate_image *ref, do
  * none), never half of one that a plot would draw without complaint. */
 static void csv_temp_path(const char *path, char *temp, size_t size) { snprintf(temp, size, "%s.tmp", path); }
 
-static FILE *open_csv(const char *dir, const char *name, char *path, size_t path_size, char *err, size_t err_size)
+FILE *open_csv(const char *dir, const char *name, char *path, size_t path_size, char *err, size_t err_size)
 {
     char temp[4200];
     snprintf(path, path_size, "%s/%s", dir, name);
@@ -186,7 +186,7 @@ static FILE *open_csv(const char *dir, const char *name, char *path, size_t path
 }
 
 /* Closes without keeping anything: for a run that failed elsewhere. */
-static void discard_csv(FILE *f, const char *path)
+void discard_csv(FILE *f, const char *path)
 {
     char temp[4200];
     csv_temp_path(path, temp, sizeof temp);
@@ -194,7 +194,7 @@ static void discard_csv(FILE *f, const char *path)
     unlink(temp);
 }
 
-static bool close_csv(FILE *f, const char *path, char *err, size_t err_size)
+bool close_csv(FILE *f, const char *path, char *err, size_t err_size)
 {
     char temp[4200];
     csv_temp_path(path, temp, sizeof temp);

@@ -70,4 +70,12 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
  * and the 1 -> 2 thread scaling; writes them to csv_path too (if not NULL). */
 bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size);
 
+/* A CSV table DIR/NAME, written as NAME.tmp and renamed into place by
+ * close_csv() only when every write succeeded (else err, and no file);
+ * discard_csv() drops it after a failure elsewhere. path receives
+ * DIR/NAME. Chapter 10's measurements write theirs the same way. */
+FILE *open_csv(const char *dir, const char *name, char *path, size_t path_size, char *err, size_t err_size);
+bool close_csv(FILE *f, const char *path, char *err, size_t err_size);
+void discard_csv(FILE *f, const char *path);
+
 #endif

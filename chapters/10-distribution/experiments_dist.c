@@ -8,6 +8,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "09-path-tracing/experiments.h"
 #include "10-distribution/distribution.h"
 #include "render.h"
 
@@ -35,14 +36,29 @@ static double render_timed(const distribution_tracer *dt, const camera *cam, int
     return cpu_seconds() - start;
 }
 
-static bool fail_io(const char *path, char *err, size_t err_size)
-{
-    snprintf(err, err_size, "%s: %s", path, strerror(errno));
-    return false;
-}
-
 bool experiment_rays_per_bounce(const motion_scene *ms, int threads, const char *dir, char *err, size_t err_size)
 {
+    /* Both tables are opened, and their headers written through, before the
+     * minute of rendering: a directory that cannot take them fails now. */
+    char noise_path[4096], counts_path[4096];
+    FILE *noise = open_csv(dir, "ch10_noise.csv", noise_path, sizeof noise_path, err, err_size);
+    if (noise == NULL)
+        return false;
+    FILE *counts = open_csv(dir, "ch10_ray_counts.csv", counts_path, sizeof counts_path, err, err_size);
+    if (counts == NULL) {
+        discard_csv(noise, noise_path);
+        return false;
+    }
+    fprintf(noise, "rays_per_bounce,spp,cpu_seconds,rmse,rays_per_camera_ray,shadow_per_camera_ray,glossy_per_camera_ray\n");
+    fprintf(counts, "glossy_samples,max_depth,rays_per_camera_ray,glossy_per_camera_ray,worst_case_glossy,cpu_seconds\n");
+    bool noise_ok = fflush(noise) == 0 && !ferror(noise), counts_ok = fflush(counts) == 0 && !ferror(counts);
+    if (!noise_ok || !counts_ok) {
+        snprintf(err, err_size, "%s: write failed (%s)", noise_ok ? counts_path : noise_path, strerror(errno));
+        discard_csv(noise, noise_path);
+        discard_csv(counts, counts_path);
+        return false;
+    }
+
     camera cam = pt_scene_camera(&ms->base, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
     distribution_tracer dt = distribution_tracer_defaults(ms, &cam);
     dt.max_depth = EXPERIMENT_DEPTH;
@@ -53,15 +69,6 @@ bool experiment_rays_per_bounce(const motion_scene *ms, int threads, const char 
     double reference_seconds = render_timed(&dt, &cam, REFERENCE_SPP, 999, threads, &reference, &counters);
     printf("reference: %.1f CPU s\n", reference_seconds);
 
-    char path[4096];
-    snprintf(path, sizeof path, "%s/ch10_noise.csv", dir);
-    FILE *f = fopen(path, "w");
-    if (f == NULL) {
-        image_free(&reference);
-        image_free(&img);
-        return fail_io(path, err, err_size);
-    }
-    fprintf(f, "rays_per_bounce,spp,cpu_seconds,rmse,rays_per_camera_ray,shadow_per_camera_ray,glossy_per_camera_ray\n");
     printf("%4s %6s %10s %10s %14s\n", "N", "spp", "CPU s", "RMSE", "rays/cam ray");
     const int settings[4] = {1, 2, 4, 8};
     for (int k = 0; k < 4; k++) {
@@ -72,26 +79,17 @@ bool experiment_rays_per_bounce(const motion_scene *ms, int threads, const char 
             double rmse = sqrt(image_mse(&img, &reference));
             double cam_rays = (double)counters.camera_rays;
             double per_camera = (double)counters_total_rays(&counters) / cam_rays;
-            fprintf(f, "%d,%d,%.6f,%.6g,%.4f,%.4f,%.4f\n", settings[k], spp, seconds, rmse, per_camera,
+            fprintf(noise, "%d,%d,%.6f,%.6g,%.4f,%.4f,%.4f\n", settings[k], spp, seconds, rmse, per_camera,
                     (double)counters.shadow_rays / cam_rays, (double)counters.indirect_rays / cam_rays);
             printf("%4d %6d %10.3f %10.4g %14.2f\n", settings[k], spp, seconds, rmse, per_camera);
             if (seconds > CPU_SECONDS_PER_SETTING || spp >= 1024)
                 break;
         }
     }
-    fclose(f);
 
     /* The explosion itself: rays per camera ray as N_glossy and the depth
      * grow (N_light = 1), at 1 sample per pixel, against the worst case
      * (every hit glossy) sum N^d. */
-    snprintf(path, sizeof path, "%s/ch10_ray_counts.csv", dir);
-    f = fopen(path, "w");
-    if (f == NULL) {
-        image_free(&reference);
-        image_free(&img);
-        return fail_io(path, err, err_size);
-    }
-    fprintf(f, "glossy_samples,max_depth,rays_per_camera_ray,glossy_per_camera_ray,worst_case_glossy,cpu_seconds\n");
     printf("\n%9s %6s %14s %14s %12s\n", "N_glossy", "depth", "rays/cam ray", "glossy/cam", "worst case");
     dt.light_samples = 1;
     const int glossy[4] = {1, 2, 4, 8};
@@ -102,15 +100,18 @@ bool experiment_rays_per_bounce(const motion_scene *ms, int threads, const char 
             double seconds = render_timed(&dt, &cam, 1, 7, threads, &img, &counters);
             double cam_rays = (double)counters.camera_rays;
             double worst = distribution_glossy_rays_per_camera_ray(glossy[g], depth);
-            fprintf(f, "%d,%d,%.4f,%.4f,%.0f,%.6f\n", glossy[g], depth,
+            fprintf(counts, "%d,%d,%.4f,%.4f,%.0f,%.6f\n", glossy[g], depth,
                     (double)counters_total_rays(&counters) / cam_rays, (double)counters.indirect_rays / cam_rays,
                     worst, seconds);
             printf("%9d %6d %14.2f %14.3f %12.0f\n", glossy[g], depth,
                    (double)counters_total_rays(&counters) / cam_rays, (double)counters.indirect_rays / cam_rays,
                    worst);
         }
-    fclose(f);
     image_free(&reference);
     image_free(&img);
-    return true;
+    if (!close_csv(noise, noise_path, err, err_size)) {
+        discard_csv(counts, counts_path);
+        return false;
+    }
+    return close_csv(counts, counts_path, err, err_size);
 }

@@ -18,6 +18,7 @@
 #include "10-distribution/distribution.h"
 #include "effects.h"
 #include "render.h"
+#include "scene_file.h"
 #include "stats.h"
 #include "test_support.h"
 
@@ -539,6 +540,38 @@ static void test_same_image_for_any_thread_count(void **state)
     motion_scene_free(&ms);
 }
 
+/* The shipped scene file is the built-in scene's still part: the same
+ * image, bit for bit, and the same counters. */
+static void test_scene_file_renders_the_still_part(void **state)
+{
+    (void)state;
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    if (!scene_desc_load(&d, "chapters/10-distribution/scenes/showcase.scene", err, sizeof err))
+        fail_msg("%s", err);
+    motion_scene from_file, built_in;
+    motion_scene_init(&from_file);
+    pt_scene_free(&from_file.base);
+    if (!pt_scene_from_desc(&from_file.base, &d, "test", err, sizeof err))
+        fail_msg("%s", err);
+    scene_desc_free(&d);
+    motion_scene_init(&built_in);
+    motion_scene_build_showcase_still(&built_in.base);
+    camera cam = pt_scene_camera(&built_in.base, 24, 24);
+    camera cam_file = pt_scene_camera(&from_file.base, 24, 24);
+    assert_memory_equal(&cam, &cam_file, sizeof cam);
+    distribution_tracer a = distribution_tracer_defaults(&from_file, &cam), b = distribution_tracer_defaults(&built_in, &cam);
+    a.lens = b.lens = thin_lens_make(&cam, 25.0f, 1000.0f);
+    render_result ra = render_radiance(distribution_radiance, &a, &cam, 2, 13, 2);
+    render_result rb = render_radiance(distribution_radiance, &b, &cam, 2, 13, 2);
+    assert_memory_equal(ra.mean.rgb, rb.mean.rgb, 24 * 24 * 3 * sizeof(float));
+    assert_memory_equal(&ra.stats.counters, &rb.stats.counters, sizeof ra.stats.counters);
+    render_result_free(&ra);
+    render_result_free(&rb);
+    motion_scene_free(&from_file);
+    motion_scene_free(&built_in);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -552,6 +585,7 @@ int main(void)
         cmocka_unit_test(test_counts_glossy_rays_explode),
         cmocka_unit_test(test_counts_only_what_the_scene_needs),
         cmocka_unit_test(test_same_image_for_any_thread_count),
+        cmocka_unit_test(test_scene_file_renders_the_still_part),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

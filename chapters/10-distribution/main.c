@@ -15,14 +15,14 @@ int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch10.exr", 512, 512, 16);
     const char *motion = "on", *data = NULL;
-    int light_samples = 4, glossy_samples = 4, max_depth = 5;
+    int light_samples = 4, glossy_samples = 4, max_depth = -1; /* -1: the scene file's, else 5 */
     /* -1: not given, so the scene's own lens */
     float aperture = -1.0f, focus_distance = -1.0f;
     const cli_flag extras[] = {
         {"--light-samples", CLI_INT, &light_samples, "N", "shadow rays to the area lights per hit (default 4)", 1, 4096},
         {"--glossy-samples", CLI_INT, &glossy_samples, "N",
          "rays from the GGX lobe per glossy hit, each recursing (default 4; 0: highlights only)", 0, 4096},
-        {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 5)", 0, 64},
+        {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 5, or the scene file's max_depth)", 0, 64},
         {"--aperture", CLI_FLOAT, &aperture, "R",
          "radius of the thin lens in scene units (0: pinhole; default the scene's, 25 mm for the built-in)", 0.0, 1e6},
         {"--focus-distance", CLI_FLOAT, &focus_distance, "D",
@@ -73,7 +73,12 @@ int main(int argc, char **argv)
         if (!opts.quiet && data == NULL)
             effects_print(stdout, &e, spec.program);
         program_note_effects(&e);
+        if (max_depth < 0 && desc.max_depth >= 0)
+            max_depth = desc.max_depth;
         scene_desc_free(&desc);
+        /* No lens in the file: a pinhole unless --aperture, focused on the
+         * camera's target unless --focus-distance. */
+        ms.focus_distance = vec3_length(vec3_sub(ms.base.target, ms.base.eye));
     } else {
         motion_scene_build_showcase(&ms);
     }
@@ -93,7 +98,7 @@ int main(int argc, char **argv)
             dt.lens.focus_distance = focus_distance;
         dt.light_samples = light_samples;
         dt.glossy_samples = glossy_samples;
-        dt.max_depth = max_depth;
+        dt.max_depth = max_depth >= 0 ? max_depth : 5;
         dt.motion = strcmp(motion, "on") == 0;
         dt.effects = effects;
         render_stats stats;

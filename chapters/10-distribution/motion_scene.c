@@ -152,10 +152,9 @@ static void mesh_add_box(mesh *m, vec3 lo, vec3 hi, int material)
     }
 }
 
-void motion_scene_build_showcase(motion_scene *ms)
+void motion_scene_build_showcase_still(pt_scene *sc)
 {
-    motion_scene_init(ms);
-    pt_scene *sc = &ms->base;
+    pt_scene_init(sc);
     int white = pt_scene_add_material(sc, pt_diffuse(v(0.725f, 0.71f, 0.68f)));
     int red = pt_scene_add_material(sc, pt_diffuse(v(0.63f, 0.065f, 0.05f)));
     int green = pt_scene_add_material(sc, pt_diffuse(v(0.14f, 0.45f, 0.091f)));
@@ -163,18 +162,27 @@ void motion_scene_build_showcase(motion_scene *ms)
     int plate = pt_scene_add_material(sc, pt_glossy(v(0.85f, 0.85f, 0.85f), 0.12f));
     int mirror = pt_scene_add_material(sc, pt_mirror(v(0.9f, 0.9f, 0.9f)));
     int glass = pt_scene_add_material(sc, pt_glass(1.5f));
-    int blue = pt_scene_add_material(sc, pt_diffuse(v(0.2f, 0.3f, 0.75f)));
-    int yellow = pt_scene_add_material(sc, pt_diffuse(v(0.8f, 0.65f, 0.15f)));
+    /* the moving sphere's and the cube's, used by motion_scene_build_showcase */
+    pt_scene_add_material(sc, pt_diffuse(v(0.2f, 0.3f, 0.75f)));
+    pt_scene_add_material(sc, pt_diffuse(v(0.8f, 0.65f, 0.15f)));
     pt_scene_add_cornell_room(sc, white, red, green, light);
     /* A glossy plate over the back of the floor, 1 mm above it, facing up. */
     pt_scene_add_quad(sc, v(520, 1, 230), v(40, 1, 230), v(40, 1, 540), v(520, 1, 540), plate);
-    /* Near the plane of focus (1000 mm in front of the eye, z = 200):
-     * a sphere moving 80 mm to the left (+x; the camera looks along +z)
-     * and a cube rising 60 mm while the shutter is open. Behind them a
-     * mirror sphere on the plate, in front a glass sphere: both out of focus. */
+    /* Behind the plane of focus a mirror sphere on the plate, in front of
+     * it a glass sphere: both out of focus. */
     pt_scene_add_sphere(sc, v(400, 91, 430), 90, mirror, false);
     pt_scene_add_sphere(sc, v(120, 60, 60), 60, glass, false);
     pt_scene_finish(sc);
+}
+
+void motion_scene_build_showcase(motion_scene *ms)
+{
+    motion_scene_init(ms);
+    motion_scene_build_showcase_still(&ms->base);
+    const int blue = 7, yellow = 8; /* materials of the still part */
+    /* In the plane of focus (1000 mm in front of the eye, z = 200): a
+     * sphere moving 80 mm to the left (+x; the camera looks along +z) and
+     * a cube rising 60 mm while the shutter is open. */
     motion_scene_add_sphere(ms, v(200, 60, 250), v(80, 0, 0), 60, blue);
     mesh cube;
     mesh_init(&cube);

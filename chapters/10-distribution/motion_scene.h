@@ -80,5 +80,8 @@ bool motion_scene_occluded(const motion_scene *ms, timed_ray tr, ray_counters *c
  * sphere in front (out of focus), a sphere moving sideways and a cube moving
  * up (motion blur) at the focus distance. */
 void motion_scene_build_showcase(motion_scene *ms);
+/* Its still part, the room, plate, mirror and glass (and the movers'
+ * materials): chapters/10-distribution/scenes/showcase.scene. */
+void motion_scene_build_showcase_still(pt_scene *sc);
 
 #endif

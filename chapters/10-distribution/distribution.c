@@ -147,16 +147,9 @@ static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, v
     return radiance;
 }
 
-static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arrival how, pcg32 *rng,
-                  ray_counters *counters);
-
-/* A mirror's or glass's branch: one ray, weighted, traced on (chapter 02). */
+/* A mirror's or glass's branch (below, after the recursion it calls). */
 static vec3 trace_branch(const distribution_tracer *dt, const hit_record *hit, vec3 direction, float time, int depth,
-                         pcg32 *rng, ray_counters *counters)
-{
-    timed_ray next = {ray_spawn(hit->point, hit->normal_geometric, direction), time};
-    return trace(dt, next, depth + 1, (arrival){true, 0.0f, hit->point}, rng, counters);
-}
+                         pcg32 *rng, ray_counters *counters);
 
 /* ---- the recursion ----------------------------------------------------------------
  *   trace(ray):  hit = closest hit at the ray's instant
@@ -242,6 +235,14 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
         radiance = vec3_add(radiance, vec3_scale(vec3_mul(m->albedo, incoming), 1.0f - reflectance));
     }
     return radiance;
+}
+
+/* A mirror's or glass's branch: one ray, traced on (chapter 02); the caller weighs it. */
+static vec3 trace_branch(const distribution_tracer *dt, const hit_record *hit, vec3 direction, float time, int depth,
+                         pcg32 *rng, ray_counters *counters)
+{
+    timed_ray next = {ray_spawn(hit->point, hit->normal_geometric, direction), time};
+    return trace(dt, next, depth + 1, (arrival){true, 0.0f, hit->point}, rng, counters);
 }
 
 vec3 distribution_radiance(const void *ctx, ray pinhole, pcg32 *rng, ray_counters *counters)

@@ -5,6 +5,7 @@
 #include "02-whitted/whitted.h"
 #include "09-path-tracing/bsdf.h"
 #include "effects.h"
+#include "explain.h"
 
 /* ---- the thin lens -------------------------------------------------------------
  * A lens of focal length F images the plane at distance f onto the film;
@@ -148,8 +149,8 @@ static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, v
 }
 
 /* A mirror's or glass's branch (below, after the recursion it calls). */
-static vec3 trace_branch(const distribution_tracer *dt, const hit_record *hit, vec3 direction, float time, int depth,
-                         pcg32 *rng, ray_counters *counters);
+static vec3 trace_branch(const distribution_tracer *dt, const hit_record *hit, vec3 direction, const char *what,
+                         float time, int depth, pcg32 *rng, ray_counters *counters);
 
 /* ---- the recursion ----------------------------------------------------------------
  *   trace(ray):  hit = closest hit at the ray's instant
@@ -172,6 +173,14 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
     vec3 wo = vec3_normalize(vec3_neg(tr.r.direction));
     vec3 n = hit.normal_shading;
     vec3 radiance = vec3_splat(0.0f);
+    int indent = 2 * depth + 2; /* --explain: each bounce two steps deeper */
+    if (explain_on()) {
+        static const char *const kinds[] = {"diffuse", "glossy", "glass", "mirror"};
+        char p[64];
+        explain_line(indent - 1, "hit %s, material #%d (%s), at t = %.6g, point %s, bounce %d",
+                     hit.shape_id >= 0 ? "a static triangle" : "a sphere or moving object", hit.material_id,
+                     kinds[m->kind], (double)hit.t, explain_vec3(p, hit.point), depth);
+    }
 
     /* Emission. Emitting static triangles are the lights the samples aim
      * at; a glossy ray that finds one shares it with them by MIS. */
@@ -191,7 +200,13 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
 
     if (m->kind == BSDF_DIFFUSE || m->kind == BSDF_GLOSSY) {
         bool lobe_rays = m->kind == BSDF_GLOSSY && dt->glossy_samples > 0 && (dt->effects & EFFECT_GLOSSY);
-        radiance = vec3_add(radiance, direct_light(dt, &hit, wo, m, tr.time, lobe_rays, rng, counters));
+        vec3 direct = direct_light(dt, &hit, wo, m, tr.time, lobe_rays, rng, counters);
+        radiance = vec3_add(radiance, direct);
+        if (explain_on()) {
+            char b[64];
+            explain_line(indent, "direct light from %d light samples%s: %s", dt->light_samples,
+                         lobe_rays ? " (MIS with the lobe rays)" : "", explain_vec3(b, direct));
+        }
         if (!lobe_rays)
             return radiance; /* diffuse: no indirect light, the path tracer's addition */
         /* Glossy reflection: 1/N sum f cos / pdf x L_i over N directions
@@ -204,6 +219,11 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
                 continue;
             counters->indirect_rays++;
             timed_ray next = {ray_spawn(hit.point, hit.normal_geometric, s.wi), tr.time};
+            if (explain_on()) {
+                char label[64];
+                snprintf(label, sizeof label, "glossy ray %d of %d (pdf %.4g)", k + 1, dt->glossy_samples, (double)s.pdf);
+                explain_ray(indent, label, next.r);
+            }
             vec3 incoming = trace(dt, next, depth + 1, (arrival){false, s.pdf, hit.point}, rng, counters);
             sum = vec3_add(sum, vec3_mul(s.weight, incoming));
         }
@@ -215,7 +235,7 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
     if (m->kind == BSDF_MIRROR) {
         if (dt->effects & EFFECT_REFLECTION) {
             counters->reflection_rays++;
-            vec3 incoming = trace_branch(dt, &hit, reflected, tr.time, depth, rng, counters);
+            vec3 incoming = trace_branch(dt, &hit, reflected, "reflected ray", tr.time, depth, rng, counters);
             radiance = vec3_add(radiance, vec3_mul(m->albedo, incoming));
         }
         return radiance;
@@ -226,22 +246,24 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
     float reflectance = can_refract ? fresnel_dielectric(vec3_dot(n, wo), eta_i, eta_t) : 1.0f;
     if ((dt->effects & EFFECT_REFLECTION) && reflectance > 0.0f) {
         counters->reflection_rays++;
-        vec3 incoming = trace_branch(dt, &hit, reflected, tr.time, depth, rng, counters);
+        vec3 incoming = trace_branch(dt, &hit, reflected, "reflected ray", tr.time, depth, rng, counters);
         radiance = vec3_add(radiance, vec3_scale(vec3_mul(m->albedo, incoming), reflectance));
     }
     if ((dt->effects & EFFECT_REFRACTION) && can_refract && reflectance < 1.0f) {
         counters->refraction_rays++;
-        vec3 incoming = trace_branch(dt, &hit, refracted, tr.time, depth, rng, counters);
+        vec3 incoming = trace_branch(dt, &hit, refracted, "refracted ray", tr.time, depth, rng, counters);
         radiance = vec3_add(radiance, vec3_scale(vec3_mul(m->albedo, incoming), 1.0f - reflectance));
     }
     return radiance;
 }
 
 /* A mirror's or glass's branch: one ray, traced on (chapter 02); the caller weighs it. */
-static vec3 trace_branch(const distribution_tracer *dt, const hit_record *hit, vec3 direction, float time, int depth,
-                         pcg32 *rng, ray_counters *counters)
+static vec3 trace_branch(const distribution_tracer *dt, const hit_record *hit, vec3 direction, const char *what,
+                         float time, int depth, pcg32 *rng, ray_counters *counters)
 {
     timed_ray next = {ray_spawn(hit->point, hit->normal_geometric, direction), time};
+    if (explain_on())
+        explain_ray(2 * depth + 2, what, next.r);
     return trace(dt, next, depth + 1, (arrival){true, 0.0f, hit->point}, rng, counters);
 }
 
@@ -254,5 +276,11 @@ vec3 distribution_radiance(const void *ctx, ray pinhole, pcg32 *rng, ray_counter
     vec2 u_lens = vec2_make(pcg32_float(rng), pcg32_float(rng));
     float u_time = pcg32_float(rng);
     timed_ray camera_ray = {thin_lens_ray(&dt->lens, pinhole, u_lens), dt->motion ? u_time : 0.0f};
+    if (explain_on()) {
+        char label[96];
+        snprintf(label, sizeof label, "lens ray (aperture %g), at shutter instant %.4f", (double)dt->lens.aperture_radius,
+                 (double)camera_ray.time);
+        explain_ray(1, label, camera_ray.r);
+    }
     return trace(dt, camera_ray, 0, (arrival){true, 0.0f, pinhole.origin}, rng, counters);
 }

@@ -572,6 +572,67 @@ static void test_scene_file_renders_the_still_part(void **state)
     motion_scene_free(&built_in);
 }
 
+/* ---- stratified pixel samples ----------------------------------------------------
+ * A radiance function that records where in the pixel each camera ray
+ * went (from its direction, inverting camera_ray), for the test below. */
+typedef struct {
+    const camera *cam;
+    float px[64], py[64];
+    int count;
+} sample_log;
+
+static sample_log stratify_log;
+
+static vec3 record_position(const void *ctx, ray r, pcg32 *rng, ray_counters *counters)
+{
+    (void)ctx;
+    (void)rng;
+    (void)counters;
+    const camera *cam = stratify_log.cam;
+    float along = vec3_dot(r.direction, cam->forward);
+    float sx = vec3_dot(r.direction, cam->right) / along, sy = vec3_dot(r.direction, cam->up) / along;
+    stratify_log.px[stratify_log.count] = (sx / cam->half_width + 1.0f) * 0.5f * (float)cam->width;
+    stratify_log.py[stratify_log.count] = (1.0f - sy / cam->half_height) * 0.5f * (float)cam->height;
+    stratify_log.count++;
+    return vec3_splat(0.0f);
+}
+
+/* Cook's jittered samples: with spp = k^2 (+ a few) the first k^2 fall one
+ * in each cell of a k x k grid over the pixel; the twin, independent
+ * uniform positions, leaves cells empty. */
+static void test_stratified_samples_fill_every_cell(void **state)
+{
+    (void)state;
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 30.0f, 8, 8);
+    const int spps[3] = {16, 18, 49};
+    for (int stratify = 1; stratify >= 0; stratify--)
+        for (int k = 0; k < 3; k++) {
+            int spp = spps[k], side = spp == 49 ? 7 : 4;
+            stratify_log.cam = &cam;
+            stratify_log.count = 0;
+            render_job job = {.cam = &cam, .spp = spp, .seed = 3, .threads = 1, .quiet = true,
+                              .radiance = record_position, .scene = NULL, .stratify = stratify};
+            ray_counters c = {0};
+            render_pixel(&job, 5, 2, &c, NULL);
+            assert_int_equal(stratify_log.count, spp);
+            int hits[49] = {0}, empty = 0;
+            for (int i = 0; i < side * side; i++) {
+                /* pixel (5, 2): positions in [5, 6) x [2, 3) */
+                float fx = stratify_log.px[i] - 5.0f, fy = stratify_log.py[i] - 2.0f;
+                assert_true(fx > -1e-4f && fx < 1.0001f && fy > -1e-4f && fy < 1.0001f);
+                int cx = (int)fminf(fmaxf(fx * (float)side, 0.0f), (float)side - 1.0f);
+                int cy = (int)fminf(fmaxf(fy * (float)side, 0.0f), (float)side - 1.0f);
+                hits[cy * side + cx]++;
+            }
+            for (int i = 0; i < side * side; i++)
+                empty += hits[i] == 0;
+            if (stratify)
+                assert_int_equal(empty, 0);
+            else /* k^2 uniform points leave about k^2 / e cells empty */
+                assert_true(empty > 0);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -586,6 +647,7 @@ int main(void)
         cmocka_unit_test(test_counts_only_what_the_scene_needs),
         cmocka_unit_test(test_same_image_for_any_thread_count),
         cmocka_unit_test(test_scene_file_renders_the_still_part),
+        cmocka_unit_test(test_stratified_samples_fill_every_cell),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -64,20 +64,20 @@ static int count_disagreements(const render_result *a, const render_result *b)
 }
 
 /* ---- the path tracer's estimator, restricted ------------------------------------
- * Distribution ray tracing computes the light that reaches the eye along
- * paths L (S|G)* D? E... more simply: all the light the path tracer finds
+ * Distribution ray tracing computes all the light the path tracer finds
  * except what bounces off a diffuse surface and goes on. Chapter 09 with
  * `effects` lacking EFFECT_INDIRECT ends its paths at diffuse vertices
  * after their direct light: the same light transport, so both estimate the
  * same image; MIS, RR off, one depth limit on both sides. The scene: the
- * Cornell box with a GGX metal block (glossy reflections of the light and
- * walls) and a glass sphere. */
+ * still part of the built-in scene (a GGX plate, a mirror and a glass
+ * sphere in the Cornell room: glossy reflections of the light and the
+ * walls). */
 static void test_equals_path_tracer_without_indirect_diffuse(void **state)
 {
     (void)state;
     motion_scene ms;
     motion_scene_init(&ms);
-    pt_scene_build_cornell_box_materials(&ms.base);
+    motion_scene_build_showcase_still(&ms.base);
     camera cam = pt_scene_camera(&ms.base, 12, 12);
 
     path_tracer pt = path_tracer_defaults(&ms.base);

@@ -15,7 +15,7 @@ do for [fmt in "png svg"] {
     set ylabel "RMSE against the reference"
     set xlabel "samples per pixel"
     plot for [n in "1 2 4 8"] file using (column(1)==n+0 ? $2 : 1/0):4 every ::1 with linespoints lw 2 pt 7 title "N = ".n
-    set xlabel "CPU seconds (one thread)"
+    set xlabel "CPU seconds (all threads together)"
     plot for [n in "1 2 4 8"] file using (column(1)==n+0 ? $3 : 1/0):4 every ::1 with linespoints lw 2 pt 7 title "N = ".n
     unset multiplot
 }

@@ -39,6 +39,8 @@ typedef struct {
      * tracer) so that even one sample per pixel lands at a random point
      * inside it, rather than at its centre (see render.h). */
     bool jitter;
+    /* Not a flag either: stratified pixel positions (render.h), chapter 10. */
+    bool stratify;
 } cli_options;
 
 /* CLI_DIR: a directory that must exist and be writable when the flags are

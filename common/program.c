@@ -96,7 +96,8 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
                       .label = label,
                       .radiance = radiance,
                       .scene = scene,
-                      .jitter = opts->jitter};
+                      .jitter = opts->jitter,
+                      .stratify = opts->stratify};
     if (opts->explain)
         return program_explain(opts, label, &job, stats_out);
     image img = image_make(cam->width, cam->height);

@@ -16,9 +16,16 @@ vec3 render_pixel(const render_job *job, int x, int y, ray_counters *counters, v
     const camera *cam = job->cam;
     pcg32 rng = pcg32_for_pixel(job->seed, (uint64_t)y * (uint64_t)cam->width + (uint64_t)x);
     welford channel[3] = {{0}, {0}, {0}};
+    int strata = 1; /* k = floor(sqrt(spp)) cells a side, when stratified */
+    while ((strata + 1) * (strata + 1) <= job->spp)
+        strata++;
     for (int s = 0; s < job->spp; s++) {
         float px = (float)x + 0.5f, py = (float)y + 0.5f;
-        if (job->spp > 1 || job->jitter) {
+        if (job->stratify && s < strata * strata) {
+            /* cell (s mod k, s div k), and a uniform point inside it */
+            px = (float)x + ((float)(s % strata) + pcg32_float(&rng)) / (float)strata;
+            py = (float)y + ((float)(s / strata) + pcg32_float(&rng)) / (float)strata;
+        } else if (job->spp > 1 || job->jitter || job->stratify) {
             px = (float)x + pcg32_float(&rng);
             py = (float)y + pcg32_float(&rng);
         }

@@ -45,6 +45,10 @@ typedef struct {
     const void *scene;
     image *standard_error; /* optional: per-pixel standard error of the mean, per channel */
     bool jitter;           /* random positions in the pixel even when spp = 1 */
+    /* Stratified ("jittered", Cook 1984) positions: the pixel cut into a
+     * k x k grid, k = floor(sqrt(spp)), one random position in each cell;
+     * samples beyond k x k anywhere in the pixel. Implies jitter. */
+    bool stratify;
 } render_job;
 
 typedef struct {

@@ -212,7 +212,7 @@ static const vec3 CORNELL_RED = {0.63f, 0.065f, 0.05f};
 static const vec3 CORNELL_GREEN = {0.14f, 0.45f, 0.091f};
 static const vec3 CORNELL_LIGHT = {17.0f, 12.0f, 4.0f};
 
-static void cornell_room(pt_scene *sc, int white, int red, int green, int light)
+void pt_scene_add_cornell_room(pt_scene *sc, int white, int red, int green, int light)
 {
     /* Floor, ceiling, back wall, right (green) and left (red) walls: the
      * published coordinates, each face counter-clockwise seen from inside. */
@@ -254,7 +254,7 @@ void pt_scene_build_cornell_box(pt_scene *sc)
     int red = pt_scene_add_material(sc, pt_diffuse(CORNELL_RED));
     int green = pt_scene_add_material(sc, pt_diffuse(CORNELL_GREEN));
     int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), CORNELL_LIGHT));
-    cornell_room(sc, white, red, green, light);
+    pt_scene_add_cornell_room(sc, white, red, green, light);
     cornell_short_block(sc, white);
     cornell_tall_block(sc, white);
     pt_scene_finish(sc);
@@ -269,7 +269,7 @@ void pt_scene_build_cornell_box_materials(pt_scene *sc)
     int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), CORNELL_LIGHT));
     int metal = pt_scene_add_material(sc, pt_glossy(vec3_make(0.95f, 0.64f, 0.54f), 0.15f)); /* copper-like */
     int glass = pt_scene_add_material(sc, pt_glass(1.5f));
-    cornell_room(sc, white, red, green, light);
+    pt_scene_add_cornell_room(sc, white, red, green, light);
     cornell_tall_block(sc, metal);
     pt_scene_add_sphere(sc, v(185, 90, 170), 90, glass, false);
     pt_scene_finish(sc);

@@ -109,6 +109,10 @@ float pt_scene_emitter_pdf_area(const pt_scene *sc, int material);
 camera pt_scene_camera(const pt_scene *sc, int width, int height);
 
 /* The scenes. */
+/* The Cornell box's room alone: floor, ceiling and back wall (white), the
+ * green and red walls, the light in the ceiling, and the original camera;
+ * millimetres. The rooms of pt_scene_build_cornell_box and of chapter 10. */
+void pt_scene_add_cornell_room(pt_scene *sc, int white, int red, int green, int light);
 /* The Cornell box as measured (Cornell University Program of Computer
  * Graphics): white, red and green walls, a square light in the ceiling, a
  * short and a tall block; millimetres; the original camera. */

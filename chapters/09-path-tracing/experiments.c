@@ -16,7 +16,7 @@ static const double RELATIVE_ERROR_EPSILON = 1e-2;
 /* CPU time of the whole process (all threads): on a machine shared with
  * other jobs, it measures the work done; wall time also measures the
  * neighbours. */
-static double cpu_seconds(void)
+double experiment_cpu_seconds(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
@@ -154,12 +154,12 @@ bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int
  * The reference has noise of its own, which adds its variance to every
  * measured MSE; subtracting the mean of its squared standard error leaves the
  * error of the image under test (an unbiased correction). */
-static void measure_error(const estimate_image *e, const estimate_image *ref, double *rmse, double *relmse)
+void experiment_error(const image *img, const estimate_image *ref, double *rmse, double *relmse)
 {
-    size_t n = (size_t)e->mean.width * (size_t)e->mean.height * 3;
+    size_t n = (size_t)img->width * (size_t)img->height * 3;
     double sum = 0.0, sum_relative = 0.0;
     for (size_t i = 0; i < n; i++) {
-        double d = (double)e->mean.rgb[i] - (double)ref->mean.rgb[i];
+        double d = (double)img->rgb[i] - (double)ref->mean.rgb[i];
         double s = ref->standard_error.rgb[i], r = ref->mean.rgb[i];
         double squared = d * d - s * s;
         sum += squared;
@@ -174,7 +174,7 @@ static void measure_error(const estimate_image *e, const estimate_image *ref, do
  * none), never half of one that a plot would draw without complaint. */
 static void csv_temp_path(const char *path, char *temp, size_t size) { snprintf(temp, size, "%s.tmp", path); }
 
-static FILE *open_csv(const char *dir, const char *name, char *path, size_t path_size, char *err, size_t err_size)
+FILE *experiment_csv_open(const char *dir, const char *name, char *path, size_t path_size, char *err, size_t err_size)
 {
     char temp[4200];
     snprintf(path, path_size, "%s/%s", dir, name);
@@ -186,7 +186,7 @@ static FILE *open_csv(const char *dir, const char *name, char *path, size_t path
 }
 
 /* Closes without keeping anything: for a run that failed elsewhere. */
-static void discard_csv(FILE *f, const char *path)
+void experiment_csv_discard(FILE *f, const char *path)
 {
     char temp[4200];
     csv_temp_path(path, temp, sizeof temp);
@@ -194,7 +194,7 @@ static void discard_csv(FILE *f, const char *path)
     unlink(temp);
 }
 
-static bool close_csv(FILE *f, const char *path, char *err, size_t err_size)
+bool experiment_csv_close(FILE *f, const char *path, char *err, size_t err_size)
 {
     char temp[4200];
     csv_temp_path(path, temp, sizeof temp);
@@ -241,7 +241,7 @@ enum { TARGET_COUNT = sizeof TARGET_RELMSE / sizeof TARGET_RELMSE[0], MAX_POINTS
  * log(relMSE) interpolated linearly in log(seconds) between the two renders
  * either side of it. -1 if no render reached it; *spp_out = the first spp
  * that did. */
-static double time_to_reach(const double *seconds, const double *relmse, const int *spp, int n, double target,
+double experiment_time_to_reach(const double *seconds, const double *relmse, const int *spp, int n, double target,
                             int *spp_out)
 {
     *spp_out = 0;
@@ -262,13 +262,13 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
 {
     char path[4096], time_path[4096], file[256];
     snprintf(file, sizeof file, "ch09_convergence_%s.csv", name);
-    FILE *csv = open_csv(dir, file, path, sizeof path, err, err_size);
+    FILE *csv = experiment_csv_open(dir, file, path, sizeof path, err, err_size);
     if (csv == NULL)
         return false;
     snprintf(file, sizeof file, "ch09_time_to_error_%s.csv", name);
-    FILE *time_csv = open_csv(dir, file, time_path, sizeof time_path, err, err_size);
+    FILE *time_csv = experiment_csv_open(dir, file, time_path, sizeof time_path, err, err_size);
     if (time_csv == NULL) {
-        discard_csv(csv, path);
+        experiment_csv_discard(csv, path);
         return false;
     }
     fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample,cpu_seconds\n");
@@ -283,11 +283,11 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
         double seconds[MAX_POINTS], relmses[MAX_POINTS];
         int spps[MAX_POINTS], n = 0;
         for (int spp = 1; spp <= max_spp && n < MAX_POINTS; spp *= 2, n++) {
-            double cpu_start = cpu_seconds();
+            double cpu_start = experiment_cpu_seconds();
             estimate_image e = render_estimate(&pt, cam, spp, 1000 + (uint64_t)spp, threads);
-            double cpu = cpu_seconds() - cpu_start;
+            double cpu = experiment_cpu_seconds() - cpu_start;
             double rmse, relmse;
-            measure_error(&e, reference, &rmse, &relmse);
+            experiment_error(&e.mean, reference, &rmse, &relmse);
             double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
             fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f,%.6f\n", k, pt_integrator_name(pt.integrator),
                     pt.russian_roulette == RR_FIXED ? "fixed" : "throughput", spp, e.seconds, rmse, relmse, rays, cpu);
@@ -298,7 +298,7 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
             estimate_image_free(&e);
         }
         for (int t = 0; t < TARGET_COUNT; t++) {
-            reached[k][t] = time_to_reach(seconds, relmses, spps, n, TARGET_RELMSE[t], &reached_spp[k][t]);
+            reached[k][t] = experiment_time_to_reach(seconds, relmses, spps, n, TARGET_RELMSE[t], &reached_spp[k][t]);
             fprintf(time_csv, "%d,\"%s\",%g,%.6f,%d\n", k, rungs[k].label, TARGET_RELMSE[t], reached[k][t],
                     reached_spp[k][t]);
         }
@@ -319,18 +319,18 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
         printf("\n");
     }
     /* Both files or neither: a failed first one discards the second. */
-    if (!close_csv(csv, path, err, err_size)) {
-        discard_csv(time_csv, time_path);
+    if (!experiment_csv_close(csv, path, err, err_size)) {
+        experiment_csv_discard(time_csv, time_path);
         return false;
     }
-    return close_csv(time_csv, time_path, err, err_size);
+    return experiment_csv_close(time_csv, time_path, err, err_size);
 }
 
 bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp,
                                  int threads, const char *dir, char *err, size_t err_size)
 {
     char path[4096];
-    FILE *csv = open_csv(dir, "ch09_russian_roulette.csv", path, sizeof path, err, err_size);
+    FILE *csv = experiment_csv_open(dir, "ch09_russian_roulette.csv", path, sizeof path, err, err_size);
     if (csv == NULL)
         return false;
     const float probabilities[] = {0.2f, 0.4f, 0.6f, 0.8f, 0.9f, 0.95f};
@@ -341,11 +341,11 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
         pt.integrator = PT_COSINE;
         pt.russian_roulette = RR_FIXED;
         pt.rr_probability = probabilities[i];
-        double cpu_start = cpu_seconds();
+        double cpu_start = experiment_cpu_seconds();
         estimate_image e = render_estimate(&pt, cam, spp, 77, threads);
-        double cpu = cpu_seconds() - cpu_start;
+        double cpu = experiment_cpu_seconds() - cpu_start;
         double rmse, relmse;
-        measure_error(&e, reference, &rmse, &relmse);
+        experiment_error(&e.mean, reference, &rmse, &relmse);
         double mse = rmse * rmse;
         double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
         fprintf(csv, "%.2f,%.6f,%.6e,%.6e,%.3f\n", (double)probabilities[i], cpu, mse, 1.0 / (mse * cpu), rays);
@@ -353,7 +353,7 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
                rays);
         estimate_image_free(&e);
     }
-    return close_csv(csv, path, err, err_size);
+    return experiment_csv_close(csv, path, err, err_size);
 }
 
 /* ---- speed ------------------------------------------------------------------------
@@ -418,9 +418,9 @@ bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char
         double best_wall[2] = {INFINITY, INFINITY}, best_cpu[2] = {INFINITY, INFINITY}, rays = 0.0;
         for (int r = 0; r < repeats; r++) {
             for (int threads = 1; threads <= 2; threads++) {
-                double cpu_start = cpu_seconds();
+                double cpu_start = experiment_cpu_seconds();
                 estimate_image e = render_estimate(&pt, &cam, spp, 1, threads);
-                double cpu = cpu_seconds() - cpu_start;
+                double cpu = experiment_cpu_seconds() - cpu_start;
                 best_wall[threads - 1] = fmin(best_wall[threads - 1], e.seconds);
                 best_cpu[threads - 1] = fmin(best_cpu[threads - 1], cpu);
                 rays = (double)counters_total_rays(&e.counters) / (million_samples * 1e6);
@@ -437,5 +437,5 @@ bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char
         }
     }
     pt_scene_free(&sc);
-    return csv == NULL || close_csv(csv, csv_path, err, err_size);
+    return csv == NULL || experiment_csv_close(csv, csv_path, err, err_size);
 }

@@ -70,4 +70,24 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
  * and the 1 -> 2 thread scaling; writes them to csv_path too (if not NULL). */
 bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size);
 
+/* The pieces the experiments are made of, shared with chapter 12's:
+ * CPU seconds of the whole process (all threads: on a shared machine it
+ * measures the work done, where wall time also measures the neighbours). */
+double experiment_cpu_seconds(void);
+/* RMSE and relMSE of img against the reference, less the reference's own
+ * noise (the mean of its squared standard error, an unbiased correction). */
+void experiment_error(const image *img, const estimate_image *reference, double *rmse, double *relmse);
+/* A CSV file DIR/NAME (path receives it), written as NAME.tmp and renamed
+ * into place by experiment_csv_close only if every write succeeded;
+ * experiment_csv_discard drops it. NULL / false with err on failure. */
+FILE *experiment_csv_open(const char *dir, const char *name, char *path, size_t path_size, char *err,
+                          size_t err_size);
+bool experiment_csv_close(FILE *f, const char *path, char *err, size_t err_size);
+void experiment_csv_discard(FILE *f, const char *path);
+/* The time at which relMSE falls to `target`, from n renders at doubling
+ * sample counts (log-log interpolation); -1 if none reached it, and
+ * *spp_out the first sample count that did. */
+double experiment_time_to_reach(const double *seconds, const double *relmse, const int *spp, int n, double target,
+                                int *spp_out);
+
 #endif

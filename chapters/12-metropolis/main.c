@@ -9,6 +9,7 @@
 #include "12-metropolis/mlt_experiments.h"
 #include "12-metropolis/mlt_scene.h"
 #include "cli.h"
+#include "program.h"
 
 static bool build_scene(pt_scene *sc, const char *name)
 {
@@ -29,6 +30,7 @@ int main(int argc, char **argv)
     const char *scene_name = "lamp", *start = "bootstrap", *data = NULL;
     float p_large = 0.3f;
     int bootstrap = 100000, chains = 256, max_depth = 64;
+    bool path_trace = false;
     const cli_flag extras[] = {
         {"--p-large", CLI_FLOAT, &p_large, "P", "probability of a large step (all new numbers; default 0.3)", 0.0, 1.0},
         {"--bootstrap", CLI_INT, &bootstrap, "N", "paths that estimate the normalization b (default 100000)", 1,
@@ -39,6 +41,8 @@ int main(int argc, char **argv)
          "first path with f > 0: start-up bias)", 0, 0},
         {"--builtin", CLI_STRING, &scene_name, "NAME",
          "lamp (default: the light shut in a housing with a 1 cm slit), cornell, materials", 0, 0},
+        {"--path-trace", CLI_BOOL, &path_trace, NULL,
+         "render the same scene with chapter 09's path tracer instead (--spp samples per pixel), to compare", 0, 0},
         {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
         {"--data", CLI_DIR, &data, "DIR",
          "run the experiments (equal-time error of MLT and path tracing; start-up bias) and write CSV into DIR", 0,
@@ -87,6 +91,12 @@ int main(int argc, char **argv)
         return 0;
     }
     camera cam = pt_scene_camera(&sc, opts.width, opts.height);
+    if (path_trace) {
+        opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
+        status = program_render(&opts, spec.program, path_trace_radiance, &pt, &cam, NULL);
+        pt_scene_free(&sc);
+        return status;
+    }
     mlt_options o = mlt_defaults(&pt, &cam);
     o.mutations_per_pixel = opts.spp;
     o.p_large = p_large;

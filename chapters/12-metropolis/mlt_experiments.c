@@ -10,19 +10,25 @@
 #include "12-metropolis/mlt.h"
 #include "12-metropolis/mlt_scene.h"
 
-/* Small images, so the whole run stays near two minutes on two cores. */
-enum { EXPERIMENT_SIZE = 48, MAX_SAMPLES = 256, STARTUP_MAX_MPP = 32, STARTUP_REPLICAS = 4, STARTUP_CHAINS = 512 };
+/* Images of 128 x 128: small, so the whole run stays near two minutes on
+ * two cores, but not tiny -- on a 48 x 48 image Kelemen's small steps
+ * (at most 1/64 of the film) move a path by under a pixel, so a chain
+ * lingers in one pixel for tens of steps and its correlated samples cost
+ * Metropolis its advantage (measured: README, "Hard cases"). */
+enum { EXPERIMENT_SIZE = 128, MAX_SAMPLES = 64, STARTUP_MAX_MPP = 16, STARTUP_REPLICAS = 3, STARTUP_CHAINS = 1024 };
 /* MLT's chains: enough to keep two threads busy, few enough that each is
  * long (its start matters little). */
 enum { EXPERIMENT_CHAINS = 64 };
+/* The path-traced references: the Cornell box converges fast, the lamp slowly. */
+enum { CORNELL_REFERENCE_SPP = 1024, LAMP_REFERENCE_SPP = 4096 };
 
 /* The bootstrap grows with the run: b's relative error scales every pixel
  * alike, so a bootstrap much smaller than the chains would put a floor
- * under the error. Half as many paths as mutations, at least 2^14. */
+ * under the error. An eighth as many paths as mutations, at least 2^15. */
 static int bootstrap_for(long long mutations)
 {
-    long long n = mutations / 2;
-    return (int)(n < (1 << 14) ? (1 << 14) : n);
+    long long n = mutations / 8;
+    return (int)(n < (1 << 15) ? (1 << 15) : n);
 }
 
 typedef struct {
@@ -31,7 +37,7 @@ typedef struct {
     int reference_spp;
 } experiment_scene;
 
-static const double TARGETS[] = {0.1, 0.03, 0.01};
+static const double TARGETS[] = {1.0, 0.3, 0.1, 0.03};
 enum { TARGET_COUNT = sizeof TARGETS / sizeof TARGETS[0], MAX_POINTS = 16 };
 
 static bool equal_time(const experiment_scene *es, const char *dir, int threads, char *err, size_t err_size)
@@ -146,7 +152,7 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_cornell_%d.exr", dir, EXPERIMENT_SIZE);
     estimate_image reference;
     printf("\n== start-up bias (Cornell box, %d chains, mean of %d runs)\n", STARTUP_CHAINS, STARTUP_REPLICAS);
-    if (!experiment_reference(&pt, &cam, 4096, threads, reference_path, &reference, err, err_size)) {
+    if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size)) {
         pt_scene_free(&sc);
         return false;
     }
@@ -204,8 +210,8 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
 bool mlt_experiments_run(const char *dir, int threads, char *err, size_t err_size)
 {
     const experiment_scene scenes[] = {
-        {"cornell", pt_scene_build_cornell_box, 4096},
-        {"lamp", mlt_scene_build_lamp, 16384},
+        {"cornell", pt_scene_build_cornell_box, CORNELL_REFERENCE_SPP},
+        {"lamp", mlt_scene_build_lamp, LAMP_REFERENCE_SPP},
     };
     for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
         if (!equal_time(&scenes[i], dir, threads, err, err_size))

@@ -15,7 +15,7 @@
  * (at most 1/64 of the film) move a path by under a pixel, so a chain
  * lingers in one pixel for tens of steps and its correlated samples cost
  * Metropolis its advantage (measured: README, "Hard cases"). */
-enum { EXPERIMENT_SIZE = 128, MAX_SAMPLES = 64, STARTUP_MAX_MPP = 16, STARTUP_REPLICAS = 3, STARTUP_CHAINS = 1024 };
+enum { EXPERIMENT_SIZE = 128, PT_MAX_SPP = 128, MLT_MAX_MPP = 64, STARTUP_MAX_MPP = 16, STARTUP_REPLICAS = 3, STARTUP_CHAINS = 1024 };
 /* MLT's chains: enough to keep two threads busy, few enough that each is
  * long (its start matters little). */
 enum { EXPERIMENT_CHAINS = 64 };
@@ -69,7 +69,8 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
     int samples[2][MAX_POINTS], count[2] = {0, 0};
     bool ok = true;
     for (int method = 0; method < 2 && ok; method++) {
-        for (int spp = 1; spp <= MAX_SAMPLES; spp *= 2) {
+        /* up to about the same CPU time: a mutation costs about twice a path */
+        for (int spp = 1; spp <= (method == 0 ? PT_MAX_SPP : MLT_MAX_MPP); spp *= 2) {
             image img = image_make(cam.width, cam.height);
             double cpu_start = experiment_cpu_seconds(), wall = 0.0, acceptance = 0.0;
             if (method == 0) {
@@ -166,10 +167,13 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     static const char *const labels[2] = {"bootstrap start", "fixed start"};
     printf("  %-18s %-18s %-14s %s\n", "mutations/pixel", "mutations/chain", "bootstrap", "fixed start");
     bool ok = true;
-    for (int mpp = 1; mpp <= STARTUP_MAX_MPP && ok; mpp *= 2) {
-        double mean_relmse[2] = {0, 0};
-        long long per_chain = (long long)mpp * cam.width * cam.height / STARTUP_CHAINS;
-        for (int start = 0; start < 2 && ok; start++) {
+    double mean_relmse[2][MAX_POINTS];
+    int points = 0;
+    /* one start after the other, so each is a contiguous line in the CSV */
+    for (int start = 0; start < 2 && ok; start++) {
+        points = 0;
+        for (int mpp = 1; mpp <= STARTUP_MAX_MPP && ok; mpp *= 2) {
+            long long per_chain = (long long)mpp * cam.width * cam.height / STARTUP_CHAINS;
             double cpu_total = 0.0, relmse_total = 0.0;
             for (int replica = 0; replica < STARTUP_REPLICAS; replica++) {
                 mlt_options o = mlt_defaults(&pt, &cam);
@@ -192,12 +196,14 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
                 relmse_total += relmse;
                 image_free(&img);
             }
-            mean_relmse[start] = relmse_total / STARTUP_REPLICAS;
+            mean_relmse[start][points++] = relmse_total / STARTUP_REPLICAS;
             fprintf(csv, "%d,%s,%d,%lld,%.6f,%.8g\n", start, labels[start], mpp, per_chain,
-                    cpu_total / STARTUP_REPLICAS, mean_relmse[start]);
+                    cpu_total / STARTUP_REPLICAS, relmse_total / STARTUP_REPLICAS);
         }
-        printf("  %-18d %-18lld %-14.4g %.4g\n", mpp, per_chain, mean_relmse[0], mean_relmse[1]);
     }
+    for (int k = 0, mpp = 1; ok && k < points; k++, mpp *= 2)
+        printf("  %-18d %-18lld %-14.4g %.4g\n", mpp, (long long)mpp * cam.width * cam.height / STARTUP_CHAINS,
+               mean_relmse[0][k], mean_relmse[1][k]);
     estimate_image_free(&reference);
     pt_scene_free(&sc);
     if (!ok) {

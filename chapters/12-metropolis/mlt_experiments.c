@@ -2,6 +2,7 @@
  * start-up bias (see mlt_experiments.h). */
 #include "mlt_experiments.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -37,6 +38,22 @@ typedef struct {
     int reference_spp;
 } experiment_scene;
 
+/* Opens DIR/NAME and writes its header at once: a disk that cannot take
+ * the table fails here, before minutes of rendering the reference. */
+static FILE *open_table(const char *dir, const char *name, const char *header, char *path, size_t path_size,
+                        char *err, size_t err_size)
+{
+    FILE *csv = experiment_csv_open(dir, name, path, path_size, err, err_size);
+    if (csv == NULL)
+        return NULL;
+    if (fprintf(csv, "%s\n", header) < 0 || fflush(csv) != 0) {
+        snprintf(err, err_size, "%s: write failed (%s)", path, strerror(errno));
+        experiment_csv_discard(csv, path);
+        return NULL;
+    }
+    return csv;
+}
+
 static const double TARGETS[] = {1.0, 0.3, 0.1, 0.03};
 enum { TARGET_COUNT = sizeof TARGETS / sizeof TARGETS[0], MAX_POINTS = 16 };
 
@@ -51,19 +68,22 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
     char reference_path[4096], file[256], path[4096];
     snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_%s_%d.exr", dir, es->name, EXPERIMENT_SIZE);
     printf("\n== scene %s (%dx%d)\n", es->name, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
-    estimate_image reference;
-    if (!experiment_reference(&pt, &cam, es->reference_spp, threads, reference_path, &reference, err, err_size)) {
+    snprintf(file, sizeof file, "ch12_equal_time_%s.csv", es->name);
+    FILE *csv = open_table(dir, file, "method,label,samples_per_pixel,wall_seconds,cpu_seconds,rmse,relmse,acceptance",
+                           path, sizeof path, err, err_size);
+    if (csv == NULL) {
         pt_scene_free(&sc);
         return false;
     }
-    snprintf(file, sizeof file, "ch12_equal_time_%s.csv", es->name);
-    FILE *csv = experiment_csv_open(dir, file, path, sizeof path, err, err_size);
-    if (csv == NULL) {
+    /* Freed on failure too: a reference that was rendered but could not be
+     * saved is still held. */
+    estimate_image reference = {0};
+    if (!experiment_reference(&pt, &cam, es->reference_spp, threads, reference_path, &reference, err, err_size)) {
+        experiment_csv_discard(csv, path);
         estimate_image_free(&reference);
         pt_scene_free(&sc);
         return false;
     }
-    fprintf(csv, "method,label,samples_per_pixel,wall_seconds,cpu_seconds,rmse,relmse,acceptance\n");
     static const char *const labels[2] = {"path tracing (MIS + RR on throughput)", "Metropolis (PSSMLT)"};
     double seconds[2][MAX_POINTS], relmses[2][MAX_POINTS];
     int samples[2][MAX_POINTS], count[2] = {0, 0};
@@ -151,19 +171,21 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
     char reference_path[4096], path[4096];
     snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_cornell_%d.exr", dir, EXPERIMENT_SIZE);
-    estimate_image reference;
     printf("\n== start-up bias (Cornell box, %d chains, mean of %d runs)\n", STARTUP_CHAINS, STARTUP_REPLICAS);
-    if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size)) {
+    FILE *csv = open_table(dir, "ch12_startup_bias.csv",
+                           "start,label,mutations_per_pixel,mutations_per_chain,cpu_seconds,relmse", path, sizeof path,
+                           err, err_size);
+    if (csv == NULL) {
         pt_scene_free(&sc);
         return false;
     }
-    FILE *csv = experiment_csv_open(dir, "ch12_startup_bias.csv", path, sizeof path, err, err_size);
-    if (csv == NULL) {
+    estimate_image reference = {0};
+    if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size)) {
+        experiment_csv_discard(csv, path);
         estimate_image_free(&reference);
         pt_scene_free(&sc);
         return false;
     }
-    fprintf(csv, "start,label,mutations_per_pixel,mutations_per_chain,cpu_seconds,relmse\n");
     static const char *const labels[2] = {"bootstrap start", "fixed start"};
     printf("  %-18s %-18s %-14s %s\n", "mutations/pixel", "mutations/chain", "bootstrap", "fixed start");
     bool ok = true;

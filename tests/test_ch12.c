@@ -1,7 +1,8 @@
 /* test_ch12.c -- Metropolis light transport: the chain samples f / b (a 1-D
  * toy with a known density), the image converges to chapter 09's, the
  * normalization b agrees with the path tracer's image mean, and the image
- * is the same bit for bit on 1 and 2 threads. Each statistical check has a
+ * is the same bit for bit on 1 and 2 threads, and short runs from a fixed
+ * start have start-up bias. Each statistical check has a
  * twin on a deliberately wrong implementation that it must reject. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -308,6 +309,74 @@ static void test_twin_without_normalization_fails(void **state)
     assert_true(c.disagreements > ALLOWED_DISAGREEMENTS);
 }
 
+/* ---- start-up bias ------------------------------------------------------------------
+ * Many chains of one mutation each: the image is little more than the
+ * chains' starting states. Started from bootstrap paths picked in
+ * proportion to f they are (nearly) samples of f / b; all started at one
+ * fixed path they pile onto its pixel. The mean squared error against the
+ * path tracer over K runs each, compared by Welch's difference of means in
+ * its standard errors. */
+enum { STARTUP_RUNS = 8 };
+
+static void startup_errors(const setup *s, const double *pt_mean, mlt_start start, uint64_t seed, double *mean,
+                           double *standard_error)
+{
+    double sum = 0.0, sum2 = 0.0;
+    for (int k = 0; k < STARTUP_RUNS; k++) {
+        mlt_options o = mlt_defaults(&s->pt, &s->cam);
+        o.mutations_per_pixel = 1;
+        o.chains = SIDE * SIDE; /* one mutation per chain */
+        o.bootstrap = 4096;
+        o.seed = seed + (uint64_t)k * 104729u;
+        o.threads = 1;
+        o.start = start;
+        image img = image_make(SIDE, SIDE);
+        mlt_result r;
+        assert_true(mlt_render(&o, &img, &r));
+        double mse = 0.0;
+        for (int i = 0; i < SIDE * SIDE; i++) {
+            double d = vec3_luminance(vec3_make(img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2])) - pt_mean[i];
+            mse += d * d / (SIDE * SIDE);
+        }
+        sum += mse;
+        sum2 += mse * mse;
+        image_free(&img);
+    }
+    *mean = sum / STARTUP_RUNS;
+    *standard_error = sqrt(fmax(0.0, (sum2 - sum * *mean) / (STARTUP_RUNS - 1)) / STARTUP_RUNS);
+}
+
+/* Is the error of `worse` larger than that of `better` by more than 5
+ * standard errors of the difference? */
+static bool startup_error_larger(mlt_start worse, mlt_start better)
+{
+    setup s;
+    setup_cornell(&s);
+    static double pt_mean[SIDE * SIDE], pt_se[SIDE * SIDE];
+    double image_mean, image_mean_se, mean_worse, se_worse, mean_better, se_better;
+    render_path_traced(&s, test_seed(1220), pt_mean, pt_se, &image_mean, &image_mean_se);
+    startup_errors(&s, pt_mean, worse, test_seed(1221), &mean_worse, &se_worse);
+    startup_errors(&s, pt_mean, better, test_seed(1222), &mean_better, &se_better);
+    print_message("short runs: MSE %.4g +- %.2g against %.4g +- %.2g\n", mean_worse, se_worse, mean_better,
+                  se_better);
+    pt_scene_free(&s.scene);
+    return mean_worse - mean_better > STANDARD_ERRORS * sqrt(se_worse * se_worse + se_better * se_better);
+}
+
+static void test_fixed_start_has_start_up_bias(void **state)
+{
+    (void)state;
+    assert_true(startup_error_larger(MLT_START_FIXED, MLT_START_BOOTSTRAP));
+}
+
+/* Twin: the same comparison between two sets of bootstrap-started runs
+ * finds no difference (the check is not passed by any two sets of runs). */
+static void test_twin_startup_check_on_equal_starts_fails(void **state)
+{
+    (void)state;
+    assert_false(startup_error_larger(MLT_START_BOOTSTRAP, MLT_START_BOOTSTRAP));
+}
+
 /* ---- the same image for any thread count ------------------------------------------- */
 
 static void test_same_image_for_one_and_two_threads(void **state)
@@ -342,6 +411,8 @@ int main(void)
         cmocka_unit_test(test_converges_to_path_traced_image),
         cmocka_unit_test(test_twin_accept_all_fails),
         cmocka_unit_test(test_twin_without_normalization_fails),
+        cmocka_unit_test(test_fixed_start_has_start_up_bias),
+        cmocka_unit_test(test_twin_startup_check_on_equal_starts_fails),
         cmocka_unit_test(test_same_image_for_one_and_two_threads),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

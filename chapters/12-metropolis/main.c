@@ -40,7 +40,7 @@ int main(int argc, char **argv)
          "bootstrap (default: chains start at bootstrap paths picked in proportion to f) or fixed (all at the "
          "first path with f > 0: start-up bias)", 0, 0},
         {"--builtin", CLI_STRING, &scene_name, "NAME",
-         "lamp (default: the light shut in a housing with a 1 cm slit), cornell, materials", 0, 0},
+         "lamp (default: the ceiling light shut in a housing; light leaves only down a 2 cm channel), cornell, materials", 0, 0},
         {"--path-trace", CLI_BOOL, &path_trace, NULL,
          "render the same scene with chapter 09's path tracer instead (--spp samples per pixel), to compare", 0, 0},
         {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
@@ -65,12 +65,27 @@ int main(int argc, char **argv)
         fprintf(stderr, "12-metropolis: --start: unknown '%s' (bootstrap, fixed)\ntry --help\n", start);
         return 2;
     }
-    if (opts.scene != NULL || opts.explain) {
-        fprintf(stderr, "12-metropolis: --scene and --explain are not supported; use --builtin\ntry --help\n");
+    if (opts.explain) {
+        fprintf(stderr, "12-metropolis: --explain is not supported (a chain has no per-pixel paths; try "
+                        "09-path-tracing --explain)\ntry --help\n");
         return 2;
     }
     pt_scene sc;
-    if (!build_scene(&sc, scene_name)) {
+    scene_desc desc;
+    char err[1024];
+    if (program_load_scene(&opts, "12-metropolis", &desc)) {
+        if (data != NULL) {
+            fprintf(stderr, "12-metropolis: --scene does not combine with --data\n");
+            scene_desc_free(&desc);
+            return 2;
+        }
+        bool ok = pt_scene_from_desc(&sc, &desc, "12-metropolis", err, sizeof err);
+        scene_desc_free(&desc);
+        if (!ok) {
+            fprintf(stderr, "12-metropolis: %s\n", err);
+            return 1;
+        }
+    } else if (!build_scene(&sc, scene_name)) {
         fprintf(stderr, "12-metropolis: --builtin: unknown scene '%s' (lamp, cornell, materials)\ntry --help\n",
                 scene_name);
         return 2;
@@ -80,7 +95,6 @@ int main(int argc, char **argv)
     pt.russian_roulette = RR_THROUGHPUT;
     pt.max_depth = max_depth;
 
-    char err[1024];
     int status = 0;
     if (data != NULL) {
         pt_scene_free(&sc);
@@ -118,7 +132,7 @@ int main(int argc, char **argv)
         double acceptance = r.proposed > 0 ? (double)r.accepted / (double)r.proposed : 0.0;
         if (!opts.quiet) {
             printf("12-metropolis: %s, %d mutations per pixel, %d chains, p_large %.2f: %.2f s (bootstrap %.2f s) "
-                   "-> %s\n", scene_name, opts.spp, chains, (double)p_large, r.seconds, r.bootstrap_seconds, opts.out);
+                   "-> %s\n", opts.scene != NULL ? opts.scene : scene_name, opts.spp, chains, (double)p_large, r.seconds, r.bootstrap_seconds, opts.out);
             printf("b = %.5g +- %.2g (%d bootstrap paths), acceptance %.3f\n", r.b, r.b_standard_error, bootstrap,
                    acceptance);
             counters_print(stdout, &r.counters, r.seconds);

@@ -30,9 +30,10 @@ void mlt_scene_build_lamp(pt_scene *sc)
     /* The light, 0.1 mm below the ceiling, facing down. */
     pt_scene_add_quad(sc, v(343, 548.7f, 227), v(343, 548.7f, 332), v(213, 548.7f, 332), v(213, 548.7f, 227), light);
     /* The housing: a plate 8 cm below the light, 45 mm wider on every side,
-     * and walls from the ceiling down to 5 mm below the plate, standing
-     * GAP mm outside its edge: light leaves only down that narrow channel,
-     * and no line of sight from the camera looks up it into the housing. */
+     * and walls from the ceiling down to 1 cm below the plate, standing
+     * `gap` outside its edge: light leaves only down that channel. The
+     * camera looks up the two side channels a little (the bright edges of
+     * the housing in the picture), not up the front or back one. */
     const float gap = 20.0f, plate = 470.0f, wall_bottom = plate - 10.0f;
     const float x0 = 168.0f, x1 = 388.0f, z0 = 182.0f, z1 = 377.0f;
     const float wx0 = x0 - gap, wx1 = x1 + gap, wz0 = z0 - gap, wz1 = z1 + gap;

@@ -177,6 +177,26 @@ typedef struct {
     double b_mean, b_standard_error;
 } mlt_replicas;
 
+/* One MLT render on one thread: each pixel's luminance, and the result. */
+static mlt_result render_luminance(const mlt_options *o, double *luminance)
+{
+    image img = image_make(SIDE, SIDE);
+    mlt_result r;
+    assert_true(mlt_render(o, &img, &r));
+    for (int i = 0; i < SIDE * SIDE; i++)
+        luminance[i] = vec3_luminance(vec3_make(img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2]));
+    image_free(&img);
+    return r;
+}
+
+/* The mean of n independent values (given their sum and sum of squares)
+ * and its standard error. */
+static void mean_and_standard_error(double sum, double sum2, int n, double *mean, double *standard_error)
+{
+    *mean = sum / n;
+    *standard_error = sqrt(fmax(0.0, (sum2 - sum * *mean) / (n - 1)) / n);
+}
+
 static void render_replicas(const setup *s, mlt_acceptance_fn acceptance, bool unnormalized, uint64_t seed,
                             mlt_replicas *out)
 {
@@ -190,29 +210,21 @@ static void render_replicas(const setup *s, mlt_acceptance_fn acceptance, bool u
         o.seed = seed + (uint64_t)k * 7919u;
         o.threads = 1;
         o.acceptance = acceptance;
-        image img = image_make(SIDE, SIDE);
-        mlt_result r;
-        assert_true(mlt_render(&o, &img, &r));
-        for (int i = 0; i < SIDE * SIDE; i++) {
-            vec3 c = vec3_make(img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2]);
-            /* the twin that forgets b: every pixel as if b were 1 */
-            values[k][i] = vec3_luminance(c) / (unnormalized ? r.b : 1.0);
-        }
+        mlt_result r = render_luminance(&o, values[k]);
+        /* the twin that forgets b: every pixel as if b were 1 */
+        for (int i = 0; unnormalized && i < SIDE * SIDE; i++)
+            values[k][i] /= r.b;
         b_sum += r.b;
         b_sum2 += r.b * r.b;
-        image_free(&img);
     }
-    out->b_mean = b_sum / REPLICAS;
-    out->b_standard_error = sqrt(fmax(0.0, (b_sum2 - b_sum * out->b_mean) / (REPLICAS - 1)) / REPLICAS);
+    mean_and_standard_error(b_sum, b_sum2, REPLICAS, &out->b_mean, &out->b_standard_error);
     for (int i = 0; i < SIDE * SIDE; i++) {
         double sum = 0.0, sum2 = 0.0;
         for (int k = 0; k < REPLICAS; k++) {
             sum += values[k][i];
             sum2 += values[k][i] * values[k][i];
         }
-        double mean = sum / REPLICAS, variance = fmax(0.0, (sum2 - sum * mean) / (REPLICAS - 1));
-        out->mean[i] = mean;
-        out->standard_error[i] = sqrt(variance / REPLICAS);
+        mean_and_standard_error(sum, sum2, REPLICAS, &out->mean[i], &out->standard_error[i]);
     }
 }
 
@@ -330,20 +342,14 @@ static void startup_errors(const setup *s, const double *pt_mean, mlt_start star
         o.seed = seed + (uint64_t)k * 104729u;
         o.threads = 1;
         o.start = start;
-        image img = image_make(SIDE, SIDE);
-        mlt_result r;
-        assert_true(mlt_render(&o, &img, &r));
-        double mse = 0.0;
-        for (int i = 0; i < SIDE * SIDE; i++) {
-            double d = vec3_luminance(vec3_make(img.rgb[3 * i], img.rgb[3 * i + 1], img.rgb[3 * i + 2])) - pt_mean[i];
-            mse += d * d / (SIDE * SIDE);
-        }
+        double luminance[SIDE * SIDE], mse = 0.0;
+        render_luminance(&o, luminance);
+        for (int i = 0; i < SIDE * SIDE; i++)
+            mse += (luminance[i] - pt_mean[i]) * (luminance[i] - pt_mean[i]) / (SIDE * SIDE);
         sum += mse;
         sum2 += mse * mse;
-        image_free(&img);
     }
-    *mean = sum / STARTUP_RUNS;
-    *standard_error = sqrt(fmax(0.0, (sum2 - sum * *mean) / (STARTUP_RUNS - 1)) / STARTUP_RUNS);
+    mean_and_standard_error(sum, sum2, STARTUP_RUNS, mean, standard_error);
 }
 
 /* Is the error of `worse` larger than that of `better` by more than 5

@@ -154,12 +154,12 @@ bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int
  * The reference has noise of its own, which adds its variance to every
  * measured MSE; subtracting the mean of its squared standard error leaves the
  * error of the image under test (an unbiased correction). */
-void experiment_measure_error(const estimate_image *e, const estimate_image *ref, double *rmse, double *relmse)
+void experiment_error(const image *img, const estimate_image *ref, double *rmse, double *relmse)
 {
-    size_t n = (size_t)e->mean.width * (size_t)e->mean.height * 3;
+    size_t n = (size_t)img->width * (size_t)img->height * 3;
     double sum = 0.0, sum_relative = 0.0;
     for (size_t i = 0; i < n; i++) {
-        double d = (double)e->mean.rgb[i] - (double)ref->mean.rgb[i];
+        double d = (double)img->rgb[i] - (double)ref->mean.rgb[i];
         double s = ref->standard_error.rgb[i], r = ref->mean.rgb[i];
         double squared = d * d - s * s;
         sum += squared;
@@ -241,7 +241,7 @@ enum { TARGET_COUNT = sizeof TARGET_RELMSE / sizeof TARGET_RELMSE[0], MAX_POINTS
  * log(relMSE) interpolated linearly in log(seconds) between the two renders
  * either side of it. -1 if no render reached it; *spp_out = the first spp
  * that did. */
-static double time_to_reach(const double *seconds, const double *relmse, const int *spp, int n, double target,
+double experiment_time_to_reach(const double *seconds, const double *relmse, const int *spp, int n, double target,
                             int *spp_out)
 {
     *spp_out = 0;
@@ -287,7 +287,7 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
             estimate_image e = render_estimate(&pt, cam, spp, 1000 + (uint64_t)spp, threads);
             double cpu = experiment_cpu_seconds() - cpu_start;
             double rmse, relmse;
-            experiment_measure_error(&e, reference, &rmse, &relmse);
+            experiment_error(&e.mean, reference, &rmse, &relmse);
             double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
             fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f,%.6f\n", k, pt_integrator_name(pt.integrator),
                     pt.russian_roulette == RR_FIXED ? "fixed" : "throughput", spp, e.seconds, rmse, relmse, rays, cpu);
@@ -298,7 +298,7 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
             estimate_image_free(&e);
         }
         for (int t = 0; t < TARGET_COUNT; t++) {
-            reached[k][t] = time_to_reach(seconds, relmses, spps, n, TARGET_RELMSE[t], &reached_spp[k][t]);
+            reached[k][t] = experiment_time_to_reach(seconds, relmses, spps, n, TARGET_RELMSE[t], &reached_spp[k][t]);
             fprintf(time_csv, "%d,\"%s\",%g,%.6f,%d\n", k, rungs[k].label, TARGET_RELMSE[t], reached[k][t],
                     reached_spp[k][t]);
         }
@@ -345,7 +345,7 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
         estimate_image e = render_estimate(&pt, cam, spp, 77, threads);
         double cpu = experiment_cpu_seconds() - cpu_start;
         double rmse, relmse;
-        experiment_measure_error(&e, reference, &rmse, &relmse);
+        experiment_error(&e.mean, reference, &rmse, &relmse);
         double mse = rmse * rmse;
         double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
         fprintf(csv, "%.2f,%.6f,%.6e,%.6e,%.3f\n", (double)probabilities[i], cpu, mse, 1.0 / (mse * cpu), rays);

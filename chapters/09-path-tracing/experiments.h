@@ -54,21 +54,6 @@ estimate_image render_progressive(const path_tracer *pt, const camera *cam, uint
 bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int threads, const char *path,
                           estimate_image *out, char *err, size_t err_size);
 
-/* The error of e against the reference: RMSE and relMSE over pixels and
- * channels, less the reference's own variance (its squared standard
- * error), which would otherwise add to every measured MSE. */
-void experiment_measure_error(const estimate_image *e, const estimate_image *ref, double *rmse, double *relmse);
-
-/* CPU time of the whole process (all threads), in seconds. */
-double experiment_cpu_seconds(void);
-
-/* A CSV file DIR/NAME, written as NAME.tmp and renamed into place only by a
- * close that finds every write succeeded (discard: remove it unwritten).
- * open: NULL with err on failure; path receives DIR/NAME. */
-FILE *experiment_csv_open(const char *dir, const char *name, char *path, size_t path_size, char *err, size_t err_size);
-bool experiment_csv_close(FILE *f, const char *path, char *err, size_t err_size);
-void experiment_csv_discard(FILE *f, const char *path);
-
 /* Writes DIR/ch09_convergence_NAME.csv (RMSE and relMSE of each rung at 1,
  * 2, 4, ... max_spp samples, with wall and CPU seconds) and
  * DIR/ch09_time_to_error_NAME.csv, and prints a table of the CPU time each
@@ -84,5 +69,25 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
  * spp samples, the best of `repeats` runs) for each rung on 1 and 2 threads,
  * and the 1 -> 2 thread scaling; writes them to csv_path too (if not NULL). */
 bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size);
+
+/* The pieces the experiments are made of, shared with chapter 12's:
+ * CPU seconds of the whole process (all threads: on a shared machine it
+ * measures the work done, where wall time also measures the neighbours). */
+double experiment_cpu_seconds(void);
+/* RMSE and relMSE of img against the reference, less the reference's own
+ * noise (the mean of its squared standard error, an unbiased correction). */
+void experiment_error(const image *img, const estimate_image *reference, double *rmse, double *relmse);
+/* A CSV file DIR/NAME (path receives it), written as NAME.tmp and renamed
+ * into place by experiment_csv_close only if every write succeeded;
+ * experiment_csv_discard drops it. NULL / false with err on failure. */
+FILE *experiment_csv_open(const char *dir, const char *name, char *path, size_t path_size, char *err,
+                          size_t err_size);
+bool experiment_csv_close(FILE *f, const char *path, char *err, size_t err_size);
+void experiment_csv_discard(FILE *f, const char *path);
+/* The time at which relMSE falls to `target`, from n renders at doubling
+ * sample counts (log-log interpolation); -1 if none reached it, and
+ * *spp_out the first sample count that did. */
+double experiment_time_to_reach(const double *seconds, const double *relmse, const int *spp, int n, double target,
+                                int *spp_out);
 
 #endif

@@ -98,7 +98,7 @@ static vec3 emitted(const pt_scene *sc, const hit_record *hit)
  * if the shadow ray from p to x' is not blocked. With with_mis, the sample is
  * weighted against the BSDF sampling that could also have found x'. */
 static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, vec3 wo, const pt_material *m,
-                                bool with_mis, int explain_depth, pcg32 *rng, ray_counters *counters)
+                                bool with_mis, int explain_depth, pt_random *rng, ray_counters *counters)
 {
     const pt_scene *sc = pt->scene;
     vec3 n = hit->normal_shading;
@@ -106,7 +106,7 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
 
     vec3 x_light, n_light;
     int light_material;
-    float u_pick = pcg32_float(rng), u1 = pcg32_float(rng), u2 = pcg32_float(rng);
+    float u_pick = pt_random_float(rng), u1 = pt_random_float(rng), u2 = pt_random_float(rng);
     if (pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &n_light, &light_material)) {
         vec3 to_light = vec3_sub(x_light, hit->point);
         float distance2 = vec3_length_squared(to_light);
@@ -213,7 +213,7 @@ static void count_continuation(ray_counters *counters, const bsdf_sample_result 
  * mirrors reflect into single directions no hemisphere sample can find; there
  * the BSDF is sampled instead, and the emission the ray then meets does
  * count. `depth` is the number of bounces before p. */
-static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int depth, pcg32 *rng, ray_counters *counters)
+static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int depth, pt_random *rng, ray_counters *counters)
 {
     const pt_scene *sc = pt->scene;
     const pt_material *m = &sc->materials[hit->material_id];
@@ -246,7 +246,7 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
      * continued path brings by P_RR, so the expectation is unchanged. */
     float p_rr = pt->russian_roulette == RR_OFF ? 1.0f : pt->rr_probability;
     if (pt->russian_roulette != RR_OFF) {
-        float u_rr = pcg32_float(rng);
+        float u_rr = pt_random_float(rng);
         explain_line(indent, "Russian roulette: u = %.4f %s P_RR = %.3g: %s", (double)u_rr, u_rr >= p_rr ? ">=" : "<",
                      (double)p_rr, u_rr >= p_rr ? "the path ends" : "continue, dividing by P_RR");
         if (u_rr >= p_rr)
@@ -255,8 +255,8 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
 
     bsdf_sample_result s;
     if (delta) {
-        vec2 u = vec2_make(pcg32_float(rng), pcg32_float(rng));
-        if (!bsdf_sample(m, n, wo, u, pcg32_float(rng), hit->front_face, &s))
+        vec2 u = vec2_make(pt_random_float(rng), pt_random_float(rng));
+        if (!bsdf_sample(m, n, wo, u, pt_random_float(rng), hit->front_face, &s))
             return l_dir;
         if (!delta_allowed(pt, &s)) {
             explain_line(indent, "no %s effect: the path ends here", s.is_transmission ? "refraction" : "reflection");
@@ -264,7 +264,7 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
         }
     } else {
         /* wi uniform on the hemisphere around n: pdf = 1 / (2 pi) */
-        vec3 local = sample_uniform_hemisphere(vec2_make(pcg32_float(rng), pcg32_float(rng)));
+        vec3 local = sample_uniform_hemisphere(vec2_make(pt_random_float(rng), pt_random_float(rng)));
         s.wi = frame_to_world(n, local);
         s.pdf = uniform_hemisphere_pdf();
         s.weight = vec3_scale(bsdf_eval(m, n, wo, s.wi), local.z / s.pdf); /* f_r cos / pdf */
@@ -304,7 +304,7 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
     return vec3_add(l_dir, l_indir);
 }
 
-static vec3 trace_lecture(const path_tracer *pt, ray r, pcg32 *rng, ray_counters *counters)
+static vec3 trace_lecture(const path_tracer *pt, ray r, pt_random *rng, ray_counters *counters)
 {
     hit_record hit;
     if (!pt_scene_intersect(pt->scene, r, &hit, counters)) {
@@ -326,7 +326,7 @@ static vec3 trace_lecture(const path_tracer *pt, ray r, pcg32 *rng, ray_counters
  * The recursion above, unrolled: `throughput` is the product of the
  * f cos / pdf factors along the path so far, and each bounce adds
  * throughput x (what is found there). */
-static vec3 trace_iterative(const path_tracer *pt, ray r, pcg32 *rng, ray_counters *counters)
+static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_counters *counters)
 {
     const pt_scene *sc = pt->scene;
     bool mis = pt->integrator == PT_MIS;
@@ -398,9 +398,9 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pcg32 *rng, ray_counte
         /* The next direction: from the BSDF (MIS, and always for delta
          * surfaces), or cosine-weighted on the hemisphere. */
         bsdf_sample_result s;
-        vec2 u = vec2_make(pcg32_float(rng), pcg32_float(rng));
+        vec2 u = vec2_make(pt_random_float(rng), pt_random_float(rng));
         if (mis || delta) {
-            if (!bsdf_sample(m, n, wo, u, pcg32_float(rng), hit.front_face, &s))
+            if (!bsdf_sample(m, n, wo, u, pt_random_float(rng), hit.front_face, &s))
                 break;
         } else {
             vec3 local = sample_cosine_hemisphere(u);
@@ -422,7 +422,7 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pcg32 *rng, ray_counte
 
         /* Russian roulette */
         if (pt->russian_roulette == RR_FIXED) {
-            float u_rr = pcg32_float(rng);
+            float u_rr = pt_random_float(rng);
             explain_line(indent, "Russian roulette: u = %.4f %s P_RR = %.3g: %s", (double)u_rr,
                          u_rr >= pt->rr_probability ? ">=" : "<", (double)pt->rr_probability,
                          u_rr >= pt->rr_probability ? "the path ends" : "continue, throughput / P_RR");
@@ -433,7 +433,7 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pcg32 *rng, ray_counte
             /* Continue in proportion to what the path can still carry: a
              * path through dark surfaces ends sooner. */
             float q = fminf(1.0f, vec3_max_component(throughput));
-            float u_rr = pcg32_float(rng);
+            float u_rr = pt_random_float(rng);
             explain_line(indent, "Russian roulette on throughput: u = %.4f %s q = %.3g: %s", (double)u_rr,
                          u_rr >= q ? ">=" : "<", (double)q, u_rr >= q ? "the path ends" : "continue, throughput / q");
             if (u_rr >= q)
@@ -457,10 +457,15 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pcg32 *rng, ray_counte
     return radiance;
 }
 
+vec3 path_trace_radiance_from(const path_tracer *pt, ray r, pt_random *random, ray_counters *counters)
+{
+    if (pt->integrator == PT_LECTURE)
+        return trace_lecture(pt, r, random, counters);
+    return trace_iterative(pt, r, random, counters);
+}
+
 vec3 path_trace_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *counters)
 {
-    const path_tracer *pt = ctx;
-    if (pt->integrator == PT_LECTURE)
-        return trace_lecture(pt, r, rng, counters);
-    return trace_iterative(pt, r, rng, counters);
+    pt_random random = {.rng = rng, .next = NULL, .state = NULL};
+    return path_trace_radiance_from(ctx, r, &random, counters);
 }

@@ -54,6 +54,28 @@ path_tracer path_tracer_defaults(const pt_scene *scene);
 /* render.h's radiance_fn; ctx points to a path_tracer. */
 vec3 path_trace_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *counters);
 
+/* Where a path's random numbers come from. The path tracer is a function of
+ * the uniform numbers it draws, one after another: a pixel's pcg32 stream
+ * (rng, with next NULL: what path_trace_radiance uses), or any other source
+ * that hands out numbers in [0, 1) -- chapter 12's Metropolis sampler
+ * replays and mutates a vector of them ("primary sample space"). The
+ * pcg32 case stays an inline call: a path draws five to eight numbers per
+ * bounce. */
+typedef struct {
+    pcg32 *rng;                 /* used when next is NULL */
+    float (*next)(void *state); /* else: the next number in [0, 1) */
+    void *state;
+} pt_random;
+
+static inline float pt_random_float(pt_random *random)
+{
+    return random->next != NULL ? random->next(random->state) : pcg32_float(random->rng);
+}
+
+/* The radiance along r, with the path's numbers drawn from `random` in the
+ * same order path_trace_radiance draws them from its stream. */
+vec3 path_trace_radiance_from(const path_tracer *pt, ray r, pt_random *random, ray_counters *counters);
+
 const char *pt_integrator_name(pt_integrator i);
 bool pt_integrator_parse(const char *name, pt_integrator *out);
 

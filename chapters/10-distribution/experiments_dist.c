@@ -6,7 +6,6 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-#include <time.h>
 
 #include "09-path-tracing/experiments.h"
 #include "10-distribution/distribution.h"
@@ -16,24 +15,16 @@ enum { EXPERIMENT_SIZE = 64, REFERENCE_SPP = 16384, EXPERIMENT_DEPTH = 4 };
 /* Each setting doubles its samples per pixel until a render takes this long. */
 static const double CPU_SECONDS_PER_SETTING = 3.0;
 
-/* CPU time of the process: all threads' work, not the neighbours'. */
-static double cpu_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static double render_timed(const distribution_tracer *dt, const camera *cam, int spp, uint64_t seed, int threads,
                            image *out, ray_counters *counters)
 {
     render_job job = {.cam = cam, .spp = spp, .seed = seed, .threads = threads, .quiet = true,
                       .radiance = distribution_radiance, .scene = dt, .stratify = true};
     render_stats stats;
-    double start = cpu_seconds();
+    double start = experiment_cpu_seconds();
     render_image(&job, out, &stats);
     *counters = stats.counters;
-    return cpu_seconds() - start;
+    return experiment_cpu_seconds() - start;
 }
 
 bool experiment_rays_per_bounce(const motion_scene *ms, int threads, const char *dir, char *err, size_t err_size)

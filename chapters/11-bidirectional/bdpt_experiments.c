@@ -61,7 +61,7 @@ bool bdpt_experiment_equal_time(const pt_scene *sc, const char *name, const came
             }
             double cpu = experiment_cpu_seconds() - start;
             double rmse, relmse;
-            experiment_measure_error(&e, reference, &rmse, &relmse);
+            experiment_error(&e.mean, reference, &rmse, &relmse);
             estimate_image_free(&e);
             fprintf(csv, "%d,\"%s\",%d,%.6f,%.6e,%.6e\n", method, labels[method], spp, cpu, relmse, rmse);
             printf("%-44s %6d %9.3f %10.5f\n", labels[method], spp, cpu, relmse);

@@ -1,0 +1,248 @@
+/* mlt_experiments.c -- equal-time error of Metropolis and path tracing, and
+ * start-up bias (see mlt_experiments.h). */
+#include "mlt_experiments.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "09-path-tracing/experiments.h"
+#include "12-metropolis/mlt.h"
+#include "12-metropolis/mlt_scene.h"
+
+/* Images of 128 x 128: small, so the whole run stays near two minutes on
+ * two cores, but not tiny -- on a 48 x 48 image Kelemen's small steps
+ * (at most 1/64 of the film) move a path by under a pixel, so a chain
+ * lingers in one pixel for tens of steps and its correlated samples cost
+ * Metropolis its advantage (measured: README, "Hard cases"). */
+enum { EXPERIMENT_SIZE = 128, PT_MAX_SPP = 128, MLT_MAX_MPP = 64, STARTUP_MAX_MPP = 16, STARTUP_REPLICAS = 3, STARTUP_CHAINS = 1024 };
+/* MLT's chains: enough to keep two threads busy, few enough that each is
+ * long (its start matters little). */
+enum { EXPERIMENT_CHAINS = 64 };
+/* The path-traced references: the Cornell box converges fast, the lamp slowly. */
+enum { CORNELL_REFERENCE_SPP = 1024, LAMP_REFERENCE_SPP = 4096 };
+
+/* The bootstrap grows with the run: b's relative error scales every pixel
+ * alike, so a bootstrap much smaller than the chains would put a floor
+ * under the error. An eighth as many paths as mutations, at least 2^15. */
+static int bootstrap_for(long long mutations)
+{
+    long long n = mutations / 8;
+    return (int)(n < (1 << 15) ? (1 << 15) : n);
+}
+
+typedef struct {
+    const char *name;
+    void (*build)(pt_scene *sc);
+    int reference_spp;
+} experiment_scene;
+
+/* Opens DIR/NAME and writes its header at once: a disk that cannot take
+ * the table fails here, before minutes of rendering the reference. */
+static FILE *open_table(const char *dir, const char *name, const char *header, char *path, size_t path_size,
+                        char *err, size_t err_size)
+{
+    FILE *csv = experiment_csv_open(dir, name, path, path_size, err, err_size);
+    if (csv == NULL)
+        return NULL;
+    if (fprintf(csv, "%s\n", header) < 0 || fflush(csv) != 0) {
+        snprintf(err, err_size, "%s: write failed (%s)", path, strerror(errno));
+        experiment_csv_discard(csv, path);
+        return NULL;
+    }
+    return csv;
+}
+
+static const double TARGETS[] = {1.0, 0.3, 0.1, 0.03};
+enum { TARGET_COUNT = sizeof TARGETS / sizeof TARGETS[0], MAX_POINTS = 16 };
+
+static bool equal_time(const experiment_scene *es, const char *dir, int threads, char *err, size_t err_size)
+{
+    pt_scene sc;
+    es->build(&sc);
+    path_tracer pt = path_tracer_defaults(&sc);
+    pt.integrator = PT_MIS;
+    pt.russian_roulette = RR_THROUGHPUT;
+    camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    char reference_path[4096], file[256], path[4096];
+    snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_%s_%d.exr", dir, es->name, EXPERIMENT_SIZE);
+    printf("\n== scene %s (%dx%d)\n", es->name, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    snprintf(file, sizeof file, "ch12_equal_time_%s.csv", es->name);
+    FILE *csv = open_table(dir, file, "method,label,samples_per_pixel,wall_seconds,cpu_seconds,rmse,relmse,acceptance",
+                           path, sizeof path, err, err_size);
+    if (csv == NULL) {
+        pt_scene_free(&sc);
+        return false;
+    }
+    /* Freed on failure too: a reference that was rendered but could not be
+     * saved is still held. */
+    estimate_image reference = {0};
+    if (!experiment_reference(&pt, &cam, es->reference_spp, threads, reference_path, &reference, err, err_size)) {
+        experiment_csv_discard(csv, path);
+        estimate_image_free(&reference);
+        pt_scene_free(&sc);
+        return false;
+    }
+    static const char *const labels[2] = {"path tracing (MIS + RR on throughput)", "Metropolis (PSSMLT)"};
+    double seconds[2][MAX_POINTS], relmses[2][MAX_POINTS];
+    int samples[2][MAX_POINTS], count[2] = {0, 0};
+    bool ok = true;
+    for (int method = 0; method < 2 && ok; method++) {
+        /* up to about the same CPU time: a mutation costs about twice a path */
+        for (int spp = 1; spp <= (method == 0 ? PT_MAX_SPP : MLT_MAX_MPP); spp *= 2) {
+            image img = image_make(cam.width, cam.height);
+            double cpu_start = experiment_cpu_seconds(), wall = 0.0, acceptance = 0.0;
+            if (method == 0) {
+                estimate_image e = render_estimate(&pt, &cam, spp, 0x1234ULL + (uint64_t)spp, threads);
+                image_free(&img);
+                img = e.mean;
+                image_free(&e.standard_error);
+                wall = e.seconds;
+            } else {
+                mlt_options o = mlt_defaults(&pt, &cam);
+                o.mutations_per_pixel = spp;
+                o.chains = EXPERIMENT_CHAINS;
+                o.bootstrap = bootstrap_for((long long)spp * cam.width * cam.height);
+                o.seed = 0x1234ULL + (uint64_t)spp;
+                o.threads = threads;
+                mlt_result r;
+                if (!mlt_render(&o, &img, &r)) {
+                    snprintf(err, err_size, "out of memory");
+                    ok = false;
+                    image_free(&img);
+                    break;
+                }
+                wall = r.seconds;
+                acceptance = r.proposed > 0 ? (double)r.accepted / (double)r.proposed : 0.0;
+            }
+            double cpu = experiment_cpu_seconds() - cpu_start, rmse, relmse;
+            experiment_error(&img, &reference, &rmse, &relmse);
+            image_free(&img);
+            fprintf(csv, "%d,%s,%d,%.6f,%.6f,%.8g,%.8g,%.4f\n", method, labels[method], spp, wall, cpu, rmse, relmse,
+                    acceptance);
+            int k = count[method]++;
+            seconds[method][k] = cpu;
+            relmses[method][k] = relmse;
+            samples[method][k] = spp;
+        }
+    }
+    if (!ok) {
+        experiment_csv_discard(csv, path);
+        estimate_image_free(&reference);
+        pt_scene_free(&sc);
+        return false;
+    }
+    printf("CPU seconds to reach relMSE (from %s):\n", path);
+    printf("  %-40s", "");
+    for (int t = 0; t < TARGET_COUNT; t++)
+        printf("  relMSE %-6g", TARGETS[t]);
+    printf("\n");
+    for (int method = 0; method < 2; method++) {
+        printf("  %-40s", labels[method]);
+        for (int t = 0; t < TARGET_COUNT; t++) {
+            int spp;
+            double s = experiment_time_to_reach(seconds[method], relmses[method], samples[method], count[method],
+                                                TARGETS[t], &spp);
+            if (s < 0.0)
+                printf("  %-13s", "not reached");
+            else
+                printf("  %7.3f s    ", s);
+        }
+        printf("\n");
+    }
+    printf("  relMSE at the largest run: path tracing %.4g in %.2f s, Metropolis %.4g in %.2f s\n",
+           relmses[0][count[0] - 1], seconds[0][count[0] - 1], relmses[1][count[1] - 1], seconds[1][count[1] - 1]);
+    estimate_image_free(&reference);
+    pt_scene_free(&sc);
+    return experiment_csv_close(csv, path, err, err_size);
+}
+
+/* Short runs of many chains, each started at a bootstrap path picked in
+ * proportion to f, or all at one fixed path: the error of the fixed start
+ * is the start-up bias, largest when the chains are shortest. */
+static bool startup_bias(const char *dir, int threads, char *err, size_t err_size)
+{
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    path_tracer pt = path_tracer_defaults(&sc);
+    pt.integrator = PT_MIS;
+    pt.russian_roulette = RR_THROUGHPUT;
+    camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    char reference_path[4096], path[4096];
+    snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_cornell_%d.exr", dir, EXPERIMENT_SIZE);
+    printf("\n== start-up bias (Cornell box, %d chains, mean of %d runs)\n", STARTUP_CHAINS, STARTUP_REPLICAS);
+    FILE *csv = open_table(dir, "ch12_startup_bias.csv",
+                           "start,label,mutations_per_pixel,mutations_per_chain,cpu_seconds,relmse", path, sizeof path,
+                           err, err_size);
+    if (csv == NULL) {
+        pt_scene_free(&sc);
+        return false;
+    }
+    estimate_image reference = {0};
+    if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size)) {
+        experiment_csv_discard(csv, path);
+        estimate_image_free(&reference);
+        pt_scene_free(&sc);
+        return false;
+    }
+    static const char *const labels[2] = {"bootstrap start", "fixed start"};
+    printf("  %-18s %-18s %-14s %s\n", "mutations/pixel", "mutations/chain", "bootstrap", "fixed start");
+    bool ok = true;
+    double mean_relmse[2][MAX_POINTS];
+    int points = 0;
+    /* one start after the other, so each is a contiguous line in the CSV */
+    for (int start = 0; start < 2 && ok; start++) {
+        points = 0;
+        for (int mpp = 1; mpp <= STARTUP_MAX_MPP && ok; mpp *= 2) {
+            long long per_chain = (long long)mpp * cam.width * cam.height / STARTUP_CHAINS;
+            double cpu_total = 0.0, relmse_total = 0.0;
+            for (int replica = 0; replica < STARTUP_REPLICAS; replica++) {
+                mlt_options o = mlt_defaults(&pt, &cam);
+                o.mutations_per_pixel = mpp;
+                o.chains = STARTUP_CHAINS;
+                o.bootstrap = 1 << 16;
+                o.seed = 0x5747ULL + (uint64_t)(replica * 1000 + mpp);
+                o.threads = threads;
+                o.start = start == 0 ? MLT_START_BOOTSTRAP : MLT_START_FIXED;
+                image img = image_make(cam.width, cam.height);
+                mlt_result r;
+                double cpu_start = experiment_cpu_seconds();
+                if (!mlt_render(&o, &img, &r)) {
+                    snprintf(err, err_size, "out of memory");
+                    ok = false;
+                }
+                cpu_total += experiment_cpu_seconds() - cpu_start;
+                double rmse, relmse;
+                experiment_error(&img, &reference, &rmse, &relmse);
+                relmse_total += relmse;
+                image_free(&img);
+            }
+            mean_relmse[start][points++] = relmse_total / STARTUP_REPLICAS;
+            fprintf(csv, "%d,%s,%d,%lld,%.6f,%.8g\n", start, labels[start], mpp, per_chain,
+                    cpu_total / STARTUP_REPLICAS, relmse_total / STARTUP_REPLICAS);
+        }
+    }
+    for (int k = 0, mpp = 1; ok && k < points; k++, mpp *= 2)
+        printf("  %-18d %-18lld %-14.4g %.4g\n", mpp, (long long)mpp * cam.width * cam.height / STARTUP_CHAINS,
+               mean_relmse[0][k], mean_relmse[1][k]);
+    estimate_image_free(&reference);
+    pt_scene_free(&sc);
+    if (!ok) {
+        experiment_csv_discard(csv, path);
+        return false;
+    }
+    return experiment_csv_close(csv, path, err, err_size);
+}
+
+bool mlt_experiments_run(const char *dir, int threads, char *err, size_t err_size)
+{
+    const experiment_scene scenes[] = {
+        {"cornell", pt_scene_build_cornell_box, CORNELL_REFERENCE_SPP},
+        {"lamp", mlt_scene_build_lamp, LAMP_REFERENCE_SPP},
+    };
+    for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
+        if (!equal_time(&scenes[i], dir, threads, err, err_size))
+            return false;
+    return startup_bias(dir, threads, err, err_size);
+}

@@ -352,13 +352,17 @@ VALGRIND_ARGS_06 := --triangles 1024
 VALGRIND_ARGS_07 := --bounces 3
 VALGRIND_ARGS_08 := --quick --runs 8 --max-log2n 6
 VALGRIND_ARGS_09 := --spp 1 --max-depth 4
+VALGRIND_ARGS_10 := --spp 1 --max-depth 2 --light-samples 1 --glossy-samples 2
+VALGRIND_ARGS_11 := --spp 1 --max-depth 3
+VALGRIND_ARGS_12 := --spp 2 --max-depth 3 --bootstrap 1000 --chains 8
 valgrind: $(PROGRAMS) | valgrind-deps
 	@mkdir -p $(BUILD)/valgrind
 	@for c in $(CHAPTERS); do \
 	  n=$${c%%-*}; \
 	  case $$n in 01) a="$(VALGRIND_ARGS_01)";; 02) a="$(VALGRIND_ARGS_02)";; 03) a="$(VALGRIND_ARGS_03)";; \
 	    04) a="$(VALGRIND_ARGS_04)";; 05) a="$(VALGRIND_ARGS_05)";; 06) a="$(VALGRIND_ARGS_06)";; \
-	    07) a="$(VALGRIND_ARGS_07)";; 08) a="$(VALGRIND_ARGS_08)";; 09) a="$(VALGRIND_ARGS_09)";; *) a="";; esac; \
+	    07) a="$(VALGRIND_ARGS_07)";; 08) a="$(VALGRIND_ARGS_08)";; 09) a="$(VALGRIND_ARGS_09)";; \
+	    10) a="$(VALGRIND_ARGS_10)";; 11) a="$(VALGRIND_ARGS_11)";; 12) a="$(VALGRIND_ARGS_12)";; *) a="";; esac; \
 	  echo "valgrind $(BUILD)/bin/$$c $$a"; \
 	  valgrind -q --error-exitcode=1 --leak-check=full --errors-for-leak-kinds=definite --show-possibly-lost=no \
 	    $(BUILD)/bin/$$c --width 32 --height 24 --threads 2 --quiet $$a --out $(BUILD)/valgrind/$$c.exr || exit 1; \

@@ -22,14 +22,12 @@
 #include "render.h"
 #include "scene_file.h"
 #include "stats.h"
+#include "image_check.h"
 #include "test_support.h"
 
 /* How many standard errors a pixel may be from the truth, in the per-pixel
  * comparisons (count_disagreements) that are left. */
 static const double STANDARD_ERRORS = 5.0;
-/* Standard errors below this are float rounding, not noise (zero-variance
- * estimators): compare with this instead. */
-static const double ROUNDING_FLOOR = 1e-5;
 
 typedef struct {
     image mean, standard_error;
@@ -55,56 +53,7 @@ static void render_result_free(render_result *r)
     image_free(&r->standard_error);
 }
 
-/* ---- image-level statistics ------------------------------------------------
- * Why not "every pixel within 5 of its own standard errors": the lecture's
- * uniform hemisphere sampling gives a skewed per-sample distribution (rare
- * bright paths). A pixel whose 64 samples missed them has both a low mean
- * and a small estimated error, so its studentized error has a heavy tail:
- * over 200 seeds 1.5 to 3.5 % of the runs failed, against the ~1e-4 the
- * normal tail at 5 sigma promises (docs/hard-cases.md, section 9).
- *
- * What replaces it, for each colour channel separately (in a grey scene
- * the three are equal, so Sidak over them is merely conservative):
- *  - where every pixel has the same expected value (furnaces, the point
- *    light in a sphere), the per-sample variance is pooled over the pixels:
- *    V = mean over pixels of se^2, an estimate from pixels x spp samples
- *    (thousands) instead of 64, and E[V] = mean of the pixels' true
- *    variances even where they differ a little (the icosphere's facets);
- *  - two statistics, each with a p-value from a distribution that holds
- *    without normality of one pixel's mean:
- *      the image mean, z = (mean of pixel means - expected) / sqrt(V / n):
- *        the mean of n x spp samples, normal by the central limit theorem,
- *        and the most sensitive test of a bias shared by all pixels;
- *      X = sum over pixels of (m_i - expected)^2 / V, chi-square with n
- *        degrees of freedom: sees a bias in some pixels only. A pixel with
- *        a 7-sigma fluke adds 49 to it, against a 1e-7 quantile of 142 at
- *        n = 64, so one skewed pixel no longer decides the test;
- *  - the test's family-wise false-alarm budget FAMILY_ALPHA is split over
- *    all the p-values it looks at with Sidak (stats_sidak_alpha), so a
- *    correct implementation fails a test with probability ~1e-6.
- * Estimators of zero variance (glass, depth 0) are compared exactly,
- * within ROUNDING_FLOOR. */
-static const double FAMILY_ALPHA = 1e-6;
-
-typedef struct {
-    double p;     /* the smallest p-value of the checks made */
-    double z;     /* the image mean's z-score in the channel with the smallest p */
-    double chi2;  /* and the chi-square, with its degrees of freedom */
-    int dof;
-} image_check;
-
-/* Each image check looks at 2 p-values in each of 3 channels. */
-enum { CHECKS_PER_IMAGE = 6 };
-
-static void image_check_take(image_check *c, double p, double z, double chi2, int dof)
-{
-    if (p < c->p) {
-        c->p = p;
-        c->z = z;
-        c->chi2 = chi2;
-        c->dof = dof;
-    }
-}
+/* ---- image-level statistics: tests/image_check.h ----------------------------- */
 
 /* The pixels x in [x0, x1), y in [y0, y1) of r against the constant
  * `expected`, with the variance pooled over those pixels. */
@@ -149,54 +98,6 @@ static image_check check_uniform_image(const render_result *r, double expected)
     return check_uniform(r, 0, 0, r->mean.width, r->mean.height, expected);
 }
 
-/* Two renders of one scene (e.g. two rungs) against each other. Pixels
- * differ, so nothing can be pooled: pixel i's difference d_i has variance
- * v_i = se_a^2 + se_b^2 from its own samples. The same two statistics:
- * z = sum d_i / sqrt(sum v_i) (the image means agree; the sum of variances
- * is estimated from all samples, so it is as reliable as a pooled one), and
- * X = sum d_i^2 / v_i, chi-square with one degree of freedom per noisy
- * pixel, whose sum of many terms one underestimated v_i cannot dominate.
- * Pixels with no noise in either render must agree within ROUNDING_FLOOR. */
-static image_check check_agree(const render_result *a, const render_result *b)
-{
-    image_check c = {.p = 2.0};
-    int n = a->mean.width * a->mean.height;
-    for (int ch = 0; ch < 3; ch++) {
-        double sum = 0, variance = 0, chi2 = 0;
-        int dof = 0, off = 0;
-        for (int k = 0; k < n; k++) {
-            int i = k * 3 + ch;
-            double d = (double)a->mean.rgb[i] - b->mean.rgb[i];
-            double v = (double)a->standard_error.rgb[i] * a->standard_error.rgb[i] +
-                       (double)b->standard_error.rgb[i] * b->standard_error.rgb[i];
-            if (v <= ROUNDING_FLOOR * ROUNDING_FLOOR) {
-                off += !(fabs(d) <= ROUNDING_FLOOR);
-                continue;
-            }
-            sum += d;
-            variance += v;
-            chi2 += d * d / v;
-            dof++;
-        }
-        double z = dof ? sum / sqrt(variance) : 0.0;
-        double p = off ? 0.0 : dof ? fmin(erfc(fabs(z) / sqrt(2.0)), stats_chi_square_p_value(chi2, dof)) : 1.0;
-        image_check_take(&c, p, z, chi2, dof);
-    }
-    return c;
-}
-
-/* The Sidak level for one of `images` image checks in a test. */
-static double image_check_alpha(int images)
-{
-    return stats_sidak_alpha(FAMILY_ALPHA, CHECKS_PER_IMAGE * images);
-}
-
-#define assert_image_check(c, images, what)                                                                          \
-    do {                                                                                                             \
-        if (!((c).p >= image_check_alpha(images)))                                                                   \
-            fail_msg("%s: p = %.3g < %.3g (image mean z = %.2f, chi-square %.1f on %d)", (what), (c).p,            \
-                     image_check_alpha(images), (c).z, (c).chi2, (c).dof);                                            \
-    } while (0)
 
 static path_tracer tracer(const pt_scene *sc, pt_integrator integrator, pt_russian_roulette rr)
 {
@@ -367,7 +268,7 @@ static void check_rungs_agree(pt_scene *sc, int spp, int images)
     for (int k = 0; k < 3; k++) {
         path_tracer pt = tracer(sc, all_rungs[k], RR_FIXED);
         render_result r = render(&pt, 8, 8, spp, 52 + (uint64_t)k, 2);
-        image_check c = check_agree(&r, &ref);
+        image_check c = check_agree(&r.mean, &r.standard_error, &ref.mean, &ref.standard_error);
         assert_image_check(c, images, pt_integrator_name(all_rungs[k]));
         render_result_free(&r);
     }
@@ -396,7 +297,7 @@ static void test_every_rung_converges_to_the_same_image(void **state)
         render_result r = render(&wrong, 8, 8, 256, 53, 2);
         memcpy(sc.materials, kept, (size_t)sc.material_count * sizeof *kept);
         free(kept);
-        image_check twin = check_agree(&r, &ref);
+        image_check twin = check_agree(&r.mean, &r.standard_error, &ref.mean, &ref.standard_error);
         print_message("twin, albedo 10 %% low: p = %.3g (image mean z = %.1f, chi-square %.0f on %d)\n", twin.p,
                       twin.z, twin.chi2, twin.dof);
         assert_true(twin.p < image_check_alpha(6));

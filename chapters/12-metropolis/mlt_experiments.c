@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "09-path-tracing/experiments.h"
+#include "11-bidirectional/bdpt.h"
 #include "12-metropolis/mlt.h"
 #include "12-metropolis/mlt_scene.h"
 
@@ -235,6 +236,193 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     return experiment_csv_close(csv, path, err, err_size);
 }
 
+/* ---- which method for which scene ---------------------------------------------- */
+
+const char *const mlt_method_names[MLT_METHOD_COUNT] = {"path tracing (ch09 MIS)", "bidirectional (ch11)",
+                                                        "Metropolis (ch12 PSSMLT)"};
+
+bool mlt_method_render(mlt_method method, const pt_scene *sc, const camera *cam, int samples, uint64_t seed,
+                       int threads, image *out)
+{
+    path_tracer pt = path_tracer_defaults(sc);
+    pt.integrator = PT_MIS;
+    pt.russian_roulette = RR_THROUGHPUT;
+    if (method == MLT_METHOD_PATH_TRACING) {
+        estimate_image e = render_estimate(&pt, cam, samples, seed, threads);
+        image_free(&e.standard_error);
+        *out = e.mean;
+        return true;
+    }
+    if (method == MLT_METHOD_BIDIRECTIONAL) {
+        bdpt b = bdpt_defaults(sc, cam);
+        estimate_image e;
+        if (!bdpt_render(&b, samples, seed, threads, true, &e))
+            return false;
+        image_free(&e.standard_error);
+        *out = e.mean;
+        return true;
+    }
+    mlt_options o = mlt_defaults(&pt, cam);
+    o.mutations_per_pixel = samples;
+    o.chains = EXPERIMENT_CHAINS;
+    o.bootstrap = bootstrap_for((long long)samples * cam->width * cam->height);
+    o.seed = seed;
+    o.threads = threads;
+    *out = image_make(cam->width, cam->height);
+    mlt_result r;
+    if (!mlt_render(&o, out, &r)) {
+        image_free(out);
+        return false;
+    }
+    return true;
+}
+
+/* The largest sample count of each method: about the same CPU time each
+ * (measured: a BDPT sample, a camera path and a light path joined in every
+ * way, costs about 5 path-traced samples; a mutation about 2). */
+static const int METHOD_MAX_SAMPLES[MLT_METHOD_COUNT] = {512, 128, 256};
+/* The references: path traced (MIS) at 16 times the path tracer's largest
+ * run, so their own relMSE is well below every error plotted (checked and
+ * printed by the run; their variance is subtracted as well). */
+enum { METHODS_REFERENCE_SPP = 8192 };
+
+typedef struct {
+    const char *name, *title;
+    void (*build)(pt_scene *sc);
+    /* The relMSE whose CPU time the table gives: reached by all three
+     * methods in the measured run where possible (chosen from it). */
+    double target_relmse;
+} methods_scene;
+
+typedef struct {
+    double cpu[MAX_POINTS], relmse[MAX_POINTS];
+    int samples[MAX_POINTS];
+    int count;
+} method_curve;
+
+static bool methods_scene_run(const methods_scene *ms, const char *dir, int threads, FILE *table, char *err,
+                              size_t err_size)
+{
+    pt_scene sc;
+    ms->build(&sc);
+    char message[256];
+    if (!bdpt_supports(&sc, message, sizeof message)) {
+        /* every scene here is diffuse with emitting triangles: this is a
+         * guard for a scene added later */
+        snprintf(err, err_size, "%s: bidirectional path tracing refuses it: %s", ms->name, message);
+        pt_scene_free(&sc);
+        return false;
+    }
+    path_tracer pt = path_tracer_defaults(&sc);
+    pt.integrator = PT_MIS;
+    pt.russian_roulette = RR_THROUGHPUT;
+    camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    char reference_path[4096], file[256], path[4096];
+    snprintf(reference_path, sizeof reference_path, "%s/ch12_methods_reference_%s_%d_%d.exr", dir, ms->name,
+             EXPERIMENT_SIZE, METHODS_REFERENCE_SPP);
+    printf("\n== which method: %s (%dx%d)\n", ms->title, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    snprintf(file, sizeof file, "ch12_methods_%s.csv", ms->name);
+    FILE *csv = open_table(dir, file, "method,label,samples,cpu_seconds,relmse,rmse", path, sizeof path, err,
+                           err_size);
+    if (csv == NULL) {
+        pt_scene_free(&sc);
+        return false;
+    }
+    estimate_image reference = {0};
+    if (!experiment_reference(&pt, &cam, METHODS_REFERENCE_SPP, threads, reference_path, &reference, err,
+                              err_size)) {
+        experiment_csv_discard(csv, path);
+        estimate_image_free(&reference);
+        pt_scene_free(&sc);
+        return false;
+    }
+    method_curve curves[MLT_METHOD_COUNT];
+    double smallest = INFINITY;
+    bool ok = true;
+    printf("  %-26s %8s %9s %11s\n", "method", "samples", "CPU s", "relMSE");
+    for (int m = 0; m < MLT_METHOD_COUNT && ok; m++) {
+        method_curve *c = &curves[m];
+        c->count = 0;
+        for (int n = 1; n <= METHOD_MAX_SAMPLES[m]; n *= 2) {
+            image img;
+            double start = experiment_cpu_seconds();
+            if (!mlt_method_render((mlt_method)m, &sc, &cam, n, 0x3e7ULL + (uint64_t)n, threads, &img)) {
+                snprintf(err, err_size, "out of memory");
+                ok = false;
+                break;
+            }
+            double cpu = experiment_cpu_seconds() - start, rmse, relmse;
+            experiment_error(&img, &reference, &rmse, &relmse);
+            image_free(&img);
+            fprintf(csv, "%d,%s,%d,%.6f,%.8g,%.8g\n", m, mlt_method_names[m], n, cpu, relmse, rmse);
+            printf("  %-26s %8d %9.3f %11.5g\n", mlt_method_names[m], n, cpu, relmse);
+            fflush(stdout);
+            c->cpu[c->count] = cpu;
+            c->relmse[c->count] = relmse;
+            c->samples[c->count] = n;
+            c->count++;
+            smallest = fmin(smallest, relmse);
+        }
+    }
+    if (ok) {
+        /* The reference's own relMSE, as its variance predicts it: small
+         * against the smallest error measured, or the curves flatten on
+         * its noise rather than on theirs. */
+        double reference_error = estimate_relative_error(&reference);
+        double reference_relmse = reference_error * reference_error;
+        printf("  reference relMSE %.3g = %.3f of the smallest measured (%.3g)%s\n", reference_relmse,
+               reference_relmse / smallest, smallest,
+               reference_relmse > 0.1 * smallest ? ": NOT well below -- render it with more samples" : "");
+        printf("  CPU seconds to reach relMSE %g:", ms->target_relmse);
+        for (int m = 0; m < MLT_METHOD_COUNT; m++) {
+            int samples = 0;
+            double s = experiment_time_to_reach(curves[m].cpu, curves[m].relmse, curves[m].samples, curves[m].count,
+                                                ms->target_relmse, &samples);
+            if (s < 0.0) {
+                printf("  %s not reached;", mlt_method_names[m]);
+                fprintf(table, "%s,%d,%s,%g,,,%.4g\n", ms->name, m, mlt_method_names[m], ms->target_relmse,
+                        reference_relmse);
+            } else {
+                printf("  %s %.2f s;", mlt_method_names[m], s);
+                fprintf(table, "%s,%d,%s,%g,%.4f,%d,%.4g\n", ms->name, m, mlt_method_names[m], ms->target_relmse, s,
+                        samples, reference_relmse);
+            }
+        }
+        printf("\n");
+    }
+    estimate_image_free(&reference);
+    pt_scene_free(&sc);
+    if (!ok) {
+        experiment_csv_discard(csv, path);
+        return false;
+    }
+    return experiment_csv_close(csv, path, err, err_size);
+}
+
+/* The three unbiased methods on the three scenes, each against one
+ * reference: DIR/ch12_methods_NAME.csv and ch12_methods_time_to_error.csv. */
+static bool methods_compare(const char *dir, int threads, char *err, size_t err_size)
+{
+    const methods_scene scenes[] = {
+        {"cornell", "Cornell box (light seen directly)", pt_scene_build_cornell_box, 0.01},
+        {"ceiling-lamp", "ceiling lamp (ch11: lit only by the ceiling's bright patch)",
+         bdpt_scene_build_ceiling_lamp, 0.03},
+        {"lamp", "lamp in a housing (light only through a 2 cm channel)", mlt_scene_build_lamp, 0.1},
+    };
+    char path[4096];
+    FILE *table = open_table(dir, "ch12_methods_time_to_error.csv",
+                             "scene,method,label,target_relmse,cpu_seconds,samples,reference_relmse", path,
+                             sizeof path, err, err_size);
+    if (table == NULL)
+        return false;
+    for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
+        if (!methods_scene_run(&scenes[i], dir, threads, table, err, err_size)) {
+            experiment_csv_discard(table, path);
+            return false;
+        }
+    return experiment_csv_close(table, path, err, err_size);
+}
+
 bool mlt_experiments_run(const char *dir, int threads, char *err, size_t err_size)
 {
     const experiment_scene scenes[] = {
@@ -244,5 +432,5 @@ bool mlt_experiments_run(const char *dir, int threads, char *err, size_t err_siz
     for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
         if (!equal_time(&scenes[i], dir, threads, err, err_size))
             return false;
-    return startup_bias(dir, threads, err, err_size);
+    return startup_bias(dir, threads, err, err_size) && methods_compare(dir, threads, err, err_size);
 }

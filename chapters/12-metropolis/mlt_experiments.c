@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "09-path-tracing/experiments.h"
@@ -281,18 +282,73 @@ bool mlt_method_render(mlt_method method, const pt_scene *sc, const camera *cam,
  * (measured: a BDPT sample, a camera path and a light path joined in every
  * way, costs about 5 path-traced samples; a mutation about 2). */
 static const int METHOD_MAX_SAMPLES[MLT_METHOD_COUNT] = {512, 128, 256};
-/* The references: path traced (MIS) at 16 times the path tracer's largest
- * run, so their own relMSE is well below every error plotted (checked and
- * printed by the run; their variance is subtracted as well). */
-enum { METHODS_REFERENCE_SPP = 8192 };
+/* Each reference is the mean of 16 independent renders by the method that
+ * converges fastest on its scene, each pixel's standard error the spread
+ * of the 16 over sqrt(16) (BDPT's splats and MLT's chains have no
+ * per-pixel standard error of their own; the replicas' spread is right
+ * for any unbiased method). Their size is chosen so that the reference's
+ * own relMSE is well below every error plotted: the run checks and prints
+ * it, and its variance is subtracted as well (experiment_error). */
+enum { REFERENCE_REPLICAS = 16 };
 
 typedef struct {
     const char *name, *title;
     void (*build)(pt_scene *sc);
-    /* The relMSE whose CPU time the table gives: reached by all three
-     * methods in the measured run where possible (chosen from it). */
+    mlt_method reference_method;
+    int reference_samples; /* per replica */
+    /* The relMSE whose CPU time the table gives: chosen from the measured
+     * run, reached by as many methods as possible. */
     double target_relmse;
 } methods_scene;
+
+static bool methods_reference(const methods_scene *ms, const pt_scene *sc, const camera *cam, int threads,
+                              const char *dir, estimate_image *out, char *err, size_t err_size)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/ch12_methods_reference_%s_%d.exr", dir, ms->name, cam->width);
+    if (experiment_reference_load(path, cam->width, cam->height, out, err, err_size))
+        return true;
+    printf("reference: rendering %dx%d by %s, %d runs of %d samples per pixel ...\n", cam->width, cam->height,
+           mlt_method_names[ms->reference_method], REFERENCE_REPLICAS, ms->reference_samples);
+    fflush(stdout);
+    size_t n = (size_t)cam->width * (size_t)cam->height * 3;
+    double *sum = calloc(n, sizeof *sum), *sum2 = calloc(n, sizeof *sum2);
+    bool ok = sum != NULL && sum2 != NULL;
+    double start = experiment_cpu_seconds();
+    for (int k = 0; k < REFERENCE_REPLICAS && ok; k++) {
+        image img;
+        ok = mlt_method_render(ms->reference_method, sc, cam, ms->reference_samples, 0x5eed00ULL + (uint64_t)k,
+                               threads, &img);
+        for (size_t i = 0; ok && i < n; i++) {
+            sum[i] += img.rgb[i];
+            sum2[i] += (double)img.rgb[i] * img.rgb[i];
+        }
+        if (ok)
+            image_free(&img);
+    }
+    if (!ok) {
+        free(sum);
+        free(sum2);
+        snprintf(err, err_size, "out of memory");
+        return false;
+    }
+    out->mean = image_make(cam->width, cam->height);
+    out->standard_error = image_make(cam->width, cam->height);
+    out->spp = (long)REFERENCE_REPLICAS * ms->reference_samples;
+    out->seconds = experiment_cpu_seconds() - start;
+    memset(&out->counters, 0, sizeof out->counters);
+    for (size_t i = 0; i < n; i++) {
+        double mean = sum[i] / REFERENCE_REPLICAS;
+        double variance = fmax(0.0, (sum2[i] - sum[i] * mean) / (REFERENCE_REPLICAS - 1));
+        out->mean.rgb[i] = (float)mean;
+        out->standard_error.rgb[i] = (float)sqrt(variance / REFERENCE_REPLICAS);
+    }
+    free(sum);
+    free(sum2);
+    printf("reference: %.1f CPU s, estimated relative error %.4f -> %s\n", out->seconds,
+           estimate_relative_error(out), path);
+    return experiment_reference_save(out, path, err, err_size);
+}
 
 typedef struct {
     double cpu[MAX_POINTS], relmse[MAX_POINTS];
@@ -313,13 +369,8 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
         pt_scene_free(&sc);
         return false;
     }
-    path_tracer pt = path_tracer_defaults(&sc);
-    pt.integrator = PT_MIS;
-    pt.russian_roulette = RR_THROUGHPUT;
     camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
-    char reference_path[4096], file[256], path[4096];
-    snprintf(reference_path, sizeof reference_path, "%s/ch12_methods_reference_%s_%d_%d.exr", dir, ms->name,
-             EXPERIMENT_SIZE, METHODS_REFERENCE_SPP);
+    char file[256], path[4096];
     printf("\n== which method: %s (%dx%d)\n", ms->title, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
     snprintf(file, sizeof file, "ch12_methods_%s.csv", ms->name);
     FILE *csv = open_table(dir, file, "method,label,samples,cpu_seconds,relmse,rmse", path, sizeof path, err,
@@ -329,8 +380,7 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
         return false;
     }
     estimate_image reference = {0};
-    if (!experiment_reference(&pt, &cam, METHODS_REFERENCE_SPP, threads, reference_path, &reference, err,
-                              err_size)) {
+    if (!methods_reference(ms, &sc, &cam, threads, dir, &reference, err, err_size)) {
         experiment_csv_discard(csv, path);
         estimate_image_free(&reference);
         pt_scene_free(&sc);
@@ -404,10 +454,12 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
 static bool methods_compare(const char *dir, int threads, char *err, size_t err_size)
 {
     const methods_scene scenes[] = {
-        {"cornell", "Cornell box (light seen directly)", pt_scene_build_cornell_box, 0.01},
+        {"cornell", "Cornell box (light seen directly)", pt_scene_build_cornell_box, MLT_METHOD_PATH_TRACING, 512,
+         0.01},
         {"ceiling-lamp", "ceiling lamp (ch11: lit only by the ceiling's bright patch)",
-         bdpt_scene_build_ceiling_lamp, 0.03},
-        {"lamp", "lamp in a housing (light only through a 2 cm channel)", mlt_scene_build_lamp, 0.1},
+         bdpt_scene_build_ceiling_lamp, MLT_METHOD_BIDIRECTIONAL, 128, 0.03},
+        {"lamp", "lamp in a housing (light only through a 2 cm channel)", mlt_scene_build_lamp,
+         MLT_METHOD_PATH_TRACING, 1024, 0.1},
     };
     char path[4096];
     FILE *table = open_table(dir, "ch12_methods_time_to_error.csv",

@@ -10,6 +10,7 @@
 
 #include "09-path-tracing/experiments.h"
 #include "11-bidirectional/bdpt.h"
+#include "timer.h"
 #include "12-metropolis/mlt.h"
 #include "12-metropolis/mlt_scene.h"
 
@@ -467,11 +468,14 @@ static bool methods_compare(const char *dir, int threads, char *err, size_t err_
                              sizeof path, err, err_size);
     if (table == NULL)
         return false;
+    double start = experiment_cpu_seconds(), wall_start = timer_seconds();
     for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
         if (!methods_scene_run(&scenes[i], dir, threads, table, err, err_size)) {
             experiment_csv_discard(table, path);
             return false;
         }
+    printf("\nwhich method for which scene: %.1f CPU s, %.1f s wall in all\n", experiment_cpu_seconds() - start,
+           timer_seconds() - wall_start);
     return experiment_csv_close(table, path, err, err_size);
 }
 

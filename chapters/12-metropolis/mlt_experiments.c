@@ -57,6 +57,20 @@ static FILE *open_table(const char *dir, const char *name, const char *header, c
     return csv;
 }
 
+/* The end of an experiment: frees its reference and scene, and keeps its
+ * table only if everything went well. */
+static bool finish_table(FILE *csv, const char *path, bool ok, estimate_image *reference, pt_scene *sc, char *err,
+                         size_t err_size)
+{
+    estimate_image_free(reference);
+    pt_scene_free(sc);
+    if (!ok) {
+        experiment_csv_discard(csv, path);
+        return false;
+    }
+    return experiment_csv_close(csv, path, err, err_size);
+}
+
 static const double TARGETS[] = {1.0, 0.3, 0.1, 0.03};
 enum { TARGET_COUNT = sizeof TARGETS / sizeof TARGETS[0], MAX_POINTS = 16 };
 
@@ -81,12 +95,8 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
     /* Freed on failure too: a reference that was rendered but could not be
      * saved is still held. */
     estimate_image reference = {0};
-    if (!experiment_reference(&pt, &cam, es->reference_spp, threads, reference_path, &reference, err, err_size)) {
-        experiment_csv_discard(csv, path);
-        estimate_image_free(&reference);
-        pt_scene_free(&sc);
-        return false;
-    }
+    if (!experiment_reference(&pt, &cam, es->reference_spp, threads, reference_path, &reference, err, err_size))
+        return finish_table(csv, path, false, &reference, &sc, err, err_size);
     static const char *const labels[2] = {"path tracing (MIS + RR on throughput)", "Metropolis (PSSMLT)"};
     double seconds[2][MAX_POINTS], relmses[2][MAX_POINTS];
     int samples[2][MAX_POINTS], count[2] = {0, 0};
@@ -130,12 +140,8 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
             samples[method][k] = spp;
         }
     }
-    if (!ok) {
-        experiment_csv_discard(csv, path);
-        estimate_image_free(&reference);
-        pt_scene_free(&sc);
-        return false;
-    }
+    if (!ok)
+        return finish_table(csv, path, false, &reference, &sc, err, err_size);
     printf("CPU seconds to reach relMSE (from %s):\n", path);
     printf("  %-40s", "");
     for (int t = 0; t < TARGET_COUNT; t++)
@@ -156,9 +162,7 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
     }
     printf("  relMSE at the largest run: path tracing %.4g in %.2f s, Metropolis %.4g in %.2f s\n",
            relmses[0][count[0] - 1], seconds[0][count[0] - 1], relmses[1][count[1] - 1], seconds[1][count[1] - 1]);
-    estimate_image_free(&reference);
-    pt_scene_free(&sc);
-    return experiment_csv_close(csv, path, err, err_size);
+    return finish_table(csv, path, true, &reference, &sc, err, err_size);
 }
 
 /* Short runs of many chains, each started at a bootstrap path picked in
@@ -183,12 +187,8 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
         return false;
     }
     estimate_image reference = {0};
-    if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size)) {
-        experiment_csv_discard(csv, path);
-        estimate_image_free(&reference);
-        pt_scene_free(&sc);
-        return false;
-    }
+    if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size))
+        return finish_table(csv, path, false, &reference, &sc, err, err_size);
     static const char *const labels[2] = {"bootstrap start", "fixed start"};
     printf("  %-18s %-18s %-14s %s\n", "mutations/pixel", "mutations/chain", "bootstrap", "fixed start");
     bool ok = true;
@@ -229,13 +229,7 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     for (int k = 0, mpp = 1; ok && k < points; k++, mpp *= 2)
         printf("  %-18d %-18lld %-14.4g %.4g\n", mpp, (long long)mpp * cam.width * cam.height / STARTUP_CHAINS,
                mean_relmse[0][k], mean_relmse[1][k]);
-    estimate_image_free(&reference);
-    pt_scene_free(&sc);
-    if (!ok) {
-        experiment_csv_discard(csv, path);
-        return false;
-    }
-    return experiment_csv_close(csv, path, err, err_size);
+    return finish_table(csv, path, ok, &reference, &sc, err, err_size);
 }
 
 /* ---- which method for which scene ---------------------------------------------- */
@@ -385,12 +379,8 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
         return false;
     }
     estimate_image reference = {0};
-    if (!methods_reference(ms, &sc, &cam, threads, dir, &reference, err, err_size)) {
-        experiment_csv_discard(csv, path);
-        estimate_image_free(&reference);
-        pt_scene_free(&sc);
-        return false;
-    }
+    if (!methods_reference(ms, &sc, &cam, threads, dir, &reference, err, err_size))
+        return finish_table(csv, path, false, &reference, &sc, err, err_size);
     method_curve curves[MLT_METHOD_COUNT];
     double smallest = INFINITY;
     bool ok = true;
@@ -445,13 +435,7 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
         }
         printf("\n");
     }
-    estimate_image_free(&reference);
-    pt_scene_free(&sc);
-    if (!ok) {
-        experiment_csv_discard(csv, path);
-        return false;
-    }
-    return experiment_csv_close(csv, path, err, err_size);
+    return finish_table(csv, path, ok, &reference, &sc, err, err_size);
 }
 
 /* The three unbiased methods on the three scenes, each against one

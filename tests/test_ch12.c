@@ -2,7 +2,9 @@
  * toy with a known density), the image converges to chapter 09's, the
  * normalization b agrees with the path tracer's image mean, and the image
  * is the same bit for bit on 1 and 2 threads, and short runs from a fixed
- * start have start-up bias. Each statistical check has a
+ * start have start-up bias; the three unbiased methods of the "which
+ * method" comparison (path tracing, BDPT, MLT) make the same image of
+ * chapter 11's ceiling lamp. Each statistical check has a
  * twin on a deliberately wrong implementation that it must reject. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -16,7 +18,9 @@
 #include <string.h>
 
 #include "09-path-tracing/path_tracer.h"
+#include "11-bidirectional/bdpt.h"
 #include "12-metropolis/mlt.h"
+#include "12-metropolis/mlt_experiments.h"
 #include "render.h"
 #include "stats.h"
 #include "test_support.h"
@@ -408,6 +412,104 @@ static void test_same_image_for_one_and_two_threads(void **state)
     pt_scene_free(&s.scene);
 }
 
+/* ---- the three methods of the comparison agree ------------------------------------
+ * Comparing the errors of path tracing, BDPT and MLT means something only
+ * if all three converge to the same image: each is unbiased, so their
+ * images of one scene differ only by noise. Here: chapter 11's ceiling
+ * lamp (where the three differ most in noise) at 8 x 8, each image cut
+ * into 2 x 2 blocks of mean luminance, each method run K times with
+ * its own seeds (the spread of the replicas gives the standard error for
+ * all three alike: BDPT's splats and MLT's chains have no per-pixel one).
+ * Every pair of methods must agree in every block within 5 standard
+ * errors in quadrature. With K = 32 the studentized difference is about
+ * Student's t with 31 degrees of freedom or more: P(|t| > 5) < 2.1e-5, so
+ * over 3 pairs x 4 blocks a false alarm is under 3e-4. */
+enum { AGREE_SIDE = 8, AGREE_BLOCK = AGREE_SIDE / 2, AGREE_BLOCKS = 4, AGREE_REPLICAS = 32 };
+/* Samples per pixel of each method: about equal time, and every block
+ * lit well enough to have a spread. */
+static const int AGREE_SAMPLES[MLT_METHOD_COUNT] = {256, 64, 128};
+
+typedef struct {
+    double mean[AGREE_BLOCKS], standard_error[AGREE_BLOCKS];
+} block_estimate;
+
+/* K renders by one method (bidirectional with `fault` if not NONE) into
+ * block means and their standard errors. */
+static void render_blocks(mlt_method method, bdpt_fault fault, const pt_scene *sc, const camera *cam, uint64_t seed,
+                          block_estimate *out)
+{
+    double sum[AGREE_BLOCKS] = {0}, sum2[AGREE_BLOCKS] = {0};
+    for (int k = 0; k < AGREE_REPLICAS; k++) {
+        uint64_t replica_seed = seed + 7919u * (uint64_t)k;
+        image img;
+        if (method == MLT_METHOD_BIDIRECTIONAL && fault != BDPT_FAULT_NONE) {
+            bdpt b = bdpt_defaults(sc, cam);
+            b.fault = fault;
+            estimate_image e;
+            assert_true(bdpt_render(&b, AGREE_SAMPLES[method], replica_seed, 1, true, &e));
+            img = e.mean;
+            image_free(&e.standard_error);
+        } else {
+            assert_true(mlt_method_render(method, sc, cam, AGREE_SAMPLES[method], replica_seed, 1, &img));
+        }
+        double block[AGREE_BLOCKS] = {0};
+        for (int y = 0; y < AGREE_SIDE; y++)
+            for (int x = 0; x < AGREE_SIDE; x++) {
+                const float *p = &img.rgb[3 * (y * AGREE_SIDE + x)];
+                block[(y / AGREE_BLOCK) * 2 + x / AGREE_BLOCK] +=
+                    vec3_luminance(vec3_make(p[0], p[1], p[2])) / (AGREE_BLOCK * AGREE_BLOCK);
+            }
+        for (int i = 0; i < AGREE_BLOCKS; i++) {
+            sum[i] += block[i];
+            sum2[i] += block[i] * block[i];
+        }
+        image_free(&img);
+    }
+    for (int i = 0; i < AGREE_BLOCKS; i++)
+        mean_and_standard_error(sum[i], sum2[i], AGREE_REPLICAS, &out->mean[i], &out->standard_error[i]);
+}
+
+/* The number of (pair of methods, block) further apart than 5 standard
+ * errors, BDPT run with `fault`. */
+static int count_method_disagreements(bdpt_fault fault)
+{
+    pt_scene sc;
+    bdpt_scene_build_ceiling_lamp(&sc);
+    camera cam = pt_scene_camera(&sc, AGREE_SIDE, AGREE_SIDE);
+    block_estimate e[MLT_METHOD_COUNT];
+    for (int m = 0; m < MLT_METHOD_COUNT; m++)
+        render_blocks((mlt_method)m, fault, &sc, &cam, test_seed(1230) + 1000003u * (uint64_t)m, &e[m]);
+    int disagreements = 0;
+    for (int a = 0; a < MLT_METHOD_COUNT; a++)
+        for (int b = a + 1; b < MLT_METHOD_COUNT; b++)
+            for (int i = 0; i < AGREE_BLOCKS; i++) {
+                double d = e[a].mean[i] - e[b].mean[i];
+                double se = sqrt(e[a].standard_error[i] * e[a].standard_error[i] +
+                                 e[b].standard_error[i] * e[b].standard_error[i]);
+                print_message("block %d: %s %.4f +- %.4f, %s %.4f +- %.4f: %.1f standard errors\n", i,
+                              mlt_method_names[a], e[a].mean[i], e[a].standard_error[i], mlt_method_names[b],
+                              e[b].mean[i], e[b].standard_error[i], fabs(d) / se);
+                if (fabs(d) > STANDARD_ERRORS * se)
+                    disagreements++;
+            }
+    pt_scene_free(&sc);
+    return disagreements;
+}
+
+static void test_three_methods_make_the_same_image(void **state)
+{
+    (void)state;
+    assert_int_equal(count_method_disagreements(BDPT_FAULT_NONE), 0);
+}
+
+/* Twin: BDPT leaving out the cosine at the light vertex when it joins a
+ * camera vertex to a light sample (s = 1) is biased; the check sees it. */
+static void test_twin_biased_bidirectional_disagrees(void **state)
+{
+    (void)state;
+    assert_true(count_method_disagreements(BDPT_FAULT_NO_LIGHT_COSINE) > 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -420,6 +522,8 @@ int main(void)
         cmocka_unit_test(test_fixed_start_has_start_up_bias),
         cmocka_unit_test(test_twin_startup_check_on_equal_starts_fails),
         cmocka_unit_test(test_same_image_for_one_and_two_threads),
+        cmocka_unit_test(test_three_methods_make_the_same_image),
+        cmocka_unit_test(test_twin_biased_bidirectional_disagrees),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

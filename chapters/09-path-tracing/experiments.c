@@ -113,18 +113,18 @@ static void standard_error_path(const char *path, char *out, size_t size)
     snprintf(out, size, "%.*s-stderr.exr", (int)(n > 4 ? n - 4 : n), path);
 }
 
-bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int threads, const char *path,
-                          estimate_image *out, char *err, size_t err_size)
+bool experiment_reference_load(const char *path, int width, int height, estimate_image *out, char *err,
+                               size_t err_size)
 {
     char se_path[4096];
     standard_error_path(path, se_path, sizeof se_path);
     image mean = {0}, se = {0};
     if (access(path, R_OK) == 0 && access(se_path, R_OK) == 0 && image_read_exr(&mean, path, err, err_size) &&
-        image_read_exr(&se, se_path, err, err_size) && mean.width == cam->width && mean.height == cam->height &&
-        se.width == cam->width && se.height == cam->height) {
+        image_read_exr(&se, se_path, err, err_size) && mean.width == width && mean.height == height &&
+        se.width == width && se.height == height) {
         out->mean = mean;
         out->standard_error = se;
-        out->spp = spp;
+        out->spp = 0;
         out->seconds = 0.0;
         memset(&out->counters, 0, sizeof out->counters);
         printf("reference: %s (cached; delete it to render it again)\n", path);
@@ -132,6 +132,31 @@ bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int
     }
     image_free(&mean);
     image_free(&se);
+    return false;
+}
+
+bool experiment_reference_save(const estimate_image *e, const char *path, char *err, size_t err_size)
+{
+    char se_path[4096];
+    standard_error_path(path, se_path, sizeof se_path);
+    if (!image_write_exr(&e->mean, path, err, err_size))
+        return false;
+    /* The cache is the pair: a new mean beside an old standard error (or
+     * none) must not be taken for one next time. */
+    if (!image_write_exr(&e->standard_error, se_path, err, err_size)) {
+        unlink(path);
+        return false;
+    }
+    return true;
+}
+
+bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int threads, const char *path,
+                          estimate_image *out, char *err, size_t err_size)
+{
+    if (experiment_reference_load(path, cam->width, cam->height, out, err, err_size)) {
+        out->spp = spp;
+        return true;
+    }
     path_tracer reference = *pt;
     reference.integrator = PT_MIS;
     reference.russian_roulette = RR_THROUGHPUT;
@@ -139,15 +164,7 @@ bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int
     fflush(stdout);
     *out = render_estimate(&reference, cam, spp, 0x5eedULL, threads);
     printf("reference: %.1f s, estimated relative error %.4f -> %s\n", out->seconds, estimate_relative_error(out), path);
-    if (!image_write_exr(&out->mean, path, err, err_size))
-        return false;
-    /* The cache is the pair: a new mean beside an old standard error (or
-     * none) must not be taken for one next time. */
-    if (!image_write_exr(&out->standard_error, se_path, err, err_size)) {
-        unlink(path);
-        return false;
-    }
-    return true;
+    return experiment_reference_save(out, path, err, err_size);
 }
 
 /* ---- error against the reference ---------------------------------------------------

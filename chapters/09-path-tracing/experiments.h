@@ -54,6 +54,14 @@ estimate_image render_progressive(const path_tracer *pt, const camera *cam, uint
 bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int threads, const char *path,
                           estimate_image *out, char *err, size_t err_size);
 
+/* The cache experiment_reference keeps, for references made otherwise
+ * (chapter 12's, by other methods): _load fills *out from the pair
+ * `path` and its "-stderr.exr" if both are there and width x height (else
+ * false, *out untouched); _save writes the pair (neither, on failure). */
+bool experiment_reference_load(const char *path, int width, int height, estimate_image *out, char *err,
+                               size_t err_size);
+bool experiment_reference_save(const estimate_image *e, const char *path, char *err, size_t err_size);
+
 /* Writes DIR/ch09_convergence_NAME.csv (RMSE and relMSE of each rung at 1,
  * 2, 4, ... max_spp samples, with wall and CPU seconds) and
  * DIR/ch09_time_to_error_NAME.csv, and prints a table of the CPU time each

@@ -45,7 +45,8 @@ int main(int argc, char **argv)
          "render the same scene with chapter 09's path tracer instead (--spp samples per pixel), to compare", 0, 0},
         {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
         {"--data", CLI_DIR, &data, "DIR",
-         "run the experiments (equal-time error of MLT and path tracing; start-up bias) and write CSV into DIR", 0,
+         "run the experiments (equal-time error of MLT and path tracing; start-up bias; which method for which "
+         "scene: path tracing, BDPT and MLT on three scenes) and write CSV into DIR", 0,
          0},
     };
     cli_spec spec = {"12-metropolis",
@@ -53,7 +54,7 @@ int main(int argc, char **argv)
                      "a Markov chain over the path tracer's uniform numbers whose stationary density is the\n"
                      "path's luminance f over b = E[f]. --spp is mutations per pixel; b is estimated from\n"
                      "--bootstrap paths. Uses chapter 09's path tracer (MIS, Russian roulette on throughput).\n"
-                     "--data DIR measures error against time against chapter 09's path tracer.",
+                     "--data DIR measures error against time against chapter 09's path tracer and chapter 11's BDPT.",
                      extras, sizeof extras / sizeof extras[0]};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     mlt_start start_mode;

@@ -5,9 +5,12 @@
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "09-path-tracing/experiments.h"
+#include "11-bidirectional/bdpt.h"
+#include "timer.h"
 #include "12-metropolis/mlt.h"
 #include "12-metropolis/mlt_scene.h"
 
@@ -54,6 +57,20 @@ static FILE *open_table(const char *dir, const char *name, const char *header, c
     return csv;
 }
 
+/* The end of an experiment: frees its reference and scene, and keeps its
+ * table only if everything went well. */
+static bool finish_table(FILE *csv, const char *path, bool ok, estimate_image *reference, pt_scene *sc, char *err,
+                         size_t err_size)
+{
+    estimate_image_free(reference);
+    pt_scene_free(sc);
+    if (!ok) {
+        experiment_csv_discard(csv, path);
+        return false;
+    }
+    return experiment_csv_close(csv, path, err, err_size);
+}
+
 static const double TARGETS[] = {1.0, 0.3, 0.1, 0.03};
 enum { TARGET_COUNT = sizeof TARGETS / sizeof TARGETS[0], MAX_POINTS = 16 };
 
@@ -78,12 +95,8 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
     /* Freed on failure too: a reference that was rendered but could not be
      * saved is still held. */
     estimate_image reference = {0};
-    if (!experiment_reference(&pt, &cam, es->reference_spp, threads, reference_path, &reference, err, err_size)) {
-        experiment_csv_discard(csv, path);
-        estimate_image_free(&reference);
-        pt_scene_free(&sc);
-        return false;
-    }
+    if (!experiment_reference(&pt, &cam, es->reference_spp, threads, reference_path, &reference, err, err_size))
+        return finish_table(csv, path, false, &reference, &sc, err, err_size);
     static const char *const labels[2] = {"path tracing (MIS + RR on throughput)", "Metropolis (PSSMLT)"};
     double seconds[2][MAX_POINTS], relmses[2][MAX_POINTS];
     int samples[2][MAX_POINTS], count[2] = {0, 0};
@@ -127,12 +140,8 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
             samples[method][k] = spp;
         }
     }
-    if (!ok) {
-        experiment_csv_discard(csv, path);
-        estimate_image_free(&reference);
-        pt_scene_free(&sc);
-        return false;
-    }
+    if (!ok)
+        return finish_table(csv, path, false, &reference, &sc, err, err_size);
     printf("CPU seconds to reach relMSE (from %s):\n", path);
     printf("  %-40s", "");
     for (int t = 0; t < TARGET_COUNT; t++)
@@ -153,9 +162,7 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
     }
     printf("  relMSE at the largest run: path tracing %.4g in %.2f s, Metropolis %.4g in %.2f s\n",
            relmses[0][count[0] - 1], seconds[0][count[0] - 1], relmses[1][count[1] - 1], seconds[1][count[1] - 1]);
-    estimate_image_free(&reference);
-    pt_scene_free(&sc);
-    return experiment_csv_close(csv, path, err, err_size);
+    return finish_table(csv, path, true, &reference, &sc, err, err_size);
 }
 
 /* Short runs of many chains, each started at a bootstrap path picked in
@@ -180,12 +187,8 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
         return false;
     }
     estimate_image reference = {0};
-    if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size)) {
-        experiment_csv_discard(csv, path);
-        estimate_image_free(&reference);
-        pt_scene_free(&sc);
-        return false;
-    }
+    if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size))
+        return finish_table(csv, path, false, &reference, &sc, err, err_size);
     static const char *const labels[2] = {"bootstrap start", "fixed start"};
     printf("  %-18s %-18s %-14s %s\n", "mutations/pixel", "mutations/chain", "bootstrap", "fixed start");
     bool ok = true;
@@ -226,13 +229,242 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     for (int k = 0, mpp = 1; ok && k < points; k++, mpp *= 2)
         printf("  %-18d %-18lld %-14.4g %.4g\n", mpp, (long long)mpp * cam.width * cam.height / STARTUP_CHAINS,
                mean_relmse[0][k], mean_relmse[1][k]);
-    estimate_image_free(&reference);
-    pt_scene_free(&sc);
-    if (!ok) {
-        experiment_csv_discard(csv, path);
+    return finish_table(csv, path, ok, &reference, &sc, err, err_size);
+}
+
+/* ---- which method for which scene ---------------------------------------------- */
+
+const char *const mlt_method_names[MLT_METHOD_COUNT] = {"path tracing (ch09 MIS)", "bidirectional (ch11)",
+                                                        "Metropolis (ch12 PSSMLT)"};
+
+bool mlt_method_render(mlt_method method, const pt_scene *sc, const camera *cam, int samples, uint64_t seed,
+                       int threads, image *out)
+{
+    path_tracer pt = path_tracer_defaults(sc);
+    pt.integrator = PT_MIS;
+    pt.russian_roulette = RR_THROUGHPUT;
+    if (method == MLT_METHOD_PATH_TRACING) {
+        estimate_image e = render_estimate(&pt, cam, samples, seed, threads);
+        image_free(&e.standard_error);
+        *out = e.mean;
+        return true;
+    }
+    if (method == MLT_METHOD_BIDIRECTIONAL) {
+        bdpt b = bdpt_defaults(sc, cam);
+        estimate_image e;
+        if (!bdpt_render(&b, samples, seed, threads, true, &e))
+            return false;
+        image_free(&e.standard_error);
+        *out = e.mean;
+        return true;
+    }
+    mlt_options o = mlt_defaults(&pt, cam);
+    o.mutations_per_pixel = samples;
+    o.chains = EXPERIMENT_CHAINS;
+    o.bootstrap = bootstrap_for((long long)samples * cam->width * cam->height);
+    o.seed = seed;
+    o.threads = threads;
+    *out = image_make(cam->width, cam->height);
+    mlt_result r;
+    if (!mlt_render(&o, out, &r)) {
+        image_free(out);
         return false;
     }
-    return experiment_csv_close(csv, path, err, err_size);
+    return true;
+}
+
+/* The largest sample count of each method: about the same CPU time each
+ * (measured: a BDPT sample, a camera path and a light path joined in every
+ * way, costs about 5 path-traced samples; a mutation about 2). */
+static const int METHOD_MAX_SAMPLES[MLT_METHOD_COUNT] = {512, 128, 256};
+/* Each reference is the mean of 16 independent renders by the method that
+ * converges fastest on its scene, each pixel's standard error the spread
+ * of the 16 over sqrt(16) (BDPT's splats and MLT's chains have no
+ * per-pixel standard error of their own; the replicas' spread is right
+ * for any unbiased method). Their size is chosen so that the reference's
+ * own relMSE is well below every error plotted: the run checks and prints
+ * it, and its variance is subtracted as well (experiment_error). Path
+ * traced references of the two lamps were not good enough: 8192 spp on the
+ * ceiling lamp had relMSE 0.002, and 16384 spp on the lamp in a housing
+ * 0.004, both about BDPT's own error after 128 samples; BDPT's 16 x 128
+ * reach 5e-5 and 2.5e-4. */
+enum { REFERENCE_REPLICAS = 16 };
+
+typedef struct {
+    const char *name, *title;
+    void (*build)(pt_scene *sc);
+    mlt_method reference_method;
+    int reference_samples; /* per replica */
+    /* The relMSE whose CPU time the table gives: chosen from the measured
+     * run, reached by as many methods as possible. */
+    double target_relmse;
+} methods_scene;
+
+static bool methods_reference(const methods_scene *ms, const pt_scene *sc, const camera *cam, int threads,
+                              const char *dir, estimate_image *out, char *err, size_t err_size)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/ch12_methods_reference_%s_%d.exr", dir, ms->name, cam->width);
+    if (experiment_reference_load(path, cam->width, cam->height, out, err, err_size))
+        return true;
+    printf("reference: rendering %dx%d by %s, %d runs of %d samples per pixel ...\n", cam->width, cam->height,
+           mlt_method_names[ms->reference_method], REFERENCE_REPLICAS, ms->reference_samples);
+    fflush(stdout);
+    size_t n = (size_t)cam->width * (size_t)cam->height * 3;
+    double *sum = calloc(n, sizeof *sum), *sum2 = calloc(n, sizeof *sum2);
+    bool ok = sum != NULL && sum2 != NULL;
+    double start = experiment_cpu_seconds();
+    for (int k = 0; k < REFERENCE_REPLICAS && ok; k++) {
+        image img;
+        ok = mlt_method_render(ms->reference_method, sc, cam, ms->reference_samples, 0x5eed00ULL + (uint64_t)k,
+                               threads, &img);
+        for (size_t i = 0; ok && i < n; i++) {
+            sum[i] += img.rgb[i];
+            sum2[i] += (double)img.rgb[i] * img.rgb[i];
+        }
+        if (ok)
+            image_free(&img);
+    }
+    if (!ok) {
+        free(sum);
+        free(sum2);
+        snprintf(err, err_size, "out of memory");
+        return false;
+    }
+    out->mean = image_make(cam->width, cam->height);
+    out->standard_error = image_make(cam->width, cam->height);
+    out->spp = (long)REFERENCE_REPLICAS * ms->reference_samples;
+    out->seconds = experiment_cpu_seconds() - start;
+    memset(&out->counters, 0, sizeof out->counters);
+    for (size_t i = 0; i < n; i++) {
+        double mean = sum[i] / REFERENCE_REPLICAS;
+        double variance = fmax(0.0, (sum2[i] - sum[i] * mean) / (REFERENCE_REPLICAS - 1));
+        out->mean.rgb[i] = (float)mean;
+        out->standard_error.rgb[i] = (float)sqrt(variance / REFERENCE_REPLICAS);
+    }
+    free(sum);
+    free(sum2);
+    printf("reference: %.1f CPU s, estimated relative error %.4f -> %s\n", out->seconds,
+           estimate_relative_error(out), path);
+    return experiment_reference_save(out, path, err, err_size);
+}
+
+typedef struct {
+    double cpu[MAX_POINTS], relmse[MAX_POINTS];
+    int samples[MAX_POINTS];
+    int count;
+} method_curve;
+
+static bool methods_scene_run(const methods_scene *ms, const char *dir, int threads, FILE *table, char *err,
+                              size_t err_size)
+{
+    pt_scene sc;
+    ms->build(&sc);
+    char message[256];
+    if (!bdpt_supports(&sc, message, sizeof message)) {
+        /* every scene here is diffuse with emitting triangles: this is a
+         * guard for a scene added later */
+        snprintf(err, err_size, "%s: bidirectional path tracing refuses it: %s", ms->name, message);
+        pt_scene_free(&sc);
+        return false;
+    }
+    camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    char file[256], path[4096];
+    printf("\n== which method: %s (%dx%d)\n", ms->title, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    snprintf(file, sizeof file, "ch12_methods_%s.csv", ms->name);
+    FILE *csv = open_table(dir, file, "method,label,samples,cpu_seconds,relmse,rmse", path, sizeof path, err,
+                           err_size);
+    if (csv == NULL) {
+        pt_scene_free(&sc);
+        return false;
+    }
+    estimate_image reference = {0};
+    if (!methods_reference(ms, &sc, &cam, threads, dir, &reference, err, err_size))
+        return finish_table(csv, path, false, &reference, &sc, err, err_size);
+    method_curve curves[MLT_METHOD_COUNT];
+    double smallest = INFINITY;
+    bool ok = true;
+    printf("  %-26s %8s %9s %11s\n", "method", "samples", "CPU s", "relMSE");
+    for (int m = 0; m < MLT_METHOD_COUNT && ok; m++) {
+        method_curve *c = &curves[m];
+        c->count = 0;
+        for (int n = 1; n <= METHOD_MAX_SAMPLES[m]; n *= 2) {
+            image img;
+            double start = experiment_cpu_seconds();
+            if (!mlt_method_render((mlt_method)m, &sc, &cam, n, 0x3e7ULL + (uint64_t)n, threads, &img)) {
+                snprintf(err, err_size, "out of memory");
+                ok = false;
+                break;
+            }
+            double cpu = experiment_cpu_seconds() - start, rmse, relmse;
+            experiment_error(&img, &reference, &rmse, &relmse);
+            image_free(&img);
+            fprintf(csv, "%d,%s,%d,%.6f,%.8g,%.8g\n", m, mlt_method_names[m], n, cpu, relmse, rmse);
+            printf("  %-26s %8d %9.3f %11.5g\n", mlt_method_names[m], n, cpu, relmse);
+            fflush(stdout);
+            c->cpu[c->count] = cpu;
+            c->relmse[c->count] = relmse;
+            c->samples[c->count] = n;
+            c->count++;
+            smallest = fmin(smallest, relmse);
+        }
+    }
+    if (ok) {
+        /* The reference's own relMSE, as its variance predicts it: small
+         * against the smallest error measured, or the curves flatten on
+         * its noise rather than on theirs. */
+        double reference_error = estimate_relative_error(&reference);
+        double reference_relmse = reference_error * reference_error;
+        printf("  reference relMSE %.3g = %.3f of the smallest measured (%.3g)%s\n", reference_relmse,
+               reference_relmse / smallest, smallest,
+               reference_relmse > 0.1 * smallest ? ": NOT well below -- render it with more samples" : "");
+        printf("  CPU seconds to reach relMSE %g:", ms->target_relmse);
+        for (int m = 0; m < MLT_METHOD_COUNT; m++) {
+            int samples = 0;
+            double s = experiment_time_to_reach(curves[m].cpu, curves[m].relmse, curves[m].samples, curves[m].count,
+                                                ms->target_relmse, &samples);
+            if (s < 0.0) {
+                printf("  %s not reached;", mlt_method_names[m]);
+                fprintf(table, "%s,%d,%s,%g,,,%.4g\n", ms->name, m, mlt_method_names[m], ms->target_relmse,
+                        reference_relmse);
+            } else {
+                printf("  %s %.2f s;", mlt_method_names[m], s);
+                fprintf(table, "%s,%d,%s,%g,%.4f,%d,%.4g\n", ms->name, m, mlt_method_names[m], ms->target_relmse, s,
+                        samples, reference_relmse);
+            }
+        }
+        printf("\n");
+    }
+    return finish_table(csv, path, ok, &reference, &sc, err, err_size);
+}
+
+/* The three unbiased methods on the three scenes, each against one
+ * reference: DIR/ch12_methods_NAME.csv and ch12_methods_time_to_error.csv. */
+static bool methods_compare(const char *dir, int threads, char *err, size_t err_size)
+{
+    const methods_scene scenes[] = {
+        {"cornell", "Cornell box (light seen directly)", pt_scene_build_cornell_box, MLT_METHOD_PATH_TRACING, 512,
+         0.01},
+        {"ceiling-lamp", "ceiling lamp (ch11: lit only by the ceiling's bright patch)",
+         bdpt_scene_build_ceiling_lamp, MLT_METHOD_BIDIRECTIONAL, 128, 0.1},
+        {"lamp", "lamp in a housing (light only through a 2 cm channel)", mlt_scene_build_lamp,
+         MLT_METHOD_BIDIRECTIONAL, 128, 0.3},
+    };
+    char path[4096];
+    FILE *table = open_table(dir, "ch12_methods_time_to_error.csv",
+                             "scene,method,label,target_relmse,cpu_seconds,samples,reference_relmse", path,
+                             sizeof path, err, err_size);
+    if (table == NULL)
+        return false;
+    double start = experiment_cpu_seconds(), wall_start = timer_seconds();
+    for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
+        if (!methods_scene_run(&scenes[i], dir, threads, table, err, err_size)) {
+            experiment_csv_discard(table, path);
+            return false;
+        }
+    printf("\nwhich method for which scene: %.1f CPU s, %.1f s wall in all\n", experiment_cpu_seconds() - start,
+           timer_seconds() - wall_start);
+    return experiment_csv_close(table, path, err, err_size);
 }
 
 bool mlt_experiments_run(const char *dir, int threads, char *err, size_t err_size)
@@ -244,5 +476,5 @@ bool mlt_experiments_run(const char *dir, int threads, char *err, size_t err_siz
     for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
         if (!equal_time(&scenes[i], dir, threads, err, err_size))
             return false;
-    return startup_bias(dir, threads, err, err_size);
+    return startup_bias(dir, threads, err, err_size) && methods_compare(dir, threads, err, err_size);
 }

@@ -122,10 +122,10 @@ static void test_converges_to_path_tracing_on_the_cornell_box(void **state)
 static void build_glowing_room(pt_scene *sc)
 {
     pt_scene_init(sc);
-    int white = pt_scene_add_material(sc, pt_emitter(vec3_make(0.725f, 0.71f, 0.68f), vec3_splat(0.5f)));
-    int red = pt_scene_add_material(sc, pt_diffuse(vec3_make(0.63f, 0.065f, 0.05f)));
-    int green = pt_scene_add_material(sc, pt_diffuse(vec3_make(0.14f, 0.45f, 0.091f)));
-    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), vec3_make(17, 12, 4)));
+    int white = pt_scene_add_material(sc, pt_emitter(PT_CORNELL_WHITE, vec3_splat(0.5f)));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
     int cube = pt_scene_add_material(sc, pt_diffuse(vec3_splat(0.7f)));
     pt_scene_add_cornell_room(sc, white, red, green, light);
     /* a cube from (180, 0, 180) to (380, 200, 380): four sides and the top,

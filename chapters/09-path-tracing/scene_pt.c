@@ -207,10 +207,10 @@ static vec3 v(float x, float y, float z) { return vec3_make(x, y, z); }
 
 /* Reflectances of the box's paints as RGB (the values GAMES101's assignment 7
  * uses), and the light's emission. */
-static const vec3 CORNELL_WHITE = {0.725f, 0.71f, 0.68f};
-static const vec3 CORNELL_RED = {0.63f, 0.065f, 0.05f};
-static const vec3 CORNELL_GREEN = {0.14f, 0.45f, 0.091f};
-static const vec3 CORNELL_LIGHT = {17.0f, 12.0f, 4.0f};
+const vec3 PT_CORNELL_WHITE = {0.725f, 0.71f, 0.68f};
+const vec3 PT_CORNELL_RED = {0.63f, 0.065f, 0.05f};
+const vec3 PT_CORNELL_GREEN = {0.14f, 0.45f, 0.091f};
+const vec3 PT_CORNELL_LIGHT = {17.0f, 12.0f, 4.0f};
 
 void pt_scene_add_cornell_room(pt_scene *sc, int white, int red, int green, int light)
 {
@@ -250,10 +250,10 @@ static void cornell_tall_block(pt_scene *sc, int m)
 void pt_scene_build_cornell_box(pt_scene *sc)
 {
     pt_scene_init(sc);
-    int white = pt_scene_add_material(sc, pt_diffuse(CORNELL_WHITE));
-    int red = pt_scene_add_material(sc, pt_diffuse(CORNELL_RED));
-    int green = pt_scene_add_material(sc, pt_diffuse(CORNELL_GREEN));
-    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), CORNELL_LIGHT));
+    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
     pt_scene_add_cornell_room(sc, white, red, green, light);
     cornell_short_block(sc, white);
     cornell_tall_block(sc, white);
@@ -263,10 +263,10 @@ void pt_scene_build_cornell_box(pt_scene *sc)
 void pt_scene_build_cornell_box_materials(pt_scene *sc)
 {
     pt_scene_init(sc);
-    int white = pt_scene_add_material(sc, pt_diffuse(CORNELL_WHITE));
-    int red = pt_scene_add_material(sc, pt_diffuse(CORNELL_RED));
-    int green = pt_scene_add_material(sc, pt_diffuse(CORNELL_GREEN));
-    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), CORNELL_LIGHT));
+    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
     int metal = pt_scene_add_material(sc, pt_glossy(vec3_make(0.95f, 0.64f, 0.54f), 0.15f)); /* copper-like */
     int glass = pt_scene_add_material(sc, pt_glass(1.5f));
     pt_scene_add_cornell_room(sc, white, red, green, light);

@@ -109,6 +109,10 @@ float pt_scene_emitter_pdf_area(const pt_scene *sc, int material);
 camera pt_scene_camera(const pt_scene *sc, int width, int height);
 
 /* The scenes. */
+/* The Cornell box's paints as RGB albedos (the values of GAMES101's
+ * assignment 7) and its light's emitted radiance: every room built on
+ * pt_scene_add_cornell_room() uses them. */
+extern const vec3 PT_CORNELL_WHITE, PT_CORNELL_RED, PT_CORNELL_GREEN, PT_CORNELL_LIGHT;
 /* The Cornell box's room alone: floor, ceiling and back wall (white), the
  * green and red walls, the light in the ceiling, and the original camera;
  * millimetres. The rooms of pt_scene_build_cornell_box and of chapter 10. */

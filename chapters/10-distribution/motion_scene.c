@@ -155,10 +155,10 @@ static void mesh_add_box(mesh *m, vec3 lo, vec3 hi, int material)
 void motion_scene_build_showcase_still(pt_scene *sc)
 {
     pt_scene_init(sc);
-    int white = pt_scene_add_material(sc, pt_diffuse(v(0.725f, 0.71f, 0.68f)));
-    int red = pt_scene_add_material(sc, pt_diffuse(v(0.63f, 0.065f, 0.05f)));
-    int green = pt_scene_add_material(sc, pt_diffuse(v(0.14f, 0.45f, 0.091f)));
-    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), v(17.0f, 12.0f, 4.0f)));
+    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
     int plate = pt_scene_add_material(sc, pt_glossy(v(0.85f, 0.85f, 0.85f), 0.12f));
     int mirror = pt_scene_add_material(sc, pt_mirror(v(0.9f, 0.9f, 0.9f)));
     int glass = pt_scene_add_material(sc, pt_glass(1.5f));

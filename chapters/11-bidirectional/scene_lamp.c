@@ -27,8 +27,8 @@ void bdpt_scene_build_ceiling_lamp(pt_scene *sc)
 {
     pt_scene_init(sc);
     int white = pt_scene_add_material(sc, pt_diffuse(vec3_make(0.75f, 0.74f, 0.72f)));
-    int red = pt_scene_add_material(sc, pt_diffuse(vec3_make(0.63f, 0.065f, 0.05f)));
-    int green = pt_scene_add_material(sc, pt_diffuse(vec3_make(0.14f, 0.45f, 0.091f)));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
     /* The lamp's underside is dark: a shade */
     int lamp = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.1f), vec3_make(100.0f, 90.0f, 75.0f)));
     pt_scene_add_quad(sc, v(0, 0, 0), v(0, 0, 5), v(4, 0, 5), v(4, 0, 0), white); /* floor */

@@ -16,9 +16,9 @@ void mlt_scene_build_lamp(pt_scene *sc)
     pt_scene_init(sc);
     /* The Cornell box's reflectances; the light 10 times brighter than its
      * (17, 12, 4), since most of it stays in the housing. */
-    int white = pt_scene_add_material(sc, pt_diffuse(vec3_make(0.725f, 0.71f, 0.68f)));
-    int red = pt_scene_add_material(sc, pt_diffuse(vec3_make(0.63f, 0.065f, 0.05f)));
-    int green = pt_scene_add_material(sc, pt_diffuse(vec3_make(0.14f, 0.45f, 0.091f)));
+    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
     int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), vec3_make(170.0f, 120.0f, 40.0f)));
     const float width = 556.0f, height = 548.8f, depth = 559.2f;
     /* The room, each face counter-clockwise seen from inside; open at the front. */

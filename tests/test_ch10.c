@@ -132,6 +132,8 @@ static void test_aperture_zero_is_the_pinhole(void **state)
     motion_scene_build_showcase(&ms);
     camera cam = pt_scene_camera(&ms.base, 16, 16);
     thin_lens lens = thin_lens_make(&cam, 0.0f, 700.0f);
+    /* 50 pixel positions along a diagonal, each with a different lens
+     * sample in [0, 1)^2: with aperture 0 none of them may move the ray */
     for (int i = 0; i < 50; i++) {
         ray pinhole = camera_ray(&cam, 0.3f * (float)i, 16.0f - 0.25f * (float)i);
         ray r = thin_lens_ray(&lens, pinhole, vec2_make(0.02f * (float)i, 0.9f - 0.017f * (float)i));

@@ -442,6 +442,8 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
  * reference: DIR/ch12_methods_NAME.csv and ch12_methods_time_to_error.csv. */
 static bool methods_compare(const char *dir, int threads, char *err, size_t err_size)
 {
+    /* name, title, scene, the method and samples per replica of its
+     * reference, the target relMSE of the time-to-error table */
     const methods_scene scenes[] = {
         {"cornell", "Cornell box (light seen directly)", pt_scene_build_cornell_box, MLT_METHOD_PATH_TRACING, 512,
          0.01},

@@ -14,11 +14,16 @@ void triangle_set_from_mesh(triangle_set *set, const mesh *m)
     set->boxes = memory_allocate((size_t)m->face_count, sizeof *set->boxes);
     /* every closest hit may read a triangle, at random: 2 MB pages (memory.h) */
     memory_advise_huge(set->triangles, (size_t)m->face_count * sizeof *set->triangles);
+    set->materials = memory_allocate((size_t)m->face_count, sizeof *set->materials);
     set->bounds = aabb_empty();
     set->source = m;
+    set->vertex_normals = false;
     for (int i = 0; i < m->face_count; i++) {
         triangle t = {mesh_vertex(m, i, 0), mesh_vertex(m, i, 1), mesh_vertex(m, i, 2)};
+        const mesh_face *f = &m->faces[i];
         set->triangles[i] = t;
+        set->materials[i] = f->material;
+        set->vertex_normals |= f->normal[0] >= 0 && f->normal[1] >= 0 && f->normal[2] >= 0;
         set->boxes[i] = aabb_add_point(aabb_add_point(aabb_add_point(aabb_empty(), t.p0), t.p1), t.p2);
         set->bounds = aabb_union(set->bounds, set->boxes[i]);
     }
@@ -28,8 +33,10 @@ void triangle_set_free(triangle_set *set)
 {
     free(set->triangles);
     free(set->boxes);
+    free(set->materials);
     set->triangles = NULL;
     set->boxes = NULL;
+    set->materials = NULL;
     set->count = 0;
 }
 
@@ -43,12 +50,11 @@ void triangle_set_fill_hit_from(const triangle_set *set, const triangle *tri, in
 {
     triangle_fill_hit(tri, r, t, b1, b2, hit);
     hit->shape_id = index;
-    hit->material_id = -1;
+    hit->material_id = set->materials != NULL ? set->materials[index] : -1;
     const mesh *m = set->source;
-    if (m == NULL)
+    if (m == NULL || !set->vertex_normals)
         return;
     const mesh_face *f = &m->faces[index];
-    hit->material_id = f->material;
     if (f->normal[0] >= 0 && f->normal[1] >= 0 && f->normal[2] >= 0) {
         /* Interpolated vertex normal, turned to the side of the geometric
          * normal (a shading normal on the far side would light the back). */

@@ -10,6 +10,7 @@ void counters_add(ray_counters *into, const ray_counters *from)
 {
     into->camera_rays += from->camera_rays;
     into->shadow_rays += from->shadow_rays;
+    into->shadow_rays_inside_walls += from->shadow_rays_inside_walls;
     into->reflection_rays += from->reflection_rays;
     into->refraction_rays += from->refraction_rays;
     into->indirect_rays += from->indirect_rays;
@@ -36,6 +37,9 @@ void counters_print(FILE *out, const ray_counters *c, double seconds)
     if (rays > 0)
         fprintf(out, "tests per ray: %.2f primitive, %.2f box\n", (double)c->primitive_tests / (double)rays,
                 (double)c->box_tests / (double)rays);
+    if (c->shadow_rays_inside_walls > 0)
+        fprintf(out, "shadow rays inside the walls (walls not tested): %" PRIu64 " of %" PRIu64 "\n",
+                c->shadow_rays_inside_walls, c->shadow_rays);
     if (c->nonfinite_samples > 0)
         fprintf(out, "warning: %" PRIu64 " NaN/Inf samples dropped\n", c->nonfinite_samples);
 }
@@ -62,12 +66,13 @@ bool counters_write_json(const char *path, const ray_counters *c, double seconds
         return false;
     }
     fprintf(f,
-            "{\n  \"camera_rays\": %" PRIu64 ",\n  \"shadow_rays\": %" PRIu64 ",\n  \"reflection_rays\": %" PRIu64
+            "{\n  \"camera_rays\": %" PRIu64 ",\n  \"shadow_rays\": %" PRIu64 ",\n  \"shadow_rays_inside_walls\": %" PRIu64
+            ",\n  \"reflection_rays\": %" PRIu64
             ",\n  \"refraction_rays\": %" PRIu64 ",\n  \"indirect_rays\": %" PRIu64 ",\n  \"box_tests\": %" PRIu64
             ",\n  \"primitive_tests\": %" PRIu64 ",\n  \"nonfinite_samples_dropped\": %" PRIu64
             ",\n  \"seconds\": %.6f%s%s\n}\n",
-            c->camera_rays, c->shadow_rays, c->reflection_rays, c->refraction_rays, c->indirect_rays, c->box_tests,
-            c->primitive_tests, c->nonfinite_samples, seconds, extra != NULL ? ",\n  " : "", extra != NULL ? extra : "");
+            c->camera_rays, c->shadow_rays, c->shadow_rays_inside_walls, c->reflection_rays, c->refraction_rays,
+            c->indirect_rays, c->box_tests, c->primitive_tests, c->nonfinite_samples, seconds, extra != NULL ? ",\n  " : "", extra != NULL ? extra : "");
     int failure = 0;
     if (fflush(f) != 0 || ferror(f))
         failure = errno ? errno : EIO;

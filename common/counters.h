@@ -17,6 +17,9 @@
 typedef struct {
     uint64_t camera_rays;
     uint64_t shadow_rays;
+    /* shadow rays whose two ends lie inside the scene's walls (the faces
+     * with the whole scene in front of them): only the rest was tested */
+    uint64_t shadow_rays_inside_walls;
     uint64_t reflection_rays;
     uint64_t refraction_rays;
     uint64_t indirect_rays;

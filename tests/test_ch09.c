@@ -683,6 +683,217 @@ static void test_point_light_in_a_sphere_needs_no_shadow_ray(void **state)
     pt_scene_free(&sc);
 }
 
+
+/* ---- walls cast no shadows (scene_pt.c) ------------------------------------- */
+
+/* A uniform point on triangle t, and the triangle's unit normal. */
+static vec3 point_on_triangle(const triangle *t, pcg32 *rng)
+{
+    float s = sqrtf(pcg32_float(rng)), u = pcg32_float(rng);
+    float b1 = (1.0f - u) * s, b2 = u * s;
+    return vec3_add(vec3_add(vec3_scale(t->p0, 1.0f - b1 - b2), vec3_scale(t->p1, b1)), vec3_scale(t->p2, b2));
+}
+
+static vec3 triangle_normal(const triangle *t)
+{
+    return vec3_normalize(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
+}
+
+static bool spheres_block(const pt_scene *sc, ray r)
+{
+    hit_record hit;
+    for (int i = 0; i < sc->sphere_count; i++) {
+        sphere shape = {sc->spheres[i].center, sc->spheres[i].radius};
+        if (sphere_intersect(&shape, r, &hit))
+            return true;
+    }
+    return false;
+}
+
+/* The answer without the walls shortcut: every triangle, every sphere. */
+static bool occluded_by_everything(const pt_scene *sc, ray r)
+{
+    ray_counters ignored = {0};
+    return (sc->triangles.count > 0 && accel_any_hit(sc->bvh, r, &ignored)) || spheres_block(sc, r);
+}
+
+/* Random segments: shadow rays between two random surface points (as the
+ * integrators make them), or between two random points of a box half
+ * again as wide as the scene on every side, so that many start or end
+ * outside the room. */
+static ray random_segment(const pt_scene *sc, bool on_surfaces, pcg32 *rng)
+{
+    if (on_surfaces) {
+        const triangle *a = &sc->triangles.triangles[pcg32_bounded(rng, (uint32_t)sc->triangles.count)];
+        const triangle *b = &sc->triangles.triangles[pcg32_bounded(rng, (uint32_t)sc->triangles.count)];
+        return ray_spawn_to(point_on_triangle(a, rng), triangle_normal(a), point_on_triangle(b, rng),
+                            triangle_normal(b));
+    }
+    vec3 lo = sc->triangles.bounds.lo, hi = sc->triangles.bounds.hi, size = vec3_sub(hi, lo);
+    vec3 p[2];
+    for (int k = 0; k < 2; k++)
+        p[k] = vec3_make(lo.x - 0.5f * size.x + 2.0f * size.x * pcg32_float(rng),
+                         lo.y - 0.5f * size.y + 2.0f * size.y * pcg32_float(rng),
+                         lo.z - 0.5f * size.z + 2.0f * size.z * pcg32_float(rng));
+    ray r = ray_make(p[0], vec3_sub(p[1], p[0]));
+    r.t_max = 1.0f;
+    return r;
+}
+
+/* The Cornell box's room is five faces with the whole box in front of
+ * them: walls. The light (the ceiling is behind it) and the blocks (each
+ * has the room behind its faces) are not. Four faces are flat and axis-
+ * aligned, one plane each; the red wall's published corners are not in
+ * one plane, so its two triangles have a plane each. */
+static void test_the_cornell_box_has_ten_wall_triangles(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    /* The red wall's quad: is its fourth corner off the plane of the
+     * first three? */
+    vec3 a = {552.8f, 0, 0}, b = {549.6f, 0, 559.2f}, c = {556, 548.8f, 559.2f}, d = {556, 548.8f, 0};
+    double volume = (double)vec3_dot(vec3_cross(vec3_sub(b, a), vec3_sub(c, a)), vec3_sub(d, a));
+    int expected_planes = 4 + (volume != 0.0 ? 2 : 1);
+    assert_int_equal(sc.wall_count, 10);
+    assert_int_equal(sc.wall_plane_count, expected_planes);
+    assert_int_equal(sc.occluder_triangles.count, sc.triangles.count - 10);
+    /* The room's quads are added first (pt_scene_add_cornell_room): the
+     * occluders are exactly the triangles after them, in order. */
+    for (int i = 0; i < sc.occluder_triangles.count; i++)
+        assert_memory_equal(&sc.occluder_triangles.triangles[i], &sc.triangles.triangles[10 + i], sizeof(triangle));
+    pt_scene_free(&sc);
+
+    /* A closed sphere of triangles has every face a wall, but hundreds of
+     * small ones do not pay (scene_pt.c): none are used. */
+    pt_scene_build_furnace(&sc, 0.5f, 0.5f);
+    assert_int_equal(sc.wall_count, 0);
+    assert_null(sc.occluders);
+    pt_scene_free(&sc);
+}
+
+/* Skipping the walls changes no answer: for shadow rays between surface
+ * points and for segments that leave the room, pt_scene_occluded equals
+ * the test against every triangle and sphere. The twin: a check that
+ * looks at the ray's start alone lets segments that leave the room through
+ * a wall pass, and the comparison catches it. */
+static void test_walls_skipped_only_where_they_cannot_block(void **state)
+{
+    (void)state;
+    enum { SEGMENTS = 20000 };
+    for (int scene = 0; scene < 2; scene++) {
+        pt_scene sc;
+        if (scene == 0)
+            pt_scene_build_cornell_box(&sc);
+        else
+            pt_scene_build_cornell_box_materials(&sc); /* with a sphere */
+        pcg32 rng = pcg32_for_pixel(test_seed(91), (uint64_t)scene);
+        for (int kind = 0; kind < 2; kind++) {
+            bool on_surfaces = kind == 0;
+            ray_counters c = {0};
+            int wrong = 0, wrong_twin = 0, blocked = 0;
+            for (int i = 0; i < SEGMENTS; i++) {
+                ray r = random_segment(&sc, on_surfaces, &rng);
+                bool truth = occluded_by_everything(&sc, r);
+                blocked += truth;
+                wrong += pt_scene_occluded(&sc, r, &c) != truth;
+                /* the twin: is the start alone in front of every wall? */
+                ray start_only = r;
+                start_only.t_max = r.t_min;
+                ray_counters ignored = {0};
+                bool twin = pt_scene_segment_inside_walls(&sc, &start_only)
+                                ? accel_any_hit(sc.occluders, r, &ignored) || spheres_block(&sc, r)
+                                : truth;
+                wrong_twin += twin != truth;
+            }
+            assert_int_equal(wrong, 0);
+            assert_true(blocked > 0 && blocked < SEGMENTS);
+            if (on_surfaces) {
+                /* every surface point, moved off its surface into the room,
+                 * is in front of every wall: nearly all rays skip them */
+                assert_true(c.shadow_rays_inside_walls >= (uint64_t)(0.99 * SEGMENTS));
+            } else {
+                assert_true(c.shadow_rays_inside_walls > 0 && c.shadow_rays_inside_walls < SEGMENTS);
+                assert_true(wrong_twin > 0);
+            }
+        }
+        pt_scene_free(&sc);
+    }
+}
+
+
+/* Signed distance of p from the plane of triangle t, in long double: the
+ * edges are exact there (differences of floats) and their products carry
+ * 64-bit rounding, far finer than the float test's. */
+static long double exact_distance(const triangle *t, vec3 p)
+{
+    long double e1[3] = {(long double)t->p1.x - t->p0.x, (long double)t->p1.y - t->p0.y, (long double)t->p1.z - t->p0.z};
+    long double e2[3] = {(long double)t->p2.x - t->p0.x, (long double)t->p2.y - t->p0.y, (long double)t->p2.z - t->p0.z};
+    long double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    long double q[3] = {(long double)p.x - t->p0.x, (long double)p.y - t->p0.y, (long double)p.z - t->p0.z};
+    return (n[0] * q[0] + n[1] * q[1] + n[2] * q[2]) / sqrtl(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+/* How many points near the walls does the float test call "in front of
+ * every wall" when, exactly, one is on or behind a wall? */
+static int points_misjudged(const pt_scene *sc, int points, uint64_t seed, int *judged_inside)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    int misjudged = 0;
+    *judged_inside = 0;
+    for (int i = 0; i < points; i++) {
+        /* a point on a random wall, moved along its normal by +-2^-k of
+         * the room's size, k from 6 to 40 (log-uniform): from well inside
+         * to far below a float's resolution, both sides */
+        const triangle *wall = &sc->triangles.triangles[pcg32_bounded(&rng, 10)];
+        float step = ldexpf(560.0f, -6 - (int)pcg32_bounded(&rng, 35)) * (pcg32_float(&rng) < 0.5f ? -1.0f : 1.0f);
+        vec3 p = vec3_add(point_on_triangle(wall, &rng), vec3_scale(triangle_normal(wall), step));
+        ray at_p = ray_make(p, vec3_make(0, 1, 0));
+        at_p.t_max = 0.0f; /* both ends at p */
+        if (!pt_scene_segment_inside_walls(sc, &at_p))
+            continue;
+        (*judged_inside)++;
+        bool behind = false;
+        for (int w = 0; w < 10; w++)
+            behind |= exact_distance(&sc->triangles.triangles[w], p) <= 0.0L;
+        misjudged += behind;
+    }
+    return misjudged;
+}
+
+/* The float test of a point against the walls never says "in front" of a
+ * point that is exactly on or behind one: its slack bounds the rounding
+ * (scene_pt.c). Points at every distance from 2^-6 to 2^-40 of the room's
+ * size, on both sides of every wall. And it is not so cautious that it
+ * refuses the rays it is for: a point 2^-16 in front of the wall x = 0 (the
+ * least ray.h moves a ray's end off a surface) is in front. The twin: with
+ * no slack, points just behind the red wall, whose normal was rounded to
+ * float, are called in front. */
+static void test_wall_test_is_never_fooled_by_rounding(void **state)
+{
+    (void)state;
+    enum { POINTS = 200000 };
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    int inside = 0;
+    assert_int_equal(points_misjudged(&sc, POINTS, test_seed(92), &inside), 0);
+    assert_true(inside > POINTS / 4); /* about half the points are in front of all walls */
+
+    ray near_green = ray_make(vec3_make(0x1.0p-16f, 274.0f, 280.0f), vec3_make(0, 1, 0));
+    near_green.t_max = 0.0f;
+    assert_true(pt_scene_segment_inside_walls(&sc, &near_green));
+    near_green.origin.x = 0.0f; /* on the wall: not in front */
+    assert_false(pt_scene_segment_inside_walls(&sc, &near_green));
+
+    /* the twin */
+    for (int g = 0; g < sc.wall_group_count; g++) {
+        memset(sc.wall_planes[g].slack, 0, sizeof sc.wall_planes[g].slack);
+        memset(sc.wall_planes[g].slack_constant, 0, sizeof sc.wall_planes[g].slack_constant);
+    }
+    assert_true(points_misjudged(&sc, POINTS, test_seed(92), &inside) > 0);
+    pt_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -701,6 +912,9 @@ int main(void)
         cmocka_unit_test(test_no_glass_no_refraction_and_no_nan),
         cmocka_unit_test(test_one_sided_emitter),
         cmocka_unit_test(test_ggx_sampling_matches_its_pdf),
+        cmocka_unit_test(test_the_cornell_box_has_ten_wall_triangles),
+        cmocka_unit_test(test_walls_skipped_only_where_they_cannot_block),
+        cmocka_unit_test(test_wall_test_is_never_fooled_by_rounding),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);
 }

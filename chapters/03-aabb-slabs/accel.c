@@ -29,6 +29,30 @@ void triangle_set_from_mesh(triangle_set *set, const mesh *m)
     }
 }
 
+void triangle_set_subset(triangle_set *out, const triangle_set *from, const bool *keep)
+{
+    int count = 0;
+    for (int i = 0; i < from->count; i++)
+        count += keep[i];
+    out->count = count;
+    /* at least one of each, so that an empty set still frees cleanly */
+    out->triangles = memory_allocate((size_t)(count > 0 ? count : 1), sizeof *out->triangles);
+    out->boxes = memory_allocate((size_t)(count > 0 ? count : 1), sizeof *out->boxes);
+    out->materials = memory_allocate((size_t)(count > 0 ? count : 1), sizeof *out->materials);
+    out->bounds = aabb_empty();
+    out->source = NULL;
+    out->vertex_normals = false;
+    for (int i = 0, k = 0; i < from->count; i++) {
+        if (!keep[i])
+            continue;
+        out->triangles[k] = from->triangles[i];
+        out->boxes[k] = from->boxes[i];
+        out->materials[k] = from->materials != NULL ? from->materials[i] : -1;
+        out->bounds = aabb_union(out->bounds, out->boxes[k]);
+        k++;
+    }
+}
+
 void triangle_set_free(triangle_set *set)
 {
     free(set->triangles);

@@ -53,6 +53,10 @@ typedef struct {
 
 void triangle_set_from_mesh(triangle_set *set, const mesh *m);
 void triangle_set_free(triangle_set *set);
+/* The triangles of `from` with keep[i] set, in order, as a set of their
+ * own (triangle i of `out` is the i-th one kept). It has no source mesh:
+ * for structures asked only whether something is hit (any hit). */
+void triangle_set_subset(triangle_set *out, const triangle_set *from, const bool *keep);
 /* Fill a hit record for triangle `index` hit at (t, b1, b2): the point, the
  * geometric normal, the interpolated vertex normal where the mesh has them,
  * and the material. */

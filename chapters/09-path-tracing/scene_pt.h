@@ -53,10 +53,29 @@ typedef struct {
     vec3 intensity; /* I: irradiance I cos(theta) / r^2 at distance r */
 } pt_point_light;
 
+/* Four wall planes, structure of arrays (one group is tested at once): a
+ * point p lies in front of plane j if
+ *   normal . p - offset > slack . |p| + slack_constant
+ * where the right side bounds the rounding of the left (scene_pt.c). An
+ * unused lane has normal 0 and offset -1: every point is in front of it. */
+typedef struct {
+    float normal[3][4], offset[4];
+    float slack[3][4], slack_constant[4];
+} pt_wall_planes;
+
 typedef struct {
     mesh geometry;          /* triangles; face material = index into materials */
     triangle_set triangles; /* built by pt_scene_finish */
     accel *bvh;
+    /* Walls cast no shadows (pt_scene_occluded): a wall is a triangle with
+     * every vertex and sphere of the scene on its front side, like the five
+     * faces of the Cornell box's room. The planes of the walls, each once,
+     * and a BVH of every other triangle (the occluders). */
+    int wall_count; /* triangles */
+    pt_wall_planes *wall_planes;
+    int wall_plane_count, wall_group_count;
+    triangle_set occluder_triangles;
+    accel *occluders; /* NULL when the scene has no walls */
     pt_sphere *spheres;
     int sphere_count, sphere_capacity;
     pt_material *materials;
@@ -95,7 +114,14 @@ pt_material pt_glass(float ior);
 pt_material pt_mirror(vec3 albedo);
 
 bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters);
+/* Is anything hit in (r.t_min, r.t_max)? A segment whose two ends lie in
+ * front of every wall plane is tested against the occluders alone
+ * (counted in counters->shadow_rays_inside_walls). */
 bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters);
+/* Do both ends of r, r(t_min) and r(t_max), lie in front of every wall
+ * plane, by more than the rounding of the test? False for an infinite
+ * t_max, and when the scene has no walls. */
+bool pt_scene_segment_inside_walls(const pt_scene *sc, const ray *r);
 
 /* A point on the emitting triangles, with the emitter's front normal and
  * material. Picked by power: the density per unit area at a point of an

@@ -6,7 +6,7 @@
 #   make test-chNN   build and run chapter NN's tests  (make test-ch01)
 #   make sanitize    the test suites under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make test-seeds  every random test over 200 seeds: how many runs fail
-#   make bench       time the acceleration structures beside Embree, and the path tracer (figures, CSV)
+#   make bench       time the acceleration structures beside Embree, and the path tracer, also on Embree's kernels (figures, CSV)
 #   make plots       draw every figure (gnuplot) from data the programs write
 #   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
 #   make valgrind    one small render of each chapter program under valgrind

@@ -6,7 +6,7 @@
 #   make test-chNN   build and run chapter NN's tests  (make test-ch01)
 #   make sanitize    the test suites under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make test-seeds  every random test over 200 seeds: how many runs fail
-#   make bench       time the acceleration structures beside Embree, and the path tracer (figures, CSV)
+#   make bench       time the acceleration structures beside Embree, and the path tracer, also on Embree's kernels (figures, CSV)
 #   make plots       draw every figure (gnuplot) from data the programs write
 #   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
 #   make valgrind    one small render of each chapter program under valgrind
@@ -203,8 +203,17 @@ $(BUILD)/bin/embree_bench: $(SHARED)/anchors/embree_bench.c | bench-deps
 	@mkdir -p $(dir $@)
 	$(CC) -O2 -std=c99 -Wall $< -o $@ -lembree3 -lm
 
+# Chapter 09's path tracer with its rays traced by Embree beside ours
+# (tests/bench_pt_embree.c): built only here, and only where Embree's
+# header is installed (`make bench-deps`).
+EMBREE_HEADER := $(wildcard /usr/include/embree3/rtcore.h)
+$(BUILD)/bin/bench_pt_embree: $(BUILD)/obj/tests/bench_pt_embree.o $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -lembree3 -o $@
+
 # Embree and ours, one after the other, on the same machine in one run; then
-# the path tracer's seconds per million camera samples (chapter 09).
+# the path tracer's seconds per million camera samples (chapter 09), and the
+# same path tracer on Embree's kernels.
 bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/09-path-tracing
 	@mkdir -p $(BUILD)/data
 	@if [ -f $(SHARED)/anchors/embree_bench.c ]; then \
@@ -217,6 +226,11 @@ bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/09-path-tracing
 	$(BUILD)/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS) \
 	  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv $(if $(wildcard $(SHARED)/anchors/embree_bench.c),--embree $(BUILD)/data/embree.txt)
 	$(BUILD)/bin/09-path-tracing --bench --width 256 --spp 16 --bench-csv $(BUILD)/data/ch09_speed.csv --out $(BUILD)/data/ch09.exr
+	@if [ -n "$(EMBREE_HEADER)" ]; then \
+	  $(MAKE) --no-print-directory $(BUILD)/bin/bench_pt_embree && \
+	  echo "$(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data" && \
+	  $(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data; \
+	else echo "no Embree header (make bench-deps): the path tracer on Embree skipped"; fi
 
 # ---------------------------------------------------------------- plots --
 # Every figure is drawn by a gnuplot script in plots/ from CSV that a program

@@ -399,30 +399,20 @@ static const speed_case speed_cases[] = {
     {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput after 5 (smallpt)"},
     {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)"},
 };
+_Static_assert(sizeof speed_cases / sizeof speed_cases[0] == EXPERIMENT_SPEED_CASES,
+               "experiments.h: EXPERIMENT_SPEED_CASES is the number of speed cases");
 
-bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size)
+int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int spp, int repeats,
+                           experiment_speed_row *rows)
 {
-    pt_scene sc;
-    pt_scene_build_cornell_box(&sc);
-    camera cam = pt_scene_camera(&sc, size, size);
+    camera cam = pt_scene_camera(sc, size, size);
     double million_samples = (double)size * (double)size * (double)spp * 1e-6;
-    FILE *csv = NULL;
-    char csv_temp[4200];
-    if (csv_path != NULL)
-        csv_temp_path(csv_path, csv_temp, sizeof csv_temp);
-    if (csv_path != NULL && (csv = fopen(csv_temp, "w")) == NULL) {
-        snprintf(err, err_size, "%s: %s", csv_path, strerror(errno));
-        pt_scene_free(&sc);
-        return false;
-    }
-    if (csv != NULL)
-        fprintf(csv, "case,threads,wall_s_per_msample,cpu_s_per_msample,rays_per_sample,scaling\n");
-    printf("Cornell box %dx%d, %d spp (%.2f M camera samples), max depth %d, best of %d runs\n", size, size, spp,
+    printf("%s %dx%d, %d spp (%.2f M camera samples), max depth %d, best of %d runs\n", label, size, size, spp,
            million_samples, SPEED_MAX_DEPTH, repeats);
     printf("%-42s %7s %12s %12s %10s %8s\n", "case", "threads", "s/M (wall)", "s/M (CPU)", "rays/spl", "scaling");
     const int n_cases = (int)(sizeof speed_cases / sizeof speed_cases[0]);
     for (int k = 0; k < n_cases; k++) {
-        path_tracer pt = path_tracer_defaults(&sc);
+        path_tracer pt = path_tracer_defaults(sc);
         pt.integrator = speed_cases[k].integrator;
         pt.russian_roulette = speed_cases[k].rr;
         pt.max_depth = SPEED_MAX_DEPTH;
@@ -444,14 +434,43 @@ bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char
                 estimate_image_free(&e);
             }
         }
+        experiment_speed_row row = {.label = speed_cases[k].label, .rays_per_sample = rays};
         for (int threads = 1; threads <= 2; threads++) {
-            double wall = best_wall[threads - 1] / million_samples, cpu = best_cpu[threads - 1] / million_samples;
-            double scaling = best_wall[0] / best_wall[threads - 1];
-            printf("%-42s %7d %12.3f %12.3f %10.2f %7.2fx\n", speed_cases[k].label, threads, wall, cpu, rays, scaling);
-            if (csv != NULL)
-                fprintf(csv, "\"%s\",%d,%.4f,%.4f,%.3f,%.3f\n", speed_cases[k].label, threads, wall, cpu, rays, scaling);
+            row.wall[threads - 1] = best_wall[threads - 1] / million_samples;
+            row.cpu[threads - 1] = best_cpu[threads - 1] / million_samples;
+            row.scaling[threads - 1] = best_wall[0] / best_wall[threads - 1];
+            printf("%-42s %7d %12.3f %12.3f %10.2f %7.2fx\n", row.label, threads, row.wall[threads - 1],
+                   row.cpu[threads - 1], rays, row.scaling[threads - 1]);
             fflush(stdout);
         }
+        if (rows != NULL)
+            rows[k] = row;
+    }
+    return n_cases;
+}
+
+bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size)
+{
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    FILE *csv = NULL;
+    char csv_temp[4200];
+    if (csv_path != NULL)
+        csv_temp_path(csv_path, csv_temp, sizeof csv_temp);
+    /* Opened before the minutes of rendering, so that a bad path fails at once. */
+    if (csv_path != NULL && (csv = fopen(csv_temp, "w")) == NULL) {
+        snprintf(err, err_size, "%s: %s", csv_path, strerror(errno));
+        pt_scene_free(&sc);
+        return false;
+    }
+    experiment_speed_row rows[EXPERIMENT_SPEED_CASES];
+    int n = experiment_speed_scene(&sc, "Cornell box", size, spp, repeats, rows);
+    if (csv != NULL) {
+        fprintf(csv, "case,threads,wall_s_per_msample,cpu_s_per_msample,rays_per_sample,scaling\n");
+        for (int k = 0; k < n; k++)
+            for (int t = 0; t < 2; t++)
+                fprintf(csv, "\"%s\",%d,%.4f,%.4f,%.3f,%.3f\n", rows[k].label, t + 1, rows[k].wall[t], rows[k].cpu[t],
+                        rows[k].rays_per_sample, rows[k].scaling[t]);
     }
     pt_scene_free(&sc);
     return csv == NULL || experiment_csv_close(csv, csv_path, err, err_size);

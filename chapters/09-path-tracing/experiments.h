@@ -78,6 +78,21 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
  * and the 1 -> 2 thread scaling; writes them to csv_path too (if not NULL). */
 bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size);
 
+/* The same table for a scene the caller built (its triangles traced by
+ * whatever accelerator sc->bvh is: chapter 06's, or another one to compare
+ * with), headed "LABEL SIZExSIZE, ...". Fills rows[0 .. returned count - 1]
+ * (if rows is not NULL; room for EXPERIMENT_SPEED_CASES): seconds per
+ * million camera samples, index 0 for 1 thread and 1 for 2 threads. */
+enum { EXPERIMENT_SPEED_CASES = 5 };
+typedef struct {
+    const char *label;
+    double wall[2], cpu[2]; /* seconds per million camera samples */
+    double scaling[2];      /* the 1-thread wall time over this one's */
+    double rays_per_sample;
+} experiment_speed_row;
+int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int spp, int repeats,
+                           experiment_speed_row *rows);
+
 /* The pieces the experiments are made of, shared with chapter 12's:
  * CPU seconds of the whole process (all threads: on a shared machine it
  * measures the work done, where wall time also measures the neighbours). */

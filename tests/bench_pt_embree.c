@@ -1,0 +1,535 @@
+/* bench_pt_embree.c -- where chapter 09's time goes: the same path tracer,
+ * its rays traced once by chapter 06's 4-wide BVH and once by Embree 3,
+ * the industry's fast CPU kernel. The difference bounds what any work on
+ * traversal can buy; what is left is shading and sampling.
+ *
+ * The path tracer reaches its triangles only through sc->bvh, an accel
+ * (chapter 03's interface); here that accel is swapped for one backed by
+ * Embree, which fills the hit record with the same triangle_set_fill_hit()
+ * from Embree's triangle index, t and barycentrics. Nothing else changes.
+ *
+ * Prints, on the Cornell box:
+ *   1. a check on 10^4 random rays in the box: Embree and ours find the same
+ *      triangle at the same t (within 1e-4 relative) and the same hit point,
+ *      and give the same any-hit answer, except where two candidates tie;
+ *   2. chapter 09's speed table (experiment_speed_scene) for ours, then for
+ *      Embree, and per case the ratio of wall times, ours / Embree;
+ *   3. for the lecture rung on one thread: every ray of one render recorded,
+ *      then traced alone by ours and by Embree: nanoseconds per closest-hit
+ *      and per shadow ray, and the render's time less its tracing time;
+ *   4. the image means of the lecture rung rendered by both, with their
+ *      standard errors: they must agree within 5 standard errors.
+ * Exits 1 if check 1 or 4 fails. With --twin uv (Embree's barycentrics
+ * swapped) or --twin no-shadows (Embree's any hit never finds one), a
+ * deliberately wrong Embree accel shows that the checks can fail.
+ *
+ * A benchmark, built only by `make bench` (Embree is a bench dependency:
+ * `make bench-deps`). Embree visits no nodes or triangles we can count: its
+ * accel leaves counters->box_tests and primitive_tests untouched (0). */
+#include <embree3/rtcore.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "03-aabb-slabs/accel.h"
+#include "09-path-tracing/experiments.h"
+#include "09-path-tracing/path_tracer.h"
+#include "09-path-tracing/scene_pt.h"
+#include "memory.h"
+#include "timer.h"
+
+/* ---- an accel backed by Embree ------------------------------------------------ */
+
+typedef enum { TWIN_NONE, TWIN_UV, TWIN_NO_SHADOWS } twin_kind;
+
+typedef struct {
+    accel base;
+    RTCDevice device;
+    RTCScene scene;
+    twin_kind twin;
+} embree_accel;
+
+/* Embree's ray is ours field for field; its interval is closed, [tnear,
+ * tfar], where ours is open: a hit exactly at t_min or t_max differs, which
+ * float rounding makes as likely for either kernel. */
+static struct RTCRay embree_ray(ray r)
+{
+    struct RTCRay e;
+    e.org_x = r.origin.x;
+    e.org_y = r.origin.y;
+    e.org_z = r.origin.z;
+    e.dir_x = r.direction.x;
+    e.dir_y = r.direction.y;
+    e.dir_z = r.direction.z;
+    e.tnear = r.t_min;
+    e.tfar = r.t_max;
+    e.time = 0.0f;
+    e.mask = 0xFFFFFFFFu;
+    e.id = 0;
+    e.flags = 0;
+    return e;
+}
+
+static bool embree_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    (void)counters;
+    const embree_accel *ea = (const embree_accel *)a;
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    struct RTCRayHit rh;
+    rh.ray = embree_ray(r);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(ea->scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return false;
+    /* Embree's (u, v) weigh p1 and p2, as our (b1, b2) do: the point is
+     * (1 - u - v) p0 + u p1 + v p2 (rtcore_ray.h). */
+    float u = rh.hit.u, v = rh.hit.v;
+    if (ea->twin == TWIN_UV) {
+        float swap = u;
+        u = v;
+        v = swap;
+    }
+    triangle_set_fill_hit(a->set, (int)rh.hit.primID, r, rh.ray.tfar, u, v, hit);
+    return true;
+}
+
+static bool embree_any_hit(const accel *a, ray r, ray_counters *counters)
+{
+    (void)counters;
+    const embree_accel *ea = (const embree_accel *)a;
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    struct RTCRay e = embree_ray(r);
+    rtcOccluded1(ea->scene, &context, &e);
+    /* Embree marks an occluded ray by setting tfar to -inf. */
+    return ea->twin != TWIN_NO_SHADOWS && e.tfar < 0.0f;
+}
+
+static void embree_destroy(accel *a)
+{
+    embree_accel *ea = (embree_accel *)a;
+    rtcReleaseScene(ea->scene);
+    rtcReleaseDevice(ea->device);
+    free(ea);
+}
+
+static const accel_ops embree_ops = {embree_closest_hit, embree_any_hit, embree_destroy};
+
+/* One triangle geometry over the set's corners (copied: triangle i is
+ * vertices 3i, 3i+1, 3i+2, so Embree's primID is our triangle index), built
+ * at medium quality as ../shared/anchors/embree_bench.c does. NULL if Embree
+ * fails. */
+static accel *embree_build(const triangle_set *set, twin_kind twin)
+{
+    double start = timer_seconds();
+    /* One build thread: the scene is tiny, and the render's own threads do
+     * the tracing (rtcIntersect1 may be called from any thread). */
+    RTCDevice device = rtcNewDevice("threads=1");
+    if (device == NULL)
+        return NULL;
+    RTCScene scene = rtcNewScene(device);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_MEDIUM);
+    float *vertices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                              3 * sizeof(float), 3 * (size_t)set->count);
+    unsigned *indices = rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                3 * sizeof(unsigned), (size_t)set->count);
+    if (vertices == NULL || indices == NULL || rtcGetDeviceError(device) != RTC_ERROR_NONE) {
+        rtcReleaseGeometry(geometry);
+        rtcReleaseScene(scene);
+        rtcReleaseDevice(device);
+        return NULL;
+    }
+    for (int i = 0; i < set->count; i++) {
+        const triangle *t = &set->triangles[i];
+        const vec3 corners[3] = {t->p0, t->p1, t->p2};
+        for (int c = 0; c < 3; c++) {
+            vertices[9 * i + 3 * c + 0] = corners[c].x;
+            vertices[9 * i + 3 * c + 1] = corners[c].y;
+            vertices[9 * i + 3 * c + 2] = corners[c].z;
+            indices[3 * i + c] = (unsigned)(3 * i + c);
+        }
+    }
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(scene, geometry);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(scene);
+    if (rtcGetDeviceError(device) != RTC_ERROR_NONE) {
+        rtcReleaseScene(scene);
+        rtcReleaseDevice(device);
+        return NULL;
+    }
+    embree_accel *ea = memory_allocate(1, sizeof *ea);
+    ea->base.ops = &embree_ops;
+    ea->base.set = set;
+    ea->base.stats = (accel_stats){.name = "Embree 3 (medium)", .build_seconds = timer_seconds() - start};
+    ea->device = device;
+    ea->scene = scene;
+    ea->twin = twin;
+    return &ea->base;
+}
+
+/* ---- an accel that records every ray it is asked to trace ---------------------
+ * Wrapped around ours for a one-thread render, it keeps the rays in the
+ * order the path tracer traced them, camera, bounce and shadow rays alike,
+ * so that they can be traced again alone. One thread only: it is not safe
+ * to call from two at once. */
+
+typedef struct {
+    ray *rays;
+    int count, capacity;
+} ray_list;
+
+typedef struct {
+    accel base;
+    const accel *inner;
+    ray_list *closest, *shadow;
+} recording_accel;
+
+static void ray_list_push(ray_list *list, ray r)
+{
+    list->rays = memory_grow(list->rays, &list->capacity, list->count + 1, sizeof(ray));
+    list->rays[list->count++] = r;
+}
+
+static bool recording_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    const recording_accel *rec = (const recording_accel *)a;
+    ray_list_push(rec->closest, r);
+    return accel_closest_hit(rec->inner, r, hit, counters);
+}
+
+static bool recording_any_hit(const accel *a, ray r, ray_counters *counters)
+{
+    const recording_accel *rec = (const recording_accel *)a;
+    ray_list_push(rec->shadow, r);
+    return accel_any_hit(rec->inner, r, counters);
+}
+
+static void recording_destroy(accel *a) { (void)a; /* lives on the caller's stack */ }
+
+static const accel_ops recording_ops = {recording_closest_hit, recording_any_hit, recording_destroy};
+
+/* ---- 1. the same hits on random rays ------------------------------------------ */
+
+static float uniform(pcg32 *rng, float lo, float hi) { return lo + (hi - lo) * pcg32_float(rng); }
+
+static vec3 uniform_direction(pcg32 *rng)
+{
+    float z = uniform(rng, -1.0f, 1.0f), phi = uniform(rng, 0.0f, 6.2831853f);
+    float s = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+    return vec3_make(s * cosf(phi), s * sinf(phi), z);
+}
+
+static bool close_relative(float a, float b, float tolerance)
+{
+    return fabsf(a - b) <= tolerance * fmaxf(fabsf(a), fabsf(b));
+}
+
+/* Rays from points uniform in the box's bounds in directions uniform on the
+ * sphere: closest hits compared over the whole line, any hits over a
+ * segment of random length (so that some end before the first surface).
+ * A tie -- two triangles within the tolerance of each other along the ray
+ * (the ray through a shared edge), or the first surface within it of the
+ * segment's end -- may go either way, and is counted but not failed. */
+static int check_random_rays(const accel *ours, const accel *embree, int count, uint64_t seed)
+{
+    const float tolerance = 1e-4f;
+    const aabb box = ours->set->bounds;
+    vec3 extent = vec3_sub(box.hi, box.lo);
+    float diagonal = vec3_length(extent);
+    pcg32 rng;
+    pcg32_seed(&rng, seed, 54);
+    int mismatches = 0, ties = 0, hits = 0, occluded = 0;
+    for (int k = 0; k < count; k++) {
+        vec3 origin = vec3_make(uniform(&rng, box.lo.x, box.hi.x), uniform(&rng, box.lo.y, box.hi.y),
+                                uniform(&rng, box.lo.z, box.hi.z));
+        ray r = {origin, uniform_direction(&rng), 0.0f, INFINITY};
+        ray_counters counters = {0};
+        hit_record a, b;
+        bool hit_a = accel_closest_hit(ours, r, &a, &counters), hit_b = accel_closest_hit(embree, r, &b, &counters);
+        bool same;
+        if (hit_a != hit_b)
+            same = false;
+        else if (!hit_a)
+            same = true;
+        else {
+            float scale = a.t * vec3_length(r.direction) + diagonal * 1e-3f;
+            same = a.shape_id == b.shape_id && close_relative(a.t, b.t, tolerance) &&
+                   vec3_length(vec3_sub(a.point, b.point)) <= tolerance * scale;
+            if (!same && a.shape_id != b.shape_id && close_relative(a.t, b.t, tolerance)) {
+                ties++;
+                same = true;
+            }
+        }
+        hits += hit_a;
+        if (!same) {
+            if (mismatches < 5)
+                printf("  closest hit differs: ray %d, ours %s triangle %d t %.7g, Embree %s triangle %d t %.7g, "
+                       "points %.3g apart\n",
+                       k, hit_a ? "hit" : "missed", hit_a ? a.shape_id : -1, hit_a ? a.t : 0.0, hit_b ? "hit" : "missed",
+                       hit_b ? b.shape_id : -1, hit_b ? b.t : 0.0,
+                       hit_a && hit_b ? vec3_length(vec3_sub(a.point, b.point)) : 0.0);
+            mismatches++;
+        }
+        ray segment = r;
+        segment.t_max = uniform(&rng, 0.0f, diagonal);
+        bool occluded_a = accel_any_hit(ours, segment, &counters), occluded_b = accel_any_hit(embree, segment, &counters);
+        occluded += occluded_a;
+        if (occluded_a != occluded_b) {
+            if (hit_a && close_relative(a.t, segment.t_max, tolerance)) {
+                ties++;
+            } else {
+                if (mismatches < 5)
+                    printf("  any hit differs: ray %d over t < %.7g, ours %d, Embree %d\n", k, segment.t_max,
+                           occluded_a, occluded_b);
+                mismatches++;
+            }
+        }
+    }
+    printf("random rays: %d in the box's bounds, %d closest hits, %d segments occluded; %d ties, %d mismatches\n",
+           count, hits, occluded, ties, mismatches);
+    return mismatches;
+}
+
+/* ---- 3. tracing alone --------------------------------------------------------- */
+
+/* Seconds to trace the rays alone, one run; the hits counted so that the
+ * loop cannot be optimized away and both kernels can be seen to agree.
+ * Rays that do not depend on each other let the processor overlap one
+ * ray's traversal with the next (throughput); in the render each ray waits
+ * for the hit before it. With `chained`, each ray's origin is made to wait
+ * for the previous answer (it adds that answer times 0, which leaves the
+ * origin as it was, bit for bit), as in the render (latency). */
+static double trace_alone(const accel *a, const ray_list *list, bool closest, bool chained, long *hits)
+{
+    ray_counters counters = {0};
+    long found = 0;
+    float wait = 0.0f;
+    double start = timer_seconds();
+    for (int k = 0; k < list->count; k++) {
+        ray r = list->rays[k];
+        if (chained)
+            r.origin.x += wait;
+        if (closest) {
+            hit_record hit;
+            bool h = accel_closest_hit(a, r, &hit, &counters);
+            found += h;
+            wait = h ? hit.t * 0.0f : 0.0f;
+        } else {
+            bool h = accel_any_hit(a, r, &counters);
+            found += h;
+            wait = (float)h * 0.0f;
+        }
+    }
+    *hits = found;
+    return timer_seconds() - start;
+}
+
+/* ---- 4. the image means ------------------------------------------------------- */
+
+/* The mean over pixels of one channel, and its standard error from the
+ * pixels' own: sqrt(sum se_i^2) / n (the pixels are independent). */
+static void image_mean(const estimate_image *e, int channel, double *mean, double *standard_error)
+{
+    long n = (long)e->mean.width * e->mean.height;
+    double sum = 0.0, variance = 0.0;
+    for (long i = 0; i < n; i++) {
+        sum += e->mean.rgb[3 * i + channel];
+        double s = e->standard_error.rgb[3 * i + channel];
+        variance += s * s;
+    }
+    *mean = sum / (double)n;
+    *standard_error = sqrt(variance) / (double)n;
+}
+
+static path_tracer lecture_rung(const pt_scene *sc)
+{
+    /* experiment_speed's first case: the lecture's estimator, P_RR 0.8,
+     * at most 50 bounces. */
+    path_tracer pt = path_tracer_defaults(sc);
+    pt.integrator = PT_LECTURE;
+    pt.russian_roulette = RR_FIXED;
+    pt.max_depth = 50;
+    return pt;
+}
+
+/* ---- main ----------------------------------------------------------------------- */
+
+static void usage(void)
+{
+    printf("usage: bench_pt_embree [--width N] [--spp N] [--reps N] [--data DIR] [--twin uv|no-shadows]\n"
+           "Chapter 09's path tracer on the Cornell box with its rays traced by chapter 06's\n"
+           "bvh4 and by Embree 3: the speed table of each, their ratio, the time of tracing\n"
+           "alone, and checks that both give the same hits and the same image.\n"
+           "  --width N    image N x N (default 256)\n"
+           "  --spp N      samples per pixel (default 16)\n"
+           "  --reps N     best of N runs (default 5)\n"
+           "  --data DIR   also write DIR/ch09_embree.csv\n"
+           "  --twin KIND  a wrong Embree accel, to see the checks fail: uv (barycentrics\n"
+           "               swapped) or no-shadows (any hit never finds one)\n");
+}
+
+int main(int argc, char **argv)
+{
+    int size = 256, spp = 16, reps = 5;
+    const char *data_dir = NULL;
+    twin_kind twin = TWIN_NONE;
+    for (int i = 1; i < argc; i++) {
+        const char *value = i + 1 < argc ? argv[i + 1] : NULL;
+        if (strcmp(argv[i], "--help") == 0) {
+            usage();
+            return 0;
+        } else if (strcmp(argv[i], "--width") == 0 && value && atoi(value) > 0) {
+            size = atoi(value);
+            i++;
+        } else if (strcmp(argv[i], "--spp") == 0 && value && atoi(value) > 0) {
+            spp = atoi(value);
+            i++;
+        } else if (strcmp(argv[i], "--reps") == 0 && value && atoi(value) > 0) {
+            reps = atoi(value);
+            i++;
+        } else if (strcmp(argv[i], "--data") == 0 && value) {
+            data_dir = value;
+            i++;
+        } else if (strcmp(argv[i], "--twin") == 0 && value &&
+                   (strcmp(value, "uv") == 0 || strcmp(value, "no-shadows") == 0)) {
+            twin = strcmp(value, "uv") == 0 ? TWIN_UV : TWIN_NO_SHADOWS;
+            i++;
+        } else {
+            fprintf(stderr, "bench_pt_embree: unknown or incomplete argument '%s' (try --help)\n", argv[i]);
+            return 2;
+        }
+    }
+    char err[4400] = "", csv_path[4200] = "";
+    FILE *csv = NULL;
+    if (data_dir != NULL && (csv = experiment_csv_open(data_dir, "ch09_embree.csv", csv_path, sizeof csv_path, err,
+                                                        sizeof err)) == NULL) {
+        fprintf(stderr, "bench_pt_embree: %s\n", err);
+        return 1;
+    }
+
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    accel *ours = sc.bvh;
+    accel *embree = embree_build(&sc.triangles, twin);
+    if (embree == NULL) {
+        fprintf(stderr, "bench_pt_embree: Embree failed to build the scene\n");
+        pt_scene_free(&sc);
+        if (csv != NULL)
+            experiment_csv_discard(csv, csv_path);
+        return 1;
+    }
+    printf("Cornell box: %d triangles; %s, %s\n", sc.triangles.count, ours->stats.name, embree->stats.name);
+    int failures = check_random_rays(ours, embree, 10000, 9) != 0;
+
+    /* 2. The speed tables, ours then Embree's, in one run. */
+    experiment_speed_row rows[2][EXPERIMENT_SPEED_CASES];
+    const char *tracers[2] = {"bvh4 (chapter 06)", "Embree 3"};
+    int n = 0;
+    for (int k = 0; k < 2; k++) {
+        char label[128];
+        snprintf(label, sizeof label, "Cornell box, traced by %s,", tracers[k]);
+        printf("\n");
+        sc.bvh = k == 0 ? ours : embree;
+        n = experiment_speed_scene(&sc, label, size, spp, reps, rows[k]);
+    }
+    sc.bvh = ours;
+    printf("\nours / Embree (wall s/M)                       1 thread  2 threads\n");
+    for (int c = 0; c < n; c++)
+        printf("%-42s %9.2fx %9.2fx\n", rows[0][c].label, rows[0][c].wall[0] / rows[1][c].wall[0],
+               rows[0][c].wall[1] / rows[1][c].wall[1]);
+    if (csv != NULL) {
+        fprintf(csv, "tracer,case,threads,wall_s_per_msample,cpu_s_per_msample,rays_per_sample,scaling\n");
+        for (int k = 0; k < 2; k++)
+            for (int c = 0; c < n; c++)
+                for (int t = 0; t < 2; t++)
+                    fprintf(csv, "\"%s\",\"%s\",%d,%.4f,%.4f,%.3f,%.3f\n", tracers[k], rows[k][c].label, t + 1,
+                            rows[k][c].wall[t], rows[k][c].cpu[t], rows[k][c].rays_per_sample, rows[k][c].scaling[t]);
+    }
+
+    /* 3. One one-thread render of the lecture rung with every ray recorded,
+     * then those rays traced alone by each kernel. */
+    ray_list closest = {0}, shadow = {0};
+    recording_accel recorder = {{&recording_ops, &sc.triangles, ours->stats}, ours, &closest, &shadow};
+    camera cam = pt_scene_camera(&sc, size, size);
+    double million_samples = (double)size * size * spp * 1e-6;
+    sc.bvh = &recorder.base;
+    path_tracer pt = lecture_rung(&sc);
+    estimate_image recorded = render_estimate(&pt, &cam, spp, 1, 1);
+    sc.bvh = ours;
+    printf("\nlecture rung, 1 thread, %.2f M camera samples: %d closest-hit and %d shadow rays recorded "
+           "(the render counted %llu)\n",
+           million_samples, closest.count, shadow.count, (unsigned long long)counters_total_rays(&recorded.counters));
+    estimate_image_free(&recorded);
+    /* The best of reps runs, the two kernels taking turns (as the speed
+     * table's 1 and 2 threads do) so that both see the same machine:
+     * seconds[kernel][chained][closest or shadow]. */
+    double seconds[2][2][2];
+    long hits[2][2];
+    for (int k = 0; k < 8; k++)
+        seconds[k / 4][k / 2 % 2][k % 2] = INFINITY;
+    for (int rep = 0; rep < reps; rep++)
+        for (int k = 0; k < 8; k++) {
+            int kernel = k / 4, chained = k / 2 % 2, kind = k % 2;
+            double s = trace_alone(kernel == 0 ? ours : embree, kind == 0 ? &closest : &shadow, kind == 0, chained,
+                                   &hits[kernel][kind]);
+            seconds[kernel][chained][kind] = fmin(seconds[kernel][chained][kind], s);
+        }
+    printf("%-20s %-12s %12s %12s %12s %12s %12s\n", "tracer", "rays", "ns/closest", "ns/shadow", "trace s/M",
+           "render s/M", "rest s/M");
+    double trace[2][2];
+    for (int k = 0; k < 2; k++)
+        for (int chained = 0; chained < 2; chained++) {
+            trace[k][chained] = (seconds[k][chained][0] + seconds[k][chained][1]) / million_samples;
+            printf("%-20s %-12s %12.1f %12.1f %12.3f %12.3f %12.3f\n", tracers[k],
+                   chained ? "each waits" : "independent", seconds[k][chained][0] / closest.count * 1e9,
+                   seconds[k][chained][1] / shadow.count * 1e9, trace[k][chained], rows[k][0].wall[0],
+                   rows[k][0].wall[0] - trace[k][chained]);
+        }
+    printf("hits: closest %ld (ours) %ld (Embree), occluded %ld (ours) %ld (Embree)\n", hits[0][0], hits[1][0],
+           hits[0][1], hits[1][1]);
+    printf("traversal saved by Embree, s/M: %.3f in the render, %.3f tracing alone (each waits), "
+           "%.3f (independent)\n",
+           rows[0][0].wall[0] - rows[1][0].wall[0], trace[0][1] - trace[1][1], trace[0][0] - trace[1][0]);
+    free(closest.rays);
+    free(shadow.rays);
+
+    /* 4. The same image: the lecture rung rendered by both, on 2 threads. */
+    estimate_image images[2];
+    for (int k = 0; k < 2; k++) {
+        sc.bvh = k == 0 ? ours : embree;
+        images[k] = render_estimate(&pt, &cam, spp, 1, 2);
+    }
+    sc.bvh = ours;
+    printf("\nimage mean, lecture rung, %dx%d, %d spp:\n", size, size, spp);
+    double worst = 0.0;
+    for (int channel = 0; channel < 3; channel++) {
+        double mean[2], se[2];
+        for (int k = 0; k < 2; k++)
+            image_mean(&images[k], channel, &mean[k], &se[k]);
+        double z = (mean[0] - mean[1]) / sqrt(se[0] * se[0] + se[1] * se[1]);
+        worst = fmax(worst, fabs(z));
+        printf("  %c: ours %.6f +- %.6f, Embree %.6f +- %.6f, z %.2f\n", "RGB"[channel], mean[0], se[0], mean[1], se[1],
+               z);
+    }
+    if (!(worst <= 5.0)) {
+        printf("the image means differ by %.1f standard errors (more than 5)\n", worst);
+        failures++;
+    }
+    for (int k = 0; k < 2; k++)
+        estimate_image_free(&images[k]);
+
+    accel_destroy(embree);
+    pt_scene_free(&sc);
+    if (csv != NULL && !experiment_csv_close(csv, csv_path, err, sizeof err)) {
+        fprintf(stderr, "bench_pt_embree: %s\n", err);
+        return 1;
+    }
+    printf(failures ? "FAILED: Embree and ours disagree\n" : "Embree and ours agree\n");
+    return failures ? 1 : 0;
+}

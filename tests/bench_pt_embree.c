@@ -3,10 +3,12 @@
  * the industry's fast CPU kernel. The difference bounds what any work on
  * traversal can buy; what is left is shading and sampling.
  *
- * The path tracer reaches its triangles only through sc->bvh, an accel
- * (chapter 03's interface); here that accel is swapped for one backed by
- * Embree, which fills the hit record with the same triangle_set_fill_hit()
- * from Embree's triangle index, t and barycentrics. Nothing else changes.
+ * The path tracer reaches its triangles only through two accels (chapter
+ * 03's interface): sc->bvh, over every triangle, and sc->occluders, over
+ * the triangles that are not walls, for shadow rays inside the walls
+ * (scene_pt.c). Here both are swapped for accels backed by Embree, which
+ * fill the hit record with the same triangle_set_fill_hit() from Embree's
+ * triangle index, t and barycentrics. Nothing else changes.
  *
  * Prints, on the Cornell box:
  *   1. a check on 10^4 random rays in the box: Embree and ours find the same
@@ -347,6 +349,14 @@ static void image_mean(const estimate_image *e, int channel, double *mean, doubl
     *standard_error = sqrt(variance) / (double)n;
 }
 
+/* Which kernels trace the scene's rays: the whole tree's, and the
+ * occluders' for shadow rays inside the walls. */
+static void use_kernel(pt_scene *sc, accel *whole, accel *occluders)
+{
+    sc->bvh = whole;
+    sc->occluders = occluders;
+}
+
 static path_tracer lecture_rung(const pt_scene *sc)
 {
     /* experiment_speed's first case: the lecture's estimator, P_RR 0.8,
@@ -415,10 +425,15 @@ int main(int argc, char **argv)
 
     pt_scene sc;
     pt_scene_build_cornell_box(&sc);
-    accel *ours = sc.bvh;
+    /* Shadow rays inside the room's walls go to the occluders' own tree
+     * (scene_pt.c, "walls cast no shadows"): Embree gets one there too. */
+    accel *ours = sc.bvh, *ours_occluders = sc.occluders;
     accel *embree = embree_build(&sc.triangles, twin);
-    if (embree == NULL) {
+    accel *embree_occluders = ours_occluders != NULL ? embree_build(&sc.occluder_triangles, twin) : NULL;
+    if (embree == NULL || (ours_occluders != NULL && embree_occluders == NULL)) {
         fprintf(stderr, "bench_pt_embree: Embree failed to build the scene\n");
+        accel_destroy(embree);
+        accel_destroy(embree_occluders);
         pt_scene_free(&sc);
         if (csv != NULL)
             experiment_csv_discard(csv, csv_path);
@@ -426,6 +441,8 @@ int main(int argc, char **argv)
     }
     printf("Cornell box: %d triangles; %s, %s\n", sc.triangles.count, ours->stats.name, embree->stats.name);
     int failures = check_random_rays(ours, embree, 10000, 9) != 0;
+    if (ours_occluders != NULL)
+        failures += check_random_rays(ours_occluders, embree_occluders, 10000, 10) != 0;
 
     /* 2. The speed tables, ours then Embree's, in one run. */
     experiment_speed_row rows[2][EXPERIMENT_SPEED_CASES];
@@ -435,10 +452,10 @@ int main(int argc, char **argv)
         char label[128];
         snprintf(label, sizeof label, "Cornell box, traced by %s,", tracers[k]);
         printf("\n");
-        sc.bvh = k == 0 ? ours : embree;
+        use_kernel(&sc, k == 0 ? ours : embree, k == 0 ? ours_occluders : embree_occluders);
         n = experiment_speed_scene(&sc, label, size, spp, reps, rows[k]);
     }
-    sc.bvh = ours;
+    use_kernel(&sc, ours, ours_occluders);
     printf("\nours / Embree (wall s/M)                       1 thread  2 threads\n");
     for (int c = 0; c < n; c++)
         printf("%-42s %9.2fx %9.2fx\n", rows[0][c].label, rows[0][c].wall[0] / rows[1][c].wall[0],
@@ -454,30 +471,36 @@ int main(int argc, char **argv)
 
     /* 3. One one-thread render of the lecture rung with every ray recorded,
      * then those rays traced alone by each kernel. */
-    ray_list closest = {0}, shadow = {0};
-    recording_accel recorder = {{&recording_ops, &sc.triangles, ours->stats}, ours, &closest, &shadow};
+    /* lists[0] closest hits, [1] shadow rays through the whole tree, [2]
+     * shadow rays inside the walls, through the occluders' tree */
+    ray_list lists[3] = {{0}};
+    recording_accel recorder = {{&recording_ops, &sc.triangles, ours->stats}, ours, &lists[0], &lists[1]};
+    recording_accel recorder_occluders = {{&recording_ops, &sc.occluder_triangles, ours->stats}, ours_occluders,
+                                          &lists[0], &lists[2]};
     camera cam = pt_scene_camera(&sc, size, size);
     double million_samples = (double)size * size * spp * 1e-6;
-    sc.bvh = &recorder.base;
+    use_kernel(&sc, &recorder.base, ours_occluders != NULL ? &recorder_occluders.base : NULL);
     path_tracer pt = lecture_rung(&sc);
     estimate_image recorded = render_estimate(&pt, &cam, spp, 1, 1);
-    sc.bvh = ours;
-    printf("\nlecture rung, 1 thread, %.2f M camera samples: %d closest-hit and %d shadow rays recorded "
-           "(the render counted %llu)\n",
-           million_samples, closest.count, shadow.count, (unsigned long long)counters_total_rays(&recorded.counters));
+    use_kernel(&sc, ours, ours_occluders);
+    int shadow_count = lists[1].count + lists[2].count;
+    printf("\nlecture rung, 1 thread, %.2f M camera samples: %d closest-hit and %d shadow rays recorded, %d of "
+           "them inside the walls (the render counted %llu)\n",
+           million_samples, lists[0].count, shadow_count, lists[2].count,
+           (unsigned long long)counters_total_rays(&recorded.counters));
     estimate_image_free(&recorded);
     /* The best of reps runs, the two kernels taking turns (as the speed
      * table's 1 and 2 threads do) so that both see the same machine:
-     * seconds[kernel][chained][closest or shadow]. */
-    double seconds[2][2][2];
-    long hits[2][2];
-    for (int k = 0; k < 8; k++)
-        seconds[k / 4][k / 2 % 2][k % 2] = INFINITY;
+     * seconds[kernel][chained][list]. */
+    double seconds[2][2][3];
+    long hits[2][3] = {{0}};
+    for (int k = 0; k < 12; k++)
+        seconds[k / 6][k / 3 % 2][k % 3] = INFINITY;
     for (int rep = 0; rep < reps; rep++)
-        for (int k = 0; k < 8; k++) {
-            int kernel = k / 4, chained = k / 2 % 2, kind = k % 2;
-            double s = trace_alone(kernel == 0 ? ours : embree, kind == 0 ? &closest : &shadow, kind == 0, chained,
-                                   &hits[kernel][kind]);
+        for (int k = 0; k < 12; k++) {
+            int kernel = k / 6, chained = k / 3 % 2, kind = k % 3;
+            const accel *a = kind == 2 ? (kernel == 0 ? ours_occluders : embree_occluders) : (kernel == 0 ? ours : embree);
+            double s = lists[kind].count > 0 ? trace_alone(a, &lists[kind], kind == 0, chained, &hits[kernel][kind]) : 0.0;
             seconds[kernel][chained][kind] = fmin(seconds[kernel][chained][kind], s);
         }
     printf("%-20s %-12s %12s %12s %12s %12s %12s\n", "tracer", "rays", "ns/closest", "ns/shadow", "trace s/M",
@@ -485,27 +508,28 @@ int main(int argc, char **argv)
     double trace[2][2];
     for (int k = 0; k < 2; k++)
         for (int chained = 0; chained < 2; chained++) {
-            trace[k][chained] = (seconds[k][chained][0] + seconds[k][chained][1]) / million_samples;
+            double shadow_seconds = seconds[k][chained][1] + seconds[k][chained][2];
+            trace[k][chained] = (seconds[k][chained][0] + shadow_seconds) / million_samples;
             printf("%-20s %-12s %12.1f %12.1f %12.3f %12.3f %12.3f\n", tracers[k],
-                   chained ? "each waits" : "independent", seconds[k][chained][0] / closest.count * 1e9,
-                   seconds[k][chained][1] / shadow.count * 1e9, trace[k][chained], rows[k][0].wall[0],
+                   chained ? "each waits" : "independent", seconds[k][chained][0] / lists[0].count * 1e9,
+                   shadow_seconds / shadow_count * 1e9, trace[k][chained], rows[k][0].wall[0],
                    rows[k][0].wall[0] - trace[k][chained]);
         }
     printf("hits: closest %ld (ours) %ld (Embree), occluded %ld (ours) %ld (Embree)\n", hits[0][0], hits[1][0],
-           hits[0][1], hits[1][1]);
+           hits[0][1] + hits[0][2], hits[1][1] + hits[1][2]);
     printf("traversal saved by Embree, s/M: %.3f in the render, %.3f tracing alone (each waits), "
            "%.3f (independent)\n",
            rows[0][0].wall[0] - rows[1][0].wall[0], trace[0][1] - trace[1][1], trace[0][0] - trace[1][0]);
-    free(closest.rays);
-    free(shadow.rays);
+    for (int k = 0; k < 3; k++)
+        free(lists[k].rays);
 
     /* 4. The same image: the lecture rung rendered by both, on 2 threads. */
     estimate_image images[2];
     for (int k = 0; k < 2; k++) {
-        sc.bvh = k == 0 ? ours : embree;
+        use_kernel(&sc, k == 0 ? ours : embree, k == 0 ? ours_occluders : embree_occluders);
         images[k] = render_estimate(&pt, &cam, spp, 1, 2);
     }
-    sc.bvh = ours;
+    use_kernel(&sc, ours, ours_occluders);
     printf("\nimage mean, lecture rung, %dx%d, %d spp:\n", size, size, spp);
     double worst = 0.0;
     for (int channel = 0; channel < 3; channel++) {
@@ -525,6 +549,7 @@ int main(int argc, char **argv)
         estimate_image_free(&images[k]);
 
     accel_destroy(embree);
+    accel_destroy(embree_occluders);
     pt_scene_free(&sc);
     if (csv != NULL && !experiment_csv_close(csv, csv_path, err, sizeof err)) {
         fprintf(stderr, "bench_pt_embree: %s\n", err);

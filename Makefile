@@ -312,7 +312,9 @@ $(DOCS)/book.css: docs/book.css | docs-deps
 $(DOCS)/%.html: chapters/%/README.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(DOCS)/book.css
 	$(DOC_PANDOC) -f gfm -M page=chapter -M chapter=$* -M files="$(notdir $(wildcard chapters/$*/*.[ch]))" $< -o $@
 
-$(DOCS)/index.html: docs/index.md $(DOC_INPUTS) $(DOCS)/book.css
+# The index shows each chapter's picture: it waits for them (with -j, it
+# was made before them and refused, naming the missing images).
+$(DOCS)/index.html: docs/index.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOCS)/book.css
 	$(DOC_PANDOC) -f gfm -M page=index -M chapter= $< -o $@
 
 # The notes beside the chapters: the scene format and the hard-case catalog.

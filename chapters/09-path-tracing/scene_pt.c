@@ -242,13 +242,14 @@ static void find_walls(pt_scene *sc)
          * the walls skipped less or more often: the test of each ray's two
          * ends decides, and it is exact. */
         bool wall = true;
-        for (int v = 0; v < m->position_count && wall; v++) {
+        int v = 0;
+        for (; v < m->position_count && wall; v++) {
             vec3 p = m->positions[v];
             float distance = w.normal[0] * p.x + w.normal[1] * p.y + w.normal[2] * p.z - w.offset;
             float margin = w.slack[0] * fabsf(p.x) + w.slack[1] * fabsf(p.y) + w.slack[2] * fabsf(p.z) + w.slack_constant;
             wall = distance >= -margin;
         }
-        budget -= m->position_count;
+        budget -= v; /* most triangles of a large mesh stop at an early vertex */
         for (int k = 0; k < sc->sphere_count && wall; k++) {
             const pt_sphere *s = &sc->spheres[k];
             vec3 c = s->center;

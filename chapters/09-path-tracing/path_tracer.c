@@ -128,6 +128,10 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
                     ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, x_light, n_light);
                     counters->shadow_rays++;
                     visible = !pt_scene_occluded(sc, shadow, counters);
+                    if (explain_on() && pt_scene_segment_inside_walls(sc, &shadow))
+                        explain_line(explain_depth, "shadow ray inside the walls: the %d wall triangles cannot "
+                                     "block it, only the other %d are tested", sc->wall_count,
+                                     sc->occluder_triangles.count);
                 }
                 if (visible) {
                     /* pdf 1/A per unit area is distance^2 / (cos' A) per unit solid angle

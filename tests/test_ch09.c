@@ -744,8 +744,9 @@ static ray random_segment(const pt_scene *sc, bool on_surfaces, pcg32 *rng)
  * them: walls. The light (the ceiling is behind it) and the blocks (each
  * has the room behind its faces) are not. Four faces are flat and axis-
  * aligned, one plane each; the red wall's published corners are not in
- * one plane, so its two triangles have a plane each. */
-static void test_the_cornell_box_has_ten_wall_triangles(void **state)
+ * one plane, so its two triangles have a plane each. Rendered with the
+ * walls and without them, the image is the same bit for bit. */
+static void test_the_cornell_box_has_ten_walls_that_change_no_image(void **state)
 {
     (void)state;
     pt_scene sc;
@@ -762,6 +763,21 @@ static void test_the_cornell_box_has_ten_wall_triangles(void **state)
      * occluders are exactly the triangles after them, in order. */
     for (int i = 0; i < sc.occluder_triangles.count; i++)
         assert_memory_equal(&sc.occluder_triangles.triangles[i], &sc.triangles.triangles[10 + i], sizeof(triangle));
+
+    /* The walls change no answer: the render with them and without them
+     * (pt_scene_use_walls) is the same, bit for bit; with them nearly every
+     * shadow ray skips them, without them none does. */
+    {
+        path_tracer with = tracer(&sc, PT_LECTURE, RR_FIXED);
+        pt_scene without_walls = sc; /* the same trees, read only */
+        pt_scene_use_walls(&without_walls, false);
+        path_tracer without = tracer(&without_walls, PT_LECTURE, RR_FIXED);
+        ray_counters c_with, c_without;
+        assert_same_render(&with, &without, &c_with, &c_without);
+        assert_true(c_with.shadow_rays_inside_walls >= c_with.shadow_rays * 99 / 100);
+        assert_int_equal(c_without.shadow_rays_inside_walls, 0);
+        assert_true(c_without.primitive_tests > c_with.primitive_tests);
+    }
     pt_scene_free(&sc);
 
     /* A closed sphere of triangles has every face a wall, but hundreds of
@@ -912,7 +928,7 @@ int main(void)
         cmocka_unit_test(test_no_glass_no_refraction_and_no_nan),
         cmocka_unit_test(test_one_sided_emitter),
         cmocka_unit_test(test_ggx_sampling_matches_its_pdf),
-        cmocka_unit_test(test_the_cornell_box_has_ten_wall_triangles),
+        cmocka_unit_test(test_the_cornell_box_has_ten_walls_that_change_no_image),
         cmocka_unit_test(test_walls_skipped_only_where_they_cannot_block),
         cmocka_unit_test(test_wall_test_is_never_fooled_by_rounding),
     };

@@ -41,7 +41,7 @@ int main(int argc, char **argv)
     cli_options opts = cli_defaults("build/out/ch09.exr", 512, 512, 16);
     /* integrator NULL and max_depth -1: not given, so the scene file's (or the default) */
     const char *integrator = NULL, *rr = "fixed", *scene_name = "cornell", *obj = NULL, *data = NULL;
-    const char *bench_csv = NULL;
+    const char *bench_csv = NULL, *walls = "on";
     bool bench = false;
     float rr_probability = 0.8f, time_budget = 0.0f, target_error = 0.0f;
     int max_depth = -1, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
@@ -55,6 +55,9 @@ int main(int argc, char **argv)
          "white-furnace, glass-furnace, point-in-sphere",
          0, 0},
         {"--obj", CLI_STRING, &obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
+        {"--walls", CLI_STRING, &walls, "on|off",
+         "on (default): shadow rays inside the room skip its walls, which cannot block them; off: every shadow "
+         "ray meets every triangle (the same image, slower)", 0, 0},
         {"--time-budget", CLI_FLOAT, &time_budget, "SECONDS", "progressive: passes until this much time is spent", 0.0, 1e6},
         {"--target-error", CLI_FLOAT, &target_error, "E",
          "progressive: passes until the estimated relative error is below E", 0.0, 10.0},
@@ -105,6 +108,11 @@ int main(int argc, char **argv)
     }
     if (max_depth < 0)
         max_depth = from_file && desc.max_depth >= 0 ? desc.max_depth : 64;
+    if (strcmp(walls, "on") != 0 && strcmp(walls, "off") != 0) {
+        fprintf(stderr, "09-path-tracing: --walls: unknown '%s' (on, off)\ntry --help\n", walls);
+        scene_desc_free(&desc);
+        return 2;
+    }
     pt_russian_roulette rr_mode;
     if (strcmp(rr, "fixed") == 0)
         rr_mode = RR_FIXED;
@@ -139,6 +147,7 @@ int main(int argc, char **argv)
         effects_print(stdout, &e, spec.program);
     program_note_effects(&e);
     scene_desc_free(&desc);
+    pt_scene_use_walls(&sc, strcmp(walls, "on") == 0);
     pt = path_tracer_defaults(&sc);
     pt.effects = effects;
     pt.integrator = chosen;

@@ -284,7 +284,7 @@ static void find_walls(pt_scene *sc)
  * through memory) cost as much as the test. */
 static inline bool segment_inside_walls(const pt_scene *sc, const ray *r)
 {
-    if (sc->wall_group_count == 0 || !(r->t_max < INFINITY))
+    if (sc->wall_group_count == 0 || sc->walls_off || !(r->t_max < INFINITY))
         return false;
     /* The two ends, p = o + t d, rounded twice: each coordinate is off by
      * at most 2^-23 of |o| + |t d|, which is what the slack is taken of
@@ -334,6 +334,8 @@ static inline bool segment_inside_walls(const pt_scene *sc, const ray *r)
 }
 
 bool pt_scene_segment_inside_walls(const pt_scene *sc, const ray *r) { return segment_inside_walls(sc, r); }
+
+void pt_scene_use_walls(pt_scene *sc, bool on) { sc->walls_off = !on; }
 
 /* How bright an emitter is, for choosing which light to sample: the mean of
  * L_e's channels (positive whenever any channel is). */

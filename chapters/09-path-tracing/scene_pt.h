@@ -76,6 +76,7 @@ typedef struct {
     int wall_plane_count, wall_group_count;
     triangle_set occluder_triangles;
     accel *occluders; /* NULL when the scene has no walls */
+    bool walls_off;   /* pt_scene_use_walls(sc, false): every shadow ray meets every triangle */
     pt_sphere *spheres;
     int sphere_count, sphere_capacity;
     pt_material *materials;
@@ -122,6 +123,9 @@ bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters);
  * plane, by more than the rounding of the test? False for an infinite
  * t_max, and when the scene has no walls. */
 bool pt_scene_segment_inside_walls(const pt_scene *sc, const ray *r);
+/* Use the walls (the default), or not: to see what they save (--walls
+ * off, --bench). The images are the same either way. */
+void pt_scene_use_walls(pt_scene *sc, bool on);
 
 /* A point on the emitting triangles, with the emitter's front normal and
  * material. Picked by power: the density per unit area at a point of an

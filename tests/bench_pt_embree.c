@@ -238,6 +238,10 @@ static bool close_relative(float a, float b, float tolerance)
  * A tie -- two triangles within the tolerance of each other along the ray
  * (the ray through a shared edge), or the first surface within it of the
  * segment's end -- may go either way, and is counted but not failed. */
+/* A thousandth of the box's diagonal: the least distance a hit point's
+ * tolerance is taken of (check_random_rays). */
+static const float HIT_POINT_FLOOR = 1e-3f;
+
 static int check_random_rays(const accel *ours, const accel *embree, int count, uint64_t seed)
 {
     const float tolerance = 1e-4f;
@@ -260,7 +264,10 @@ static int check_random_rays(const accel *ours, const accel *embree, int count, 
         else if (!hit_a)
             same = true;
         else {
-            float scale = a.t * vec3_length(r.direction) + diagonal * 1e-3f;
+            /* the hit points are compared relative to their distance from
+             * the origin, with a floor of HIT_POINT_FLOOR of the box's size
+             * so that a hit at t near 0 is not held to a tolerance of 0 */
+            float scale = a.t * vec3_length(r.direction) + diagonal * HIT_POINT_FLOOR;
             same = a.shape_id == b.shape_id && close_relative(a.t, b.t, tolerance) &&
                    vec3_length(vec3_sub(a.point, b.point)) <= tolerance * scale;
             if (!same && a.shape_id != b.shape_id && close_relative(a.t, b.t, tolerance)) {

@@ -384,7 +384,8 @@ static void usage(void)
            "bvh4 and by Embree 3: the speed table of each, their ratio, the time of tracing\n"
            "alone, and checks that both give the same hits and the same image.\n"
            "  --width N    image N x N (default 256)\n"
-           "  --spp N      samples per pixel (default 16)\n"
+           "  --spp N      samples per pixel, at least 2: the image check needs each pixel's\n"
+           "               standard error (default 16)\n"
            "  --reps N     best of N runs (default 5)\n"
            "  --data DIR   also write DIR/ch09_embree.csv\n"
            "  --twin KIND  a wrong Embree accel, to see the checks fail: uv (barycentrics\n"
@@ -404,7 +405,7 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--width") == 0 && value && atoi(value) > 0) {
             size = atoi(value);
             i++;
-        } else if (strcmp(argv[i], "--spp") == 0 && value && atoi(value) > 0) {
+        } else if (strcmp(argv[i], "--spp") == 0 && value && atoi(value) > 1) {
             spp = atoi(value);
             i++;
         } else if (strcmp(argv[i], "--reps") == 0 && value && atoi(value) > 0) {
@@ -417,6 +418,10 @@ int main(int argc, char **argv)
                    (strcmp(value, "uv") == 0 || strcmp(value, "no-shadows") == 0)) {
             twin = strcmp(value, "uv") == 0 ? TWIN_UV : TWIN_NO_SHADOWS;
             i++;
+        } else if (strcmp(argv[i], "--spp") == 0 && value) {
+            fprintf(stderr, "bench_pt_embree: --spp %s: at least 2 (the image check needs each pixel's standard "
+                            "error)\n", value);
+            return 2;
         } else {
             fprintf(stderr, "bench_pt_embree: unknown or incomplete argument '%s' (try --help)\n", argv[i]);
             return 2;

@@ -45,7 +45,10 @@ typedef struct {
     ray_counters counters;
 } trace_result;
 
-static trace_result trace(const accel *a, const ray_set *rays, int count, bool closest, int threads)
+/* Rays handed to a stream kernel at a time (bvh4-stream). */
+enum { STREAM_CHUNK = 1024 };
+
+static trace_result trace(const accel *a, const ray_set *rays, int count, bool closest, int threads, bool stream)
 {
     trace_result result = {0};
     long hits = 0;
@@ -54,8 +57,26 @@ static trace_result trace(const accel *a, const ray_set *rays, int count, bool c
 #pragma omp parallel num_threads(threads) reduction(+ : hits, t_sum)
     {
         ray_counters mine = {0};
+        if (stream) {
+            hit_record *chunk_hits = memory_allocate(STREAM_CHUNK, sizeof *chunk_hits);
+            bool found[STREAM_CHUNK];
+#pragma omp for schedule(dynamic, 1)
+            for (int start = 0; start < count; start += STREAM_CHUNK) {
+                int n = count - start < STREAM_CHUNK ? count - start : STREAM_CHUNK;
+                if (closest)
+                    bvh4_closest_hit_stream(a, rays->rays + start, n, chunk_hits, found, &mine);
+                else
+                    bvh4_any_hit_stream(a, rays->rays + start, n, found, &mine);
+                for (int j = 0; j < n; j++) {
+                    hits += found[j];
+                    if (closest && found[j])
+                        t_sum += chunk_hits[j].t;
+                }
+            }
+            free(chunk_hits);
+        }
 #pragma omp for schedule(dynamic, 1024)
-        for (int k = 0; k < count; k++) {
+        for (int k = 0; k < (stream ? 0 : count); k++) {
             if (closest) {
                 hit_record hit;
                 if (accel_closest_hit(a, rays->rays[k], &hit, &mine)) {
@@ -82,14 +103,15 @@ static int compare_doubles(const void *a, const void *b)
 }
 
 /* Median of `reps` timings of the same trace: robust to a stray slow run. */
-static trace_result trace_median(const accel *a, const ray_set *rays, int count, bool closest, int threads, int reps)
+static trace_result trace_median(const accel *a, const ray_set *rays, int count, bool closest, int threads, int reps,
+                                 bool stream)
 {
     double times[16];
     trace_result r = {0};
     if (reps > 16)
         reps = 16;
     for (int i = 0; i < reps; i++) {
-        r = trace(a, rays, count, closest, threads);
+        r = trace(a, rays, count, closest, threads, stream);
         times[i] = r.seconds;
     }
     qsort(times, (size_t)reps, sizeof times[0], compare_doubles);
@@ -104,6 +126,7 @@ typedef struct {
     accel *(*build)(const triangle_set *set);
     long max_triangles; /* larger meshes are skipped (brute force) */
     int max_rays;       /* rays per set (brute force uses a strided subset) */
+    bool stream;        /* traced as streams of rays taking turns (bvh4_closest_hit_stream) */
 } structure;
 
 static accel *build_brute(const triangle_set *s) { return brute_force_build(s); }
@@ -114,12 +137,13 @@ static accel *build_bvh_sah(const triangle_set *s) { return bvh_build(s, BVH_SPL
 static accel *build_bvh4_sah(const triangle_set *s) { return bvh4_build(s, BVH_SPLIT_SAH); }
 
 static const structure structures[] = {
-    {"brute", build_brute, 10240, 1 << 14},
-    {"grid", build_grid, 1L << 30, 1 << 20},
-    {"kdtree", build_kdtree, 1L << 30, 1 << 20},
-    {"bvh-median", build_bvh_median, 1L << 30, 1 << 20},
-    {"bvh-sah", build_bvh_sah, 1L << 30, 1 << 20},
-    {"bvh4-sah", build_bvh4_sah, 1L << 30, 1 << 20},
+    {"brute", build_brute, 10240, 1 << 14, false},
+    {"grid", build_grid, 1L << 30, 1 << 20, false},
+    {"kdtree", build_kdtree, 1L << 30, 1 << 20, false},
+    {"bvh-median", build_bvh_median, 1L << 30, 1 << 20, false},
+    {"bvh-sah", build_bvh_sah, 1L << 30, 1 << 20, false},
+    {"bvh4-sah", build_bvh4_sah, 1L << 30, 1 << 20, false},
+    {"bvh4-stream", build_bvh4_sah, 1L << 30, 1 << 20, true},
 };
 enum { STRUCTURE_COUNT = sizeof structures / sizeof structures[0] };
 
@@ -221,6 +245,7 @@ static void stadium_study(const char *path, int reps)
         for (int k = 0; k < DENSITIES + STRUCTURE_COUNT; k++) {
             accel *a;
             float density = 0.0f;
+            bool stream = false;
             const char *name;
             if (k < DENSITIES) {
                 density = densities[k];
@@ -232,9 +257,10 @@ static void stadium_study(const char *path, int reps)
                     continue;
                 a = st->build(&set);
                 name = st->name;
+                stream = st->stream;
             }
-            trace(a, &rays, rays.count, true, 1); /* warm-up */
-            trace_result r = trace_median(a, &rays, rays.count, true, 1, reps);
+            trace(a, &rays, rays.count, true, 1, stream); /* warm-up */
+            trace_result r = trace_median(a, &rays, rays.count, true, 1, reps, stream);
             double boxes = (double)r.counters.box_tests / rays.count;
             double tris = (double)r.counters.primitive_tests / rays.count;
             double mrays = rays.count / r.seconds * 1e-6;
@@ -380,13 +406,14 @@ int main(int argc, char **argv)
             double build_ms = 1e3 * build_times[build_reps / 2];
 
             ray_set coh = ray_subset(&coherent, st->max_rays), inc = ray_subset(&incoherent, st->max_rays);
-            trace(a, &coh, coh.count, true, 1); /* warm-up, not counted */
-            trace_result cc = trace_median(a, &coh, coh.count, true, 1, reps);
-            trace_result ca = trace_median(a, &coh, coh.count, false, 1, reps);
-            trace_result ic = trace_median(a, &inc, inc.count, true, 1, reps);
-            trace_result ia = trace_median(a, &inc, inc.count, false, 1, reps);
-            trace_result cc_all = trace_median(a, &coh, coh.count, true, threads, reps);
-            trace_result ic_all = trace_median(a, &inc, inc.count, true, threads, reps);
+            bool stream = st->stream;
+            trace(a, &coh, coh.count, true, 1, stream); /* warm-up, not counted */
+            trace_result cc = trace_median(a, &coh, coh.count, true, 1, reps, stream);
+            trace_result ca = trace_median(a, &coh, coh.count, false, 1, reps, stream);
+            trace_result ic = trace_median(a, &inc, inc.count, true, 1, reps, stream);
+            trace_result ia = trace_median(a, &inc, inc.count, false, 1, reps, stream);
+            trace_result cc_all = trace_median(a, &coh, coh.count, true, threads, reps, stream);
+            trace_result ic_all = trace_median(a, &inc, inc.count, true, threads, reps, stream);
             double mrays_cc = coh.count / cc.seconds * 1e-6, mrays_ca = coh.count / ca.seconds * 1e-6;
             double mrays_ic = inc.count / ic.seconds * 1e-6, mrays_ia = inc.count / ia.seconds * 1e-6;
             double mrays_cc_all = coh.count / cc_all.seconds * 1e-6, mrays_ic_all = inc.count / ic_all.seconds * 1e-6;

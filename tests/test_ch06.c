@@ -1032,6 +1032,119 @@ static void test_bvh4_empty_set_builds_and_misses(void **state)
     mesh_free(&m);
 }
 
+/* ---- streams: rays taking turns ------------------------------------------------- */
+
+/* Rays of one stream whose answers differ from what the same rays get one
+ * at a time: found or not, and the whole hit record (t, barycentrics, point,
+ * normals, triangle, material) bit for bit; any hit the same. */
+static long stream_mismatches(const accel *a, const ray *rays, int count, const hit_record *hits,
+                              const bool *found, const bool *any)
+{
+    long mismatches = 0;
+    for (int i = 0; i < count; i++) {
+        hit_record want;
+        ray_counters c = {0};
+        bool want_found = accel_closest_hit(a, rays[i], &want, &c);
+        bool same = want_found == found[i] && accel_any_hit(a, rays[i], &c) == any[i];
+        if (same && want_found)
+            same = want.t == hits[i].t && want.u == hits[i].u && want.v == hits[i].v &&
+                   want.shape_id == hits[i].shape_id && want.material_id == hits[i].material_id &&
+                   memcmp(&want.point, &hits[i].point, sizeof want.point) == 0 &&
+                   memcmp(&want.normal_shading, &hits[i].normal_shading, sizeof want.normal_shading) == 0;
+        mismatches += !same;
+    }
+    return mismatches;
+}
+
+/* A stream hands each ray what it would get alone, whatever the stream's
+ * length (0, fewer rays than lanes, not a multiple of them, thousands), on
+ * every mesh of the differential test and with both kernels. Half the rays
+ * are cut short before their hit, so neighbours in the stream have
+ * different answers, and a lane that kept the previous ray's closest hit
+ * (or its t_max) would be caught. The counters are those of the rays one at
+ * a time, summed. Twin: the same answers handed on to the next ray, the
+ * mistake a stream can make that a single ray cannot, are caught. */
+static void test_bvh4_stream_gives_each_ray_its_own_answer(void **state)
+{
+    (void)state;
+    enum { RAYS = 3001 };
+    static const int lengths[] = {0, 1, BVH4_STREAM_LANES - 1, BVH4_STREAM_LANES + 3, RAYS};
+    ray *rays = calloc(RAYS, sizeof *rays);
+    hit_record *hits = calloc(RAYS, sizeof *hits);
+    bool *found = calloc(RAYS, sizeof *found), *any = calloc(RAYS, sizeof *any);
+    long shifted_mismatches = 0, hit_count = 0;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+        pcg32 rng = pcg32_for_pixel(6, 60 + kind);
+        for (int i = 0; i < RAYS; i++) {
+            rays[i] = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+            hit_record h;
+            ray_counters c = {0};
+            if (i % 2 == 1 && accel_closest_hit(a, rays[i], &h, &c))
+                rays[i].t_max = h.t * 0.5f;
+        }
+        for (int kernel = 0; kernel < 2; kernel++) {
+            if (!bvh4_set_kernel(a, kernel == 0 ? BVH4_KERNEL_SSE : BVH4_KERNEL_SCALAR))
+                continue;
+            for (size_t l = 0; l < sizeof lengths / sizeof lengths[0]; l++) {
+                int n = lengths[l];
+                ray_counters stream = {0}, alone = {0};
+                bvh4_closest_hit_stream(a, rays, n, hits, found, &stream);
+                bvh4_any_hit_stream(a, rays, n, any, &stream);
+                for (int i = 0; i < n; i++) {
+                    hit_record h;
+                    accel_closest_hit(a, rays[i], &h, &alone);
+                    accel_any_hit(a, rays[i], &alone);
+                    hit_count += found[i];
+                }
+                if (stream_mismatches(a, rays, n, hits, found, any) != 0)
+                    fail_msg("%s, kernel %d, stream of %d: answers differ from single rays",
+                             accel_check_mesh_names[kind], kernel, n);
+                assert_int_equal(stream.box_tests, alone.box_tests);
+                assert_int_equal(stream.primitive_tests, alone.primitive_tests);
+            }
+            /* the twin: every answer handed to the next ray */
+            shifted_mismatches += stream_mismatches(a, rays + 1, RAYS - 1, hits, found, any);
+        }
+        accel_destroy(a);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    print_message("streams: %ld hits; answers handed to the next ray: %ld wrong\n", hit_count, shifted_mismatches);
+    assert_true(hit_count > 1000);
+    assert_true(shifted_mismatches > 1000);
+    free(rays);
+    free(hits);
+    free(found);
+    free(any);
+}
+
+/* A stream through an empty tree: every ray misses, none is left unanswered. */
+static void test_bvh4_stream_through_an_empty_tree_misses(void **state)
+{
+    (void)state;
+    mesh m;
+    mesh_init(&m);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+    ray rays[3] = {ray_from(0, 0, 0, 0, 0, 1), ray_from(1, 2, 3, -1, 0, 0), ray_from(0, 0, 0, 1, 1, 1)};
+    hit_record hits[3];
+    bool found[3] = {true, true, true}, any[3] = {true, true, true};
+    ray_counters counters = {0};
+    bvh4_closest_hit_stream(a, rays, 3, hits, found, &counters);
+    bvh4_any_hit_stream(a, rays, 3, any, &counters);
+    for (int i = 0; i < 3; i++)
+        assert_false(found[i] || any[i]);
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
 /* ---- scene files (chapters 03-06) ---------------------------------------------- */
 
 static image render_view(const accel *a, const camera *cam)
@@ -1152,6 +1265,8 @@ int main(void)
         cmocka_unit_test(test_bvh4_slab_test_matches_chapter_03),
         cmocka_unit_test(test_bvh4_triangle_test_matches_chapter_01),
         cmocka_unit_test(test_bvh4_empty_set_builds_and_misses),
+        cmocka_unit_test(test_bvh4_stream_gives_each_ray_its_own_answer),
+        cmocka_unit_test(test_bvh4_stream_through_an_empty_tree_misses),
     };
     return cmocka_run_group_tests_name("ch06 bvh", tests, NULL, NULL);
 }

@@ -136,6 +136,19 @@ int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float
 int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
                        bvh4_kernel kernel);
 
+/* Closest hits of a stream of independent rays: hit_found[i] and hits[i]
+ * are what accel_closest_hit() gives for rays[i], bit for bit, but
+ * BVH4_STREAM_LANES rays walk the tree at once, taking turns node by node,
+ * so that one ray's wait for memory overlaps the others' work (see
+ * bvh4_traverse.c). Pays on meshes larger than the cache. */
+#ifndef BVH4_STREAM_LANES
+#define BVH4_STREAM_LANES 8
+#endif
+void bvh4_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                             ray_counters *counters);
+/* The same for any hit: hit_found[i] is accel_any_hit() of rays[i]. */
+void bvh4_any_hit_stream(const accel *a, const ray *rays, int count, bool *hit_found, ray_counters *counters);
+
 /* The traversal's stack: each node pushes at most BVH4_WIDTH - 1 entries,
  * and the wide tree is no deeper than the binary one plus the levels that split
  * leaves of more than BVH4_LEAF_MAX triangles. */

@@ -349,87 +349,116 @@ static inline int child_count(const bvh4_node *node)
     return count;
 }
 
+/* One ray's walk through the tree, as data: what the loop of a traversal
+ * keeps between one node and the next. Kept in a struct, rather than in
+ * local variables, so that several rays can take turns (the stream below);
+ * for one ray alone the compiler keeps the scalars in registers all the
+ * same. */
+typedef struct {
+    bvh4_ray r4;
+    ray r;
+    bvh4_found found;
+    uint32_t current; /* the node or leaf to visit next */
+    int top;          /* entries on the stack */
+    uint64_t box_tests, primitive_tests;
+    bvh4_entry stack[BVH4_STACK_SIZE];
+} bvh4_traversal;
+
+/* Start at the root; false if there is no tree to walk. */
+static ALWAYS_INLINE bool traversal_begin(const bvh4 *b, const ray *r, bvh4_traversal *w)
+{
+    w->r = *r;
+    w->r4 = bvh4_ray_make(r);
+    w->found = (bvh4_found){-1, r->t_max, 0.0f, 0.0f};
+    w->current = 0; /* the root */
+    w->top = 0;
+    w->box_tests = w->primitive_tests = 0;
+    return b->node_count > 0;
+}
+
+/* Visit w->current -- slab-test a node's children, or test a leaf's
+ * triangles -- and choose the next one to visit. Returns false when the
+ * walk is over: the stack is empty, or (any hit) a triangle was hit. */
+static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool stop_at_first, bool sse)
+{
+    if (!bvh4_is_leaf(w->current)) {
+        const bvh4_node *node = &b->nodes[w->current];
+        float t_enter[BVH4_WIDTH];
+        float cull = w->found.t * BVH_CULL_SLACK;
+        int mask;
+#if BVH4_HAVE_SSE
+        if (sse)
+            mask = slab_test4_sse(node, &w->r4, w->r.t_min, cull, t_enter);
+        else
+#endif
+            mask = slab_test4_scalar(node, &w->r4, w->r.t_min, cull, t_enter);
+        w->box_tests += (uint64_t)child_count(node);
+        if (mask != 0) {
+            int k = lowest_bit((unsigned)mask);
+            mask &= mask - 1;
+            if (mask == 0) {
+                /* one child hit: no order to decide */
+                w->current = node->child[k];
+                return true;
+            }
+            int k2 = lowest_bit((unsigned)mask);
+            mask &= mask - 1;
+            if (mask == 0) {
+                /* two (the commonest case): one comparison orders them */
+                bool second_first = t_enter[k2] < t_enter[k];
+                int near = second_first ? k2 : k, far = second_first ? k : k2;
+                prefetch_child(b, node->child[far]);
+                w->stack[w->top++] = (bvh4_entry){node->child[far], t_enter[far]};
+                w->current = node->child[near];
+                return true;
+            }
+            mask |= 1 << k2;
+            /* Three or more: sort them by t_enter, nearest last
+             * (insertion sort), push all but the nearest, visit it. */
+            bvh4_entry hits[BVH4_WIDTH];
+            int n = 0;
+            hits[n++] = (bvh4_entry){node->child[k], t_enter[k]};
+            prefetch_child(b, node->child[k]);
+            while (mask != 0) {
+                k = lowest_bit((unsigned)mask);
+                mask &= mask - 1;
+                bvh4_entry e = {node->child[k], t_enter[k]};
+                prefetch_child(b, e.ref);
+                int j = n++;
+                while (j > 0 && hits[j - 1].t_enter < e.t_enter) {
+                    hits[j] = hits[j - 1];
+                    j--;
+                }
+                hits[j] = e;
+            }
+            for (int j = 0; j < n - 1; j++)
+                w->stack[w->top++] = hits[j];
+            w->current = hits[n - 1].ref;
+            return true;
+        }
+    } else if (test_leaf4(b, w->current, &w->r4, &w->r, &w->found, stop_at_first, sse, &w->primitive_tests)) {
+        return false;
+    }
+    /* Next from the stack, skipping entries that begin beyond the
+     * closest hit (their box test would fail now). */
+    float cull = w->found.t * BVH_CULL_SLACK;
+    while (w->top > 0 && w->stack[w->top - 1].t_enter > cull)
+        w->top--;
+    if (w->top == 0)
+        return false;
+    w->current = w->stack[--w->top].ref;
+    return true;
+}
+
 static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_first, bool sse, ray_counters *counters)
 {
-    bvh4_found found = {-1, r->t_max, 0.0f, 0.0f};
-    if (b->node_count == 0)
-        return found;
-    bvh4_ray r4 = bvh4_ray_make(r);
-    bvh4_entry stack[BVH4_STACK_SIZE];
-    int top = 0;
-    uint32_t current = 0; /* the root */
-    uint64_t box_tests = 0, primitive_tests = 0;
-    for (;;) {
-        if (!bvh4_is_leaf(current)) {
-            const bvh4_node *node = &b->nodes[current];
-            float t_enter[BVH4_WIDTH];
-            float cull = found.t * BVH_CULL_SLACK;
-            int mask;
-#if BVH4_HAVE_SSE
-            if (sse)
-                mask = slab_test4_sse(node, &r4, r->t_min, cull, t_enter);
-            else
-#endif
-                mask = slab_test4_scalar(node, &r4, r->t_min, cull, t_enter);
-            box_tests += (uint64_t)child_count(node);
-            if (mask != 0) {
-                int k = lowest_bit((unsigned)mask);
-                mask &= mask - 1;
-                if (mask == 0) {
-                    /* one child hit: no order to decide */
-                    current = node->child[k];
-                    continue;
-                }
-                int k2 = lowest_bit((unsigned)mask);
-                mask &= mask - 1;
-                if (mask == 0) {
-                    /* two (the commonest case): one comparison orders them */
-                    bool second_first = t_enter[k2] < t_enter[k];
-                    int near = second_first ? k2 : k, far = second_first ? k : k2;
-                    prefetch_child(b, node->child[far]);
-                    stack[top++] = (bvh4_entry){node->child[far], t_enter[far]};
-                    current = node->child[near];
-                    continue;
-                }
-                mask |= 1 << k2;
-                /* Three or more: sort them by t_enter, nearest last
-                 * (insertion sort), push all but the nearest, visit it. */
-                bvh4_entry hits[BVH4_WIDTH];
-                int n = 0;
-                hits[n++] = (bvh4_entry){node->child[k], t_enter[k]};
-                prefetch_child(b, node->child[k]);
-                while (mask != 0) {
-                    k = lowest_bit((unsigned)mask);
-                    mask &= mask - 1;
-                    bvh4_entry e = {node->child[k], t_enter[k]};
-                    prefetch_child(b, e.ref);
-                    int j = n++;
-                    while (j > 0 && hits[j - 1].t_enter < e.t_enter) {
-                        hits[j] = hits[j - 1];
-                        j--;
-                    }
-                    hits[j] = e;
-                }
-                for (int j = 0; j < n - 1; j++)
-                    stack[top++] = hits[j];
-                current = hits[n - 1].ref;
-                continue;
-            }
-        } else if (test_leaf4(b, current, &r4, r, &found, stop_at_first, sse, &primitive_tests)) {
-            break;
-        }
-        /* Next from the stack, skipping entries that begin beyond the
-         * closest hit (their box test would fail now). */
-        float cull = found.t * BVH_CULL_SLACK;
-        while (top > 0 && stack[top - 1].t_enter > cull)
-            top--;
-        if (top == 0)
-            break;
-        current = stack[--top].ref;
-    }
-    counters->box_tests += box_tests;
-    counters->primitive_tests += primitive_tests;
-    return found;
+    bvh4_traversal w;
+    if (traversal_begin(b, r, &w))
+        while (traversal_step(b, &w, stop_at_first, sse))
+            ;
+    counters->box_tests += w.box_tests;
+    counters->primitive_tests += w.primitive_tests;
+    return w.found;
 }
 
 /* ---- the accel interface ------------------------------------------------------------- */
@@ -475,6 +504,83 @@ static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
     return traverse4((const bvh4 *)a, &r, true, true, counters).lane >= 0;
 }
 #endif
+
+/* ---- a stream of rays, taking turns ---------------------------------------------------
+ * On a mesh far larger than the cache, one ray's walk is a chain of waits:
+ * a node must arrive from memory before its boxes can say which node comes
+ * next. The processor overlaps little of that, because each fetch depends
+ * on the one before. Rays of a stream do not depend on each other, so
+ * BVH4_STREAM_LANES of them take turns: each visits one node, asks for
+ * the memory of the node it will visit next (prefetch), and waits while the
+ * others take their turn. By the time a ray's turn comes round again its
+ * node has arrived. Each ray does exactly what it would alone, in the same
+ * order: the same hits, bit for bit. */
+static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                                  bool stop_at_first, bool sse, ray_counters *counters)
+{
+    bvh4_traversal lanes[BVH4_STREAM_LANES];
+    int ray_of[BVH4_STREAM_LANES]; /* the ray each lane walks, -1: none left */
+    int next = 0, walking = 0;
+    for (int k = 0; k < BVH4_STREAM_LANES; k++)
+        ray_of[k] = -1;
+    for (;;) {
+        /* Give every idle lane the next ray; a ray with no tree to walk
+         * (an empty tree) finishes at once. */
+        for (int k = 0; k < BVH4_STREAM_LANES && next < count; k++) {
+            if (ray_of[k] >= 0)
+                continue;
+            if (traversal_begin(b, &rays[next], &lanes[k])) {
+                ray_of[k] = next;
+                walking++;
+            } else {
+                hit_found[next] = false;
+            }
+            next++;
+        }
+        if (walking == 0)
+            break;
+        for (int k = 0; k < BVH4_STREAM_LANES; k++) {
+            if (ray_of[k] < 0)
+                continue;
+            bvh4_traversal *w = &lanes[k];
+            if (traversal_step(b, w, stop_at_first, sse)) {
+                prefetch_child(b, w->current);
+                continue;
+            }
+            int i = ray_of[k];
+            hit_found[i] = stop_at_first ? w->found.lane >= 0 : finish_closest(b, &w->found, &w->r, &hits[i]);
+            counters->box_tests += w->box_tests;
+            counters->primitive_tests += w->primitive_tests;
+            ray_of[k] = -1;
+            walking--;
+        }
+    }
+}
+
+void bvh4_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                             ray_counters *counters)
+{
+    const bvh4 *b = (const bvh4 *)a;
+#if BVH4_HAVE_SSE
+    if (b->kernel == BVH4_KERNEL_SSE) {
+        stream4(b, rays, count, hits, hit_found, false, true, counters);
+        return;
+    }
+#endif
+    stream4(b, rays, count, hits, hit_found, false, false, counters);
+}
+
+void bvh4_any_hit_stream(const accel *a, const ray *rays, int count, bool *hit_found, ray_counters *counters)
+{
+    const bvh4 *b = (const bvh4 *)a;
+#if BVH4_HAVE_SSE
+    if (b->kernel == BVH4_KERNEL_SSE) {
+        stream4(b, rays, count, NULL, hit_found, true, true, counters);
+        return;
+    }
+#endif
+    stream4(b, rays, count, NULL, hit_found, true, false, counters);
+}
 
 static void bvh4_destroy(accel *a)
 {

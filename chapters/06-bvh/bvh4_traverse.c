@@ -521,6 +521,16 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
     bvh4_traversal lanes[BVH4_STREAM_LANES];
     int ray_of[BVH4_STREAM_LANES]; /* the ray each lane walks, -1: none left */
     int next = 0, walking = 0;
+    /* Closest hits found, waiting to become hit records. Making one reads
+     * the triangle's material (and maybe its vertices) from the set, memory
+     * that prefetch_hit() asked for when the hit was found, often just
+     * before the walk ended: a ray waits here while BVH4_STREAM_LANES others
+     * finish, so that the memory has arrived. */
+    struct {
+        int ray;
+        bvh4_found found;
+    } waiting[BVH4_STREAM_LANES];
+    int waiting_count = 0, waiting_oldest = 0;
     for (int k = 0; k < BVH4_STREAM_LANES; k++)
         ray_of[k] = -1;
     for (;;) {
@@ -548,12 +558,28 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
                 continue;
             }
             int i = ray_of[k];
-            hit_found[i] = stop_at_first ? w->found.lane >= 0 : finish_closest(b, &w->found, &w->r, &hits[i]);
+            hit_found[i] = w->found.lane >= 0;
+            if (!stop_at_first && hit_found[i]) {
+                if (waiting_count == BVH4_STREAM_LANES) {
+                    int j = waiting[waiting_oldest].ray;
+                    finish_closest(b, &waiting[waiting_oldest].found, &rays[j], &hits[j]);
+                    waiting_oldest = (waiting_oldest + 1) % BVH4_STREAM_LANES;
+                    waiting_count--;
+                }
+                int slot = (waiting_oldest + waiting_count++) % BVH4_STREAM_LANES;
+                waiting[slot].ray = i;
+                waiting[slot].found = w->found;
+            }
             counters->box_tests += w->box_tests;
             counters->primitive_tests += w->primitive_tests;
             ray_of[k] = -1;
             walking--;
         }
+    }
+    for (; waiting_count > 0; waiting_count--) {
+        int j = waiting[waiting_oldest].ray;
+        finish_closest(b, &waiting[waiting_oldest].found, &rays[j], &hits[j]);
+        waiting_oldest = (waiting_oldest + 1) % BVH4_STREAM_LANES;
     }
 }
 

@@ -8,7 +8,10 @@
  * For every structure and mesh size: build time, bytes per triangle, and
  * Mrays/s for closest hit and any hit on both sets, one thread and all
  * threads. Prints a table and writes CSV. With --embree FILE (the harness's
- * output lines), prints our figures as ratios of Embree's.
+ * output lines), prints our figures as ratios of Embree's. The row
+ * bvh4-stream is bvh4-sah's tree traced through bvh4_closest_hit_stream()
+ * and bvh4_any_hit_stream() in chunks of STREAM_CHUNK rays: the same
+ * answers, 8 rays taking turns so that their waits for memory overlap.
  *
  * This is a benchmark, not a test: it prints figures and asserts nothing
  * about time. It does check that every structure finds the same hits (the
@@ -297,7 +300,8 @@ static void usage(void)
            "harness's output ('embree_bench embree N medium 1 R' lines) and prints ratios.\n"
            "--stadium also runs the teapot in a stadium (the grid at several C, every hierarchy)\n"
            "and writes its figures to FILE.csv.\n"
-           "structures: brute grid kdtree bvh-median bvh-sah bvh4-sah\n");
+           "structures: brute grid kdtree bvh-median bvh-sah bvh4-sah bvh4-stream (bvh4-sah's tree, rays\n"
+           "traced 8 at a time, taking turns: bvh4_closest_hit_stream)\n");
 }
 
 int main(int argc, char **argv)

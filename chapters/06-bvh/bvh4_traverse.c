@@ -259,7 +259,12 @@ static inline int lowest_bit(unsigned mask) { return __builtin_ctz(mask); }
  * or a leaf's packets (160 bytes each). The children hit at a node are all
  * fetched at once, in parallel, instead of one after the other as the
  * traversal reaches them. */
-static inline void prefetch_child(const bvh4 *b, uint32_t ref)
+/* Always inlined, and that matters: GCC counts __builtin_prefetch as having
+ * no effect, so it takes a function made of prefetches for a pure one, and
+ * a call to a pure function whose result is unused for dead code. Where
+ * this function was not inlined early, as in the closest-hit traversal, the
+ * call and every prefetch in it silently vanished (objdump showed none). */
+static ALWAYS_INLINE void prefetch_child(const bvh4 *b, uint32_t ref)
 {
 #if defined(__GNUC__)
     if (!bvh4_is_leaf(ref)) {
@@ -288,7 +293,7 @@ static inline void prefetch_child(const bvh4 *b, uint32_t ref)
  * triangle: ask for them as soon as a hit is found, so they are in the
  * cache by the end of the traversal (usually the first hit found is the
  * closest). */
-static inline void prefetch_hit(const bvh4 *b, int32_t lane_index)
+static ALWAYS_INLINE void prefetch_hit(const bvh4 *b, int32_t lane_index)
 {
 #if defined(__GNUC__)
     int index = bvh4_lane_triangle(lane_index);
@@ -583,29 +588,32 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
     }
 }
 
-void bvh4_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
-                             ray_counters *counters)
+/* The kernel chosen once per stream, so stream4() is compiled with it fixed. */
+static void stream4_with_kernel(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                                bool stop_at_first, ray_counters *counters)
 {
     const bvh4 *b = (const bvh4 *)a;
 #if BVH4_HAVE_SSE
     if (b->kernel == BVH4_KERNEL_SSE) {
-        stream4(b, rays, count, hits, hit_found, false, true, counters);
+        if (stop_at_first)
+            stream4(b, rays, count, hits, hit_found, true, true, counters);
+        else
+            stream4(b, rays, count, hits, hit_found, false, true, counters);
         return;
     }
 #endif
-    stream4(b, rays, count, hits, hit_found, false, false, counters);
+    stream4(b, rays, count, hits, hit_found, stop_at_first, false, counters);
+}
+
+void bvh4_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                             ray_counters *counters)
+{
+    stream4_with_kernel(a, rays, count, hits, hit_found, false, counters);
 }
 
 void bvh4_any_hit_stream(const accel *a, const ray *rays, int count, bool *hit_found, ray_counters *counters)
 {
-    const bvh4 *b = (const bvh4 *)a;
-#if BVH4_HAVE_SSE
-    if (b->kernel == BVH4_KERNEL_SSE) {
-        stream4(b, rays, count, NULL, hit_found, true, true, counters);
-        return;
-    }
-#endif
-    stream4(b, rays, count, NULL, hit_found, true, false, counters);
+    stream4_with_kernel(a, rays, count, NULL, hit_found, true, counters);
 }
 
 static void bvh4_destroy(accel *a)

@@ -133,7 +133,7 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
                  * block a light (or the scene turned shadows off). */
                 bool visible = true;
                 if (pt->effects & EFFECT_SHADOWS) {
-                    visible = pt_scene_visible(sc, hit->point, hit->normal_geometric, x_light, n_light, counters);
+                    visible = pt_scene_visible(sc, hit, &x_light, &n_light, counters);
                     if (explain_on() && shadow_inside_walls(sc, hit, x_light, n_light))
                         explain_line(explain_depth, "shadow ray inside the walls: the %d wall triangles cannot "
                                      "block it, only the other %d are tested", sc->wall_count,
@@ -180,7 +180,7 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
             continue;
         bool visible = true;
         if (pt->effects & EFFECT_SHADOWS) {
-            visible = pt_scene_visible(sc, hit->point, hit->normal_geometric, light->position, vec3_splat(0.0f), counters);
+            visible = pt_scene_visible(sc, hit, &light->position, &(vec3){0.0f, 0.0f, 0.0f}, counters);
         }
         if (visible) {
             vec3 contribution = vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2);

@@ -375,7 +375,28 @@ void pt_scene_finish(pt_scene *sc)
 
 /* ---- intersection ---------------------------------------------------------- */
 
-/* pt_scene_intersect() is in scene_pt.h. */
+bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters)
+{
+    bool found = false;
+    if (sc->bvh != NULL && sc->triangles.count > 0 && accel_closest_hit(sc->bvh, r, hit, counters)) {
+        found = true;
+        r.t_max = hit->t;
+    }
+    for (int i = 0; i < sc->sphere_count; i++) {
+        const pt_sphere *s = &sc->spheres[i];
+        sphere shape = {s->center, s->radius};
+        counters->primitive_tests++;
+        if (sphere_intersect(&shape, r, hit)) {
+            found = true;
+            r.t_max = hit->t;
+            hit->shape_id = -1 - i; /* spheres count down from -1; triangles up from 0 */
+            hit->material_id = s->material;
+            if (s->inside_out) /* the front is the inside */
+                hit->front_face = !hit->front_face;
+        }
+    }
+    return found;
+}
 
 /* Inline into both callers below: pt_scene_visible() builds its shadow ray
  * right here, and the ray stays in registers instead of being copied. */

@@ -114,34 +114,7 @@ pt_material pt_glossy(vec3 f0, float roughness);
 pt_material pt_glass(float ior);
 pt_material pt_mirror(vec3 albedo);
 
-/* The closest hit along r: the triangles' BVH first, then each sphere on
- * what is left of the ray. Inline, here in the header: the integrators call
- * it once per bounce with a ray they have just built, and as a call into
- * scene_pt.c the ray was copied once more on its way to the BVH (3.5% of
- * chapter 09's time on the Cornell box, README "Speed"). */
-static inline bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters)
-{
-    bool found = false;
-    if (sc->bvh != NULL && sc->triangles.count > 0 && accel_closest_hit(sc->bvh, r, hit, counters)) {
-        found = true;
-        r.t_max = hit->t;
-    }
-    for (int i = 0; i < sc->sphere_count; i++) {
-        const pt_sphere *s = &sc->spheres[i];
-        sphere shape = {s->center, s->radius};
-        counters->primitive_tests++;
-        if (sphere_intersect(&shape, r, hit)) {
-            found = true;
-            r.t_max = hit->t;
-            hit->shape_id = -1 - i; /* spheres count down from -1; triangles up from 0 */
-            hit->material_id = s->material;
-            if (s->inside_out) /* the front is the inside */
-                hit->front_face = !hit->front_face;
-        }
-    }
-    return found;
-}
-
+bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters);
 /* Is anything hit in (r.t_min, r.t_max)? A segment whose two ends lie in
  * front of every wall plane is tested against the occluders alone
  * (counted in counters->shadow_rays_inside_walls). */

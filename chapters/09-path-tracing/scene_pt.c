@@ -399,7 +399,7 @@ bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters
 }
 
 /* Inline into both callers below: pt_scene_visible() builds its shadow ray
- * right here, and the ray stays in registers instead of being copied. */
+ * here and hands it on by pointer, not copied through one more call. */
 static inline bool occluded(const pt_scene *sc, const ray *r, ray_counters *counters)
 {
     if (segment_inside_walls(sc, r)) {

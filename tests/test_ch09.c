@@ -788,6 +788,15 @@ static void test_the_cornell_box_has_ten_walls_that_change_no_image(void **state
     pt_scene_free(&sc);
 }
 
+/* The Cornell box (scene 0), or the box with a glass sphere (1). */
+static void build_box_scene(pt_scene *sc, int scene)
+{
+    if (scene == 0)
+        pt_scene_build_cornell_box(sc);
+    else
+        pt_scene_build_cornell_box_materials(sc);
+}
+
 /* Skipping the walls changes no answer: for shadow rays between surface
  * points and for segments that leave the room, pt_scene_occluded equals
  * the test against every triangle and sphere. The twin: a check that
@@ -799,10 +808,7 @@ static void test_walls_skipped_only_where_they_cannot_block(void **state)
     enum { SEGMENTS = 20000 };
     for (int scene = 0; scene < 2; scene++) {
         pt_scene sc;
-        if (scene == 0)
-            pt_scene_build_cornell_box(&sc);
-        else
-            pt_scene_build_cornell_box_materials(&sc); /* with a sphere */
+        build_box_scene(&sc, scene);
         pcg32 rng = pcg32_for_pixel(test_seed(91), (uint64_t)scene);
         for (int kind = 0; kind < 2; kind++) {
             bool on_surfaces = kind == 0;
@@ -851,10 +857,7 @@ static void test_visible_is_the_shadow_ray_it_builds(void **state)
     enum { PAIRS = 20000 };
     for (int scene = 0; scene < 2; scene++) {
         pt_scene sc;
-        if (scene == 0)
-            pt_scene_build_cornell_box(&sc);
-        else
-            pt_scene_build_cornell_box_materials(&sc); /* with a sphere */
+        build_box_scene(&sc, scene);
         pcg32 rng = pcg32_for_pixel(test_seed(92), (uint64_t)scene);
         ray_counters c = {0};
         int wrong = 0, wrong_twin = 0, blocked = 0, calls = 0;

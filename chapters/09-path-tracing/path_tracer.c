@@ -180,7 +180,8 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
             continue;
         bool visible = true;
         if (pt->effects & EFFECT_SHADOWS) {
-            visible = pt_scene_visible(sc, hit, &light->position, &(vec3){0.0f, 0.0f, 0.0f}, counters);
+            const vec3 no_surface = vec3_splat(0.0f); /* nothing to stop short of at a point light */
+            visible = pt_scene_visible(sc, hit, &light->position, &no_surface, counters);
         }
         if (visible) {
             vec3 contribution = vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2);

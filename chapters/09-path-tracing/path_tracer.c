@@ -90,6 +90,14 @@ static vec3 emitted(const pt_scene *sc, const hit_record *hit)
     return hit->front_face ? m->emission : vec3_splat(0.0f);
 }
 
+/* --explain: does the shadow ray to x' skip the walls? (the same ray
+ * pt_scene_visible() builds) */
+static bool shadow_inside_walls(const pt_scene *sc, const hit_record *hit, vec3 x_light, vec3 n_light)
+{
+    ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, x_light, n_light);
+    return pt_scene_segment_inside_walls(sc, &shadow);
+}
+
 /* ---- direct light: sampling the light ---------------------------------------
  * The lecture's change of variables: instead of waiting for a hemisphere
  * sample to hit the light, pick a point x' on the light uniformly by area
@@ -125,10 +133,8 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
                  * block a light (or the scene turned shadows off). */
                 bool visible = true;
                 if (pt->effects & EFFECT_SHADOWS) {
-                    ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, x_light, n_light);
-                    counters->shadow_rays++;
-                    visible = !pt_scene_occluded(sc, shadow, counters);
-                    if (explain_on() && pt_scene_segment_inside_walls(sc, &shadow))
+                    visible = pt_scene_visible(sc, hit, &x_light, &n_light, counters);
+                    if (explain_on() && shadow_inside_walls(sc, hit, x_light, n_light))
                         explain_line(explain_depth, "shadow ray inside the walls: the %d wall triangles cannot "
                                      "block it, only the other %d are tested", sc->wall_count,
                                      sc->occluder_triangles.count);
@@ -174,9 +180,8 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
             continue;
         bool visible = true;
         if (pt->effects & EFFECT_SHADOWS) {
-            ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, light->position, vec3_splat(0.0f));
-            counters->shadow_rays++;
-            visible = !pt_scene_occluded(sc, shadow, counters);
+            const vec3 no_surface = vec3_splat(0.0f); /* nothing to stop short of at a point light */
+            visible = pt_scene_visible(sc, hit, &light->position, &no_surface, counters);
         }
         if (visible) {
             vec3 contribution = vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2);

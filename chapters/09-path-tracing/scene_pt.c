@@ -398,23 +398,35 @@ bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters
     return found;
 }
 
-bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters)
+/* Inline into both callers below: pt_scene_visible() builds its shadow ray
+ * here and hands it on by pointer, not copied through one more call. */
+static inline bool occluded(const pt_scene *sc, const ray *r, ray_counters *counters)
 {
-    if (segment_inside_walls(sc, &r)) {
+    if (segment_inside_walls(sc, r)) {
         counters->shadow_rays_inside_walls++;
-        if (sc->occluder_triangles.count > 0 && accel_any_hit(sc->occluders, r, counters))
+        if (sc->occluder_triangles.count > 0 && accel_any_hit(sc->occluders, *r, counters))
             return true;
-    } else if (sc->bvh != NULL && sc->triangles.count > 0 && accel_any_hit(sc->bvh, r, counters)) {
+    } else if (sc->bvh != NULL && sc->triangles.count > 0 && accel_any_hit(sc->bvh, *r, counters)) {
         return true;
     }
     hit_record ignored;
     for (int i = 0; i < sc->sphere_count; i++) {
         sphere shape = {sc->spheres[i].center, sc->spheres[i].radius};
         counters->primitive_tests++;
-        if (sphere_intersect(&shape, r, &ignored))
+        if (sphere_intersect(&shape, *r, &ignored))
             return true;
     }
     return false;
+}
+
+bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters) { return occluded(sc, &r, counters); }
+
+bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, const vec3 *target_normal,
+                      ray_counters *counters)
+{
+    ray shadow = ray_spawn_to(from->point, from->normal_geometric, *target, *target_normal);
+    counters->shadow_rays++;
+    return !occluded(sc, &shadow, counters);
 }
 
 bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u2, vec3 *point, vec3 *normal,

@@ -119,6 +119,16 @@ bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters
  * front of every wall plane is tested against the occluders alone
  * (counted in counters->shadow_rays_inside_walls). */
 bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters);
+/* Can the hit point `from` see `target` (a point on a light whose normal is
+ * *target_normal, or a point light: normal 0)? One shadow ray,
+ * ray_spawn_to(from->point, from->normal_geometric, *target, *target_normal)
+ * (ray.h), counted in counters->shadow_rays: the same answer as
+ * pt_scene_occluded on that ray. The integrators ask it at every vertex, so
+ * it builds the ray where it tests it, and takes its points by pointer: a
+ * vec3 passed by value travels in two registers that the callee stores and
+ * reloads in other widths, a stall for every shadow ray (README, "Speed"). */
+bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, const vec3 *target_normal,
+                      ray_counters *counters);
 /* Do both ends of r, r(t_min) and r(t_max), lie in front of every wall
  * plane, by more than the rounding of the test? False for an infinite
  * t_max, and when the scene has no walls. */

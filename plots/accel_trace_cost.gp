@@ -3,7 +3,7 @@
 # triangles of the tori field, log-log, one line per structure and Embree
 # beside them. Brute force grows like N (slope 1); a good hierarchy like
 # log N (a line that barely rises); the gap to Embree is what SIMD and
-# decades of tuning buy. BVH4 with streams (the same tree, 8 rays taking
+# decades of tuning buy. BVH4 with streams (the same tree, 16 rays taking
 # turns so their waits for memory overlap) shows how much of the rise at
 # large N is waiting for memory.
 #

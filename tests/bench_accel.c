@@ -11,7 +11,7 @@
  * output lines), prints our figures as ratios of Embree's. The row
  * bvh4-stream is bvh4-sah's tree traced through bvh4_closest_hit_stream()
  * and bvh4_any_hit_stream() in chunks of STREAM_CHUNK rays: the same
- * answers, 8 rays taking turns so that their waits for memory overlap.
+ * answers, 16 rays taking turns so that their waits for memory overlap.
  *
  * This is a benchmark, not a test: it prints figures and asserts nothing
  * about time. It does check that every structure finds the same hits (the
@@ -301,7 +301,7 @@ static void usage(void)
            "--stadium also runs the teapot in a stadium (the grid at several C, every hierarchy)\n"
            "and writes its figures to FILE.csv.\n"
            "structures: brute grid kdtree bvh-median bvh-sah bvh4-sah bvh4-stream (bvh4-sah's tree, rays\n"
-           "traced 8 at a time, taking turns: bvh4_closest_hit_stream)\n");
+           "traced 16 at a time, taking turns: bvh4_closest_hit_stream)\n");
 }
 
 int main(int argc, char **argv)

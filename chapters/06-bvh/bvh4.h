@@ -142,7 +142,7 @@ int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4]
  * so that one ray's wait for memory overlaps the others' work (see
  * bvh4_traverse.c). Pays on meshes larger than the cache. */
 #ifndef BVH4_STREAM_LANES
-#define BVH4_STREAM_LANES 8
+#define BVH4_STREAM_LANES 16
 #endif
 void bvh4_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
                              ray_counters *counters);

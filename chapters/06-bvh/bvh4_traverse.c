@@ -5,6 +5,7 @@
  * as a plain C loop over the lanes; the two do the same float operations in
  * the same order, so they give the same answers (test_ch06 runs both). */
 #include <stdlib.h>
+#include <string.h>
 
 #include "bvh4.h"
 #include "bvh_internal.h"
@@ -538,6 +539,10 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
     int waiting_count = 0, waiting_oldest = 0;
     for (int k = 0; k < BVH4_STREAM_LANES; k++)
         ray_of[k] = -1;
+    /* Not needed (a lane is read only after traversal_begin() filled it),
+     * but GCC cannot see that with one lane and warns; the cost is nothing
+     * next to a stream's thousand rays. */
+    memset(lanes, 0, sizeof lanes);
     for (;;) {
         /* Give every idle lane the next ray; a ray with no tree to walk
          * (an empty tree) finishes at once. */

@@ -259,8 +259,9 @@ static inline int lowest_bit(unsigned mask) { return __builtin_ctz(mask); }
 /* Ask for a child's memory before it is needed: a node's cache lines,
  * or a leaf's packets (160 bytes each). The children hit at a node are all
  * fetched at once, in parallel, instead of one after the other as the
- * traversal reaches them. */
-/* Always inlined, and that matters: GCC counts __builtin_prefetch as having
+ * traversal reaches them.
+ *
+ * Always inlined, and that matters: GCC counts __builtin_prefetch as having
  * no effect, so it takes a function made of prefetches for a pure one, and
  * a call to a pure function whose result is unused for dead code. Where
  * this function was not inlined early, as in the closest-hit traversal, the

@@ -19,6 +19,8 @@
  *   3. for the lecture rung on one thread: every ray of one render recorded,
  *      then traced alone by ours and by Embree: nanoseconds per closest-hit
  *      and per shadow ray, and the render's time less its tracing time;
+ *      and once more through chapter 06's streams (bvh4_closest_hit_stream),
+ *      which hide waits for memory that this small scene never has;
  *   4. the image means of the lecture rung rendered by both, with their
  *      standard errors: they must agree within 5 standard errors.
  * Exits 1 if check 1 or 4 fails. With --twin uv (Embree's barycentrics
@@ -35,6 +37,7 @@
 #include <string.h>
 
 #include "03-aabb-slabs/accel.h"
+#include "06-bvh/bvh4.h"
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "09-path-tracing/scene_pt.h"
@@ -339,6 +342,32 @@ static double trace_alone(const accel *a, const ray_list *list, bool closest, bo
     return timer_seconds() - start;
 }
 
+/* The same rays through chapter 06's streams (bvh4_closest_hit_stream):
+ * BVH4_STREAM_LANES rays taking turns, in chunks of STREAM_CHUNK. Seconds,
+ * one run, and the hits counted. */
+enum { STREAM_CHUNK = 1024 };
+static double trace_streams(const accel *a, const ray_list *list, bool closest, long *hits)
+{
+    ray_counters counters = {0};
+    hit_record *chunk_hits = memory_allocate(STREAM_CHUNK, sizeof *chunk_hits);
+    bool found[STREAM_CHUNK];
+    long total = 0;
+    double start = timer_seconds();
+    for (int first = 0; first < list->count; first += STREAM_CHUNK) {
+        int n = list->count - first < STREAM_CHUNK ? list->count - first : STREAM_CHUNK;
+        if (closest)
+            bvh4_closest_hit_stream(a, list->rays + first, n, chunk_hits, found, &counters);
+        else
+            bvh4_any_hit_stream(a, list->rays + first, n, found, &counters);
+        for (int k = 0; k < n; k++)
+            total += found[k];
+    }
+    double seconds = timer_seconds() - start;
+    free(chunk_hits);
+    *hits = total;
+    return seconds;
+}
+
 /* ---- 4. the image means ------------------------------------------------------- */
 
 /* The mean over pixels of one channel, and its standard error from the
@@ -527,8 +556,24 @@ int main(int argc, char **argv)
                    shadow_seconds / shadow_count * 1e9, trace[k][chained], rows[k][0].wall[0],
                    rows[k][0].wall[0] - trace[k][chained]);
         }
-    printf("hits: closest %ld (ours) %ld (Embree), occluded %ld (ours) %ld (Embree)\n", hits[0][0], hits[1][0],
-           hits[0][1] + hits[0][2], hits[1][1] + hits[1][2]);
+    /* Would chapter 06's streams help? They hide waits for memory, and
+     * this scene's trees (1.5 KB) never wait: expect them slower. */
+    double stream_seconds[3] = {INFINITY, INFINITY, INFINITY};
+    long stream_hits[3] = {0};
+    for (int rep = 0; rep < reps; rep++)
+        for (int kind = 0; kind < 3; kind++)
+            if (lists[kind].count > 0)
+                stream_seconds[kind] = fmin(stream_seconds[kind], trace_streams(kind == 2 ? ours_occluders : ours,
+                                                                                &lists[kind], kind == 0,
+                                                                                &stream_hits[kind]));
+            else
+                stream_seconds[kind] = 0.0;
+    double stream_shadow = stream_seconds[1] + stream_seconds[2];
+    printf("%-20s %-12s %12.1f %12.1f %12.3f\n", tracers[0], "streams", stream_seconds[0] / lists[0].count * 1e9,
+           stream_shadow / shadow_count * 1e9, (stream_seconds[0] + stream_shadow) / million_samples);
+    printf("hits: closest %ld (ours) %ld (Embree) %ld (streams), occluded %ld (ours) %ld (Embree) %ld (streams)\n",
+           hits[0][0], hits[1][0], stream_hits[0], hits[0][1] + hits[0][2], hits[1][1] + hits[1][2],
+           stream_hits[1] + stream_hits[2]);
     printf("traversal saved by Embree, s/M: %.3f in the render, %.3f tracing alone (each waits), "
            "%.3f (independent)\n",
            rows[0][0].wall[0] - rows[1][0].wall[0], trace[0][1] - trace[1][1], trace[0][0] - trace[1][0]);

@@ -796,6 +796,14 @@ static void test_bvh4_more_coincident_triangles_than_a_leaf_holds(void **state)
     mesh_free(&m);
 }
 
+/* A mesh of the differential test, its triangle set and its 4-wide SAH BVH. */
+static accel *bvh4_of_mesh_kind(accel_check_mesh kind, mesh *m, triangle_set *set)
+{
+    accel_check_make_mesh(m, kind);
+    triangle_set_from_mesh(set, m);
+    return bvh4_build(set, BVH_SPLIT_SAH);
+}
+
 /* The hit record of a lane marked BVH4_LANE_EXACT is made from the packet's
  * P0, E1, E2 instead of the set's triangle: it must be the very record the
  * set's triangle gives (point, normals, material, bit for bit), on every
@@ -806,10 +814,8 @@ static void test_bvh4_hit_records_equal_the_sets(void **state)
     long exact_hits = 0, other_hits = 0;
     for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
         mesh m;
-        accel_check_make_mesh(&m, (accel_check_mesh)kind);
         triangle_set set;
-        triangle_set_from_mesh(&set, &m);
-        accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+        accel *a = bvh4_of_mesh_kind((accel_check_mesh)kind, &m, &set);
         const bvh4 *b = (const bvh4 *)a;
         bool *exact = calloc((size_t)set.count + 1, sizeof *exact);
         for (int lane = 0; lane < 4 * b->packet_count; lane++) {
@@ -1083,10 +1089,8 @@ static void test_bvh4_stream_gives_each_ray_its_own_answer(void **state)
     long shifted_mismatches = 0, hit_count = 0;
     for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
         mesh m;
-        accel_check_make_mesh(&m, (accel_check_mesh)kind);
         triangle_set set;
-        triangle_set_from_mesh(&set, &m);
-        accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+        accel *a = bvh4_of_mesh_kind((accel_check_mesh)kind, &m, &set);
         pcg32 rng = pcg32_for_pixel(6, 60 + kind);
         for (int i = 0; i < RAYS; i++) {
             rays[i] = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);

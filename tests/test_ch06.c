@@ -13,6 +13,7 @@
 
 #include "06-bvh/bvh.h"
 #include "06-bvh/bvh4.h"
+#include "06-bvh/flat.h"
 #include "render.h"
 #include "scene_file.h"
 #include "accel_check.h"
@@ -1046,6 +1047,136 @@ static void test_bvh4_empty_set_builds_and_misses(void **state)
     mesh_free(&m);
 }
 
+/* ---- no tree: every triangle, eight at a time (flat.h) -------------------------- */
+
+/* Rays on which `a` answers differently from chapter 03's brute force,
+ * which tests the triangles one by one in order: found or not, and the hit
+ * record bit for bit (t, barycentrics, point, normal, triangle, material;
+ * of equal t the lower index wins in both), the triangles tested, and any
+ * hit. Flat runs the same arithmetic, so nothing may differ, not even on
+ * the coincident and degenerate meshes where ties are everywhere. */
+static long flat_mismatches(const accel *a, const accel *brute, const mesh *m, const triangle_set *set, int rays,
+                            uint64_t seed, long *hits)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 606);
+    long wrong = 0;
+    for (int i = 0; i < rays; i++) {
+        ray r = accel_check_ray(m, set->bounds.lo, set->bounds.hi, &rng, i);
+        hit_record want, got;
+        memset(&want, 0, sizeof want);
+        memset(&got, 0, sizeof got);
+        ray_counters c_want = {0}, c_got = {0};
+        bool want_hit = accel_closest_hit(brute, r, &want, &c_want);
+        bool got_hit = accel_closest_hit(a, r, &got, &c_got);
+        bool same = want_hit == got_hit && c_want.primitive_tests == c_got.primitive_tests &&
+                    accel_any_hit(a, r, &c_got) == want_hit;
+        if (same && want_hit)
+            same = memcmp(&want, &got, sizeof want) == 0;
+        *hits += want_hit;
+        wrong += !same;
+    }
+    return wrong;
+}
+
+static void test_flat_equals_brute_force_bit_for_bit(void **state)
+{
+    (void)state;
+    const flat_kernel kernels[] = {FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR};
+    const char *names[] = {"avx", "sse", "scalar"};
+    int kernels_run = 0;
+    for (int k = 0; k < 3; k++) {
+        long hits = 0, wrong = 0;
+        bool available = true;
+        for (int kind = 0; kind < MESH_KIND_COUNT && available; kind++) {
+            mesh m;
+            triangle_set set;
+            accel_check_make_mesh(&m, (accel_check_mesh)kind);
+            triangle_set_from_mesh(&set, &m);
+            accel *brute = brute_force_build(&set), *a = flat_build(&set);
+            available = flat_set_kernel(a, kernels[k]);
+            /* the big meshes cost brute force's time twice: fewer rays */
+            if (available)
+                wrong += flat_mismatches(a, brute, &m, &set, set.count > 2000 ? 300 : 3000, 60 + (uint64_t)kind, &hits);
+            accel_destroy(a);
+            accel_destroy(brute);
+            triangle_set_free(&set);
+            mesh_free(&m);
+        }
+        if (!available) {
+            print_message("flat: the %s kernel does not run here\n", names[k]);
+            continue;
+        }
+        kernels_run++;
+        print_message("flat, %s kernel: %ld rays hit, %ld answers differ from brute force\n", names[k], hits, wrong);
+        assert_true(hits > 2000);
+        assert_int_equal(wrong, 0);
+    }
+    assert_true(kernels_run >= 1);
+}
+
+/* The twins: two ways to get a flat set wrong, each caught. The last block
+ * dropped (the count of blocks rounded down, a classic), and the triangle
+ * numbers of lanes 0 and 1 swapped in every block (a hit reported for the
+ * wrong triangle). */
+static void test_flat_twins_are_caught(void **state)
+{
+    (void)state;
+    mesh m;
+    triangle_set set;
+    /* the first mesh with a partial last block to drop */
+    for (int kind = 0;; kind++) {
+        assert_true(kind < MESH_KIND_COUNT);
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set_from_mesh(&set, &m);
+        if (set.count % FLAT_LANES != 0 && set.count < 2000)
+            break;
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    accel *brute = brute_force_build(&set), *a = flat_build(&set);
+    flat *f = (flat *)a;
+    long hits = 0;
+    assert_int_equal(flat_mismatches(a, brute, &m, &set, 3000, 61, &hits), 0);
+    f->block_count--;
+    long dropped = flat_mismatches(a, brute, &m, &set, 3000, 61, &hits);
+    f->block_count++;
+    for (int i = 0; i < f->block_count; i++) {
+        int32_t first = f->blocks[i].index[0];
+        f->blocks[i].index[0] = f->blocks[i].index[1];
+        f->blocks[i].index[1] = first;
+    }
+    long swapped = flat_mismatches(a, brute, &m, &set, 3000, 61, &hits);
+    print_message("flat twins: last block dropped %ld, two lanes swapped %ld of 3000 rays wrong\n", dropped, swapped);
+    assert_true(dropped > 0 && swapped > 0);
+    accel_destroy(a);
+    accel_destroy(brute);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+static void test_flat_empty_set_builds_and_misses(void **state)
+{
+    (void)state;
+    mesh m;
+    mesh_init(&m);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = flat_build(&set);
+    hit_record hit;
+    ray_counters counters = {0};
+    const flat_kernel kernels[] = {FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR};
+    for (int k = 0; k < 3; k++) {
+        if (!flat_set_kernel(a, kernels[k]))
+            continue;
+        assert_false(accel_closest_hit(a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
+        assert_false(accel_any_hit(a, ray_from(0, 0, 0, 0, 0, 1), &counters));
+    }
+    assert_int_equal(counters.primitive_tests, 0);
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
 /* ---- streams: rays taking turns ------------------------------------------------- */
 
 /* Rays of one stream whose answers differ from what the same rays get one
@@ -1255,6 +1386,9 @@ int main(void)
         cmocka_unit_test(test_bvh4_slab_test_matches_chapter_03),
         cmocka_unit_test(test_bvh4_triangle_test_matches_chapter_01),
         cmocka_unit_test(test_bvh4_empty_set_builds_and_misses),
+        cmocka_unit_test(test_flat_equals_brute_force_bit_for_bit),
+        cmocka_unit_test(test_flat_twins_are_caught),
+        cmocka_unit_test(test_flat_empty_set_builds_and_misses),
         cmocka_unit_test(test_bvh4_stream_gives_each_ray_its_own_answer),
     };
     return cmocka_run_group_tests_name("ch06 bvh", tests, NULL, NULL);

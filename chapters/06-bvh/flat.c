@@ -1,0 +1,378 @@
+/* flat.c -- every triangle, eight at a time (flat.h). */
+#include "06-bvh/flat.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "memory.h"
+#include "timer.h"
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(BVH4_NO_SIMD)
+#define FLAT_HAVE_X86 1
+#include <immintrin.h>
+#else
+#define FLAT_HAVE_X86 0
+#endif
+
+/* ---- the plain C kernel ---------------------------------------------------------
+ * Lane by lane, in triangle order, the arithmetic of
+ * triangle_intersect_barycentric(): the reference the others must equal.
+ * Returns the lane hit nearest in (t_min, *t_max), or -1, and lowers
+ * *t_max to it; a later lane must be strictly nearer to replace it. */
+static int block_closest_scalar(const flat_block *b, const ray *r, float *t_max, float *b1, float *b2)
+{
+    int found = -1;
+    for (int k = 0; k < FLAT_LANES; k++) {
+        vec3 p0 = vec3_make(b->p0[0][k], b->p0[1][k], b->p0[2][k]);
+        vec3 e1 = vec3_make(b->e1[0][k], b->e1[1][k], b->e1[2][k]);
+        vec3 e2 = vec3_make(b->e2[0][k], b->e2[1][k], b->e2[2][k]);
+        vec3 s1 = vec3_cross(r->direction, e2);
+        float determinant = vec3_dot(s1, e1);
+        if (determinant == 0.0f)
+            continue;
+        float inverse = 1.0f / determinant;
+        vec3 s = vec3_sub(r->origin, p0);
+        float u = vec3_dot(s1, s) * inverse;
+        if (!(u >= 0.0f && u <= 1.0f))
+            continue;
+        vec3 s2 = vec3_cross(s, e1);
+        float v = vec3_dot(s2, r->direction) * inverse;
+        if (!(v >= 0.0f && u + v <= 1.0f))
+            continue;
+        float t = vec3_dot(s2, e2) * inverse;
+        if (!(t > r->t_min && t < *t_max))
+            continue;
+        *t_max = t;
+        *b1 = u;
+        *b2 = v;
+        found = k;
+    }
+    return found;
+}
+
+/* ---- eight lanes, or four ------------------------------------------------------
+ * The same operations in the same order, every lane run to the end and its
+ * conditions and-ed (a lane the scalar test leaves early computes inf or
+ * NaN on the way, which fail its remaining comparisons). One macro writes
+ * both widths, so that they cannot drift apart: V is the vector type, P the
+ * intrinsics' prefix. Each lane keeps its own nearest hit; lanes are
+ * compared once, at the end. Selection is and/andnot/or, not blendv, which
+ * GCC has been seen to turn into scalar code inside a target("avx")
+ * function. */
+#if FLAT_HAVE_X86
+#define FLAT_LANE_TEST(V, P, LOAD, CMP_NE, CMP_GE, CMP_LE, CMP_GT, CMP_LT, block, offset, nearest, which, hit_b1, hit_b2,    \
+                       any)                                                                                         \
+    do {                                                                                                           \
+        V e1x = LOAD(block->e1[0] + offset), e1y = LOAD(block->e1[1] + offset), e1z = LOAD(block->e1[2] + offset); \
+        V e2x = LOAD(block->e2[0] + offset), e2y = LOAD(block->e2[1] + offset), e2z = LOAD(block->e2[2] + offset); \
+        V s1x = P##_sub_ps(P##_mul_ps(dy, e2z), P##_mul_ps(dz, e2y));                                              \
+        V s1y = P##_sub_ps(P##_mul_ps(dz, e2x), P##_mul_ps(dx, e2z));                                              \
+        V s1z = P##_sub_ps(P##_mul_ps(dx, e2y), P##_mul_ps(dy, e2x));                                              \
+        V determinant = P##_add_ps(P##_add_ps(P##_mul_ps(s1x, e1x), P##_mul_ps(s1y, e1y)), P##_mul_ps(s1z, e1z));  \
+        V ok = CMP_NE(determinant, zero);                                                                          \
+        V inverse = P##_div_ps(one, determinant);                                                                  \
+        V sx = P##_sub_ps(ox, LOAD(block->p0[0] + offset));                                                        \
+        V sy = P##_sub_ps(oy, LOAD(block->p0[1] + offset));                                                        \
+        V sz = P##_sub_ps(oz, LOAD(block->p0[2] + offset));                                                        \
+        V u = P##_mul_ps(P##_add_ps(P##_add_ps(P##_mul_ps(s1x, sx), P##_mul_ps(s1y, sy)), P##_mul_ps(s1z, sz)),    \
+                         inverse);                                                                                 \
+        ok = P##_and_ps(ok, P##_and_ps(CMP_GE(u, zero), CMP_LE(u, one)));                                          \
+        V s2x = P##_sub_ps(P##_mul_ps(sy, e1z), P##_mul_ps(sz, e1y));                                              \
+        V s2y = P##_sub_ps(P##_mul_ps(sz, e1x), P##_mul_ps(sx, e1z));                                              \
+        V s2z = P##_sub_ps(P##_mul_ps(sx, e1y), P##_mul_ps(sy, e1x));                                              \
+        V v = P##_mul_ps(P##_add_ps(P##_add_ps(P##_mul_ps(s2x, dx), P##_mul_ps(s2y, dy)), P##_mul_ps(s2z, dz)),    \
+                         inverse);                                                                                 \
+        ok = P##_and_ps(ok, P##_and_ps(CMP_GE(v, zero), CMP_LE(P##_add_ps(u, v), one)));                           \
+        V t = P##_mul_ps(P##_add_ps(P##_add_ps(P##_mul_ps(s2x, e2x), P##_mul_ps(s2y, e2y)), P##_mul_ps(s2z, e2z)), \
+                         inverse);                                                                                 \
+        ok = P##_and_ps(ok, P##_and_ps(CMP_GT(t, t_min), CMP_LT(t, nearest)));                                     \
+        nearest = P##_or_ps(P##_and_ps(ok, t), P##_andnot_ps(ok, nearest));                                        \
+        V lane_index = LOAD((const float *)block->index + offset);                                                 \
+        which = P##_or_ps(P##_and_ps(ok, lane_index), P##_andnot_ps(ok, which));                                   \
+        hit_b1 = P##_or_ps(P##_and_ps(ok, u), P##_andnot_ps(ok, hit_b1));                                          \
+        hit_b2 = P##_or_ps(P##_and_ps(ok, v), P##_andnot_ps(ok, hit_b2));                                          \
+        any = P##_or_ps(any, ok);                                                                                  \
+    } while (0)
+
+#define SSE_CMP_NE(a, b) _mm_cmpneq_ps(a, b)
+#define SSE_CMP_GE(a, b) _mm_cmpge_ps(a, b)
+#define SSE_CMP_LE(a, b) _mm_cmple_ps(a, b)
+#define SSE_CMP_GT(a, b) _mm_cmpgt_ps(a, b)
+#define SSE_CMP_LT(a, b) _mm_cmplt_ps(a, b)
+/* The ordered predicates are the SSE ones (cmpneq is unordered: NaN != 0). */
+#define AVX_CMP_NE(a, b) _mm256_cmp_ps(a, b, _CMP_NEQ_UQ)
+#define AVX_CMP_GE(a, b) _mm256_cmp_ps(a, b, _CMP_GE_OS)
+#define AVX_CMP_LE(a, b) _mm256_cmp_ps(a, b, _CMP_LE_OS)
+#define AVX_CMP_GT(a, b) _mm256_cmp_ps(a, b, _CMP_GT_OS)
+#define AVX_CMP_LT(a, b) _mm256_cmp_ps(a, b, _CMP_LT_OS)
+#endif
+
+#if FLAT_HAVE_X86
+/* The lanes' nearest hits, compared: the nearest t, of equal t the lowest
+ * triangle index -- what testing them one by one in order gives. */
+typedef struct {
+    _Alignas(32) float t[FLAT_LANES];
+    int32_t index[FLAT_LANES];
+    float b1[FLAT_LANES], b2[FLAT_LANES];
+} lane_hits;
+
+static int nearest_lane(const lane_hits *h, int lanes, float t_max)
+{
+    int best = -1;
+    for (int k = 0; k < lanes; k++)
+        if (h->index[k] >= 0 && h->t[k] < t_max && (best < 0 || h->t[k] < h->t[best] ||
+                                                     (h->t[k] == h->t[best] && h->index[k] < h->index[best])))
+            best = k;
+    return best;
+}
+#endif
+
+/* ---- closest and any hit, for each kernel -------------------------------------- */
+
+static bool finish(const flat *f, const ray *r, int index, float t, float b1, float b2, hit_record *hit)
+{
+    if (index < 0)
+        return false;
+    triangle_set_fill_hit(f->base.set, index, *r, t, b1, b2, hit);
+    return true;
+}
+
+static bool closest_hit_scalar(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+    counters->primitive_tests += (uint64_t)f->base.set->count;
+    float t_max = r.t_max, b1 = 0.0f, b2 = 0.0f;
+    int index = -1;
+    for (int i = 0; i < f->block_count; i++) {
+        int lane = block_closest_scalar(&f->blocks[i], &r, &t_max, &b1, &b2);
+        if (lane >= 0)
+            index = f->blocks[i].index[lane];
+    }
+    return finish(f, &r, index, t_max, b1, b2, hit);
+}
+
+static bool any_hit_scalar(const accel *a, ray r, ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+    for (int i = 0; i < f->block_count; i++) {
+        float t_max = r.t_max, b1, b2;
+        counters->primitive_tests += (uint64_t)(f->base.set->count - i * FLAT_LANES < FLAT_LANES
+                                                    ? f->base.set->count - i * FLAT_LANES
+                                                    : FLAT_LANES);
+        if (block_closest_scalar(&f->blocks[i], &r, &t_max, &b1, &b2) >= 0)
+            return true;
+    }
+    return false;
+}
+
+#if FLAT_HAVE_X86
+/* The triangles of blocks [0, i] that are real: what any hit counts when
+ * it stops after block i. */
+static uint64_t tested_through(const flat *f, int i)
+{
+    int n = (i + 1) * FLAT_LANES;
+    return (uint64_t)(n < f->base.set->count ? n : f->base.set->count);
+}
+
+__attribute__((target("avx"))) static bool closest_hit_avx(const accel *a, ray r, hit_record *hit,
+                                                           ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+    counters->primitive_tests += (uint64_t)f->base.set->count;
+    const __m256 ox = _mm256_set1_ps(r.origin.x), oy = _mm256_set1_ps(r.origin.y), oz = _mm256_set1_ps(r.origin.z);
+    const __m256 dx = _mm256_set1_ps(r.direction.x), dy = _mm256_set1_ps(r.direction.y),
+                 dz = _mm256_set1_ps(r.direction.z);
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), t_min = _mm256_set1_ps(r.t_min);
+    __m256 nearest = _mm256_set1_ps(r.t_max), which = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    __m256 hit_b1 = zero, hit_b2 = zero, any = zero;
+    for (int i = 0; i < f->block_count; i++) {
+        const flat_block *block = &f->blocks[i];
+        FLAT_LANE_TEST(__m256, _mm256, _mm256_load_ps, AVX_CMP_NE, AVX_CMP_GE, AVX_CMP_LE, AVX_CMP_GT, AVX_CMP_LT,
+                       block, 0, nearest, which, hit_b1, hit_b2, any);
+    }
+    if (_mm256_movemask_ps(any) == 0)
+        return false;
+    /* The lanes compared one by one, in memory. (Comparing them in
+     * registers, by shuffles, was measured no faster: 1351 against
+     * 1023 + 270 perf samples.) */
+    lane_hits h;
+    _mm256_store_ps(h.t, nearest);
+    _mm256_store_ps((float *)h.index, which);
+    _mm256_store_ps(h.b1, hit_b1);
+    _mm256_store_ps(h.b2, hit_b2);
+    /* Leave the 256-bit registers clean before calling SSE code. GCC 12
+     * puts a vzeroupper on the function's own exits but not before these
+     * calls; without it every SSE instruction after them waits on the
+     * upper halves, and the whole path tracer ran 20 % slower. */
+    _mm256_zeroupper();
+    int k = nearest_lane(&h, FLAT_LANES, r.t_max);
+    return k >= 0 && finish(f, &r, h.index[k], h.t[k], h.b1[k], h.b2[k], hit);
+}
+
+__attribute__((target("avx"))) static bool any_hit_avx(const accel *a, ray r, ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+    const __m256 ox = _mm256_set1_ps(r.origin.x), oy = _mm256_set1_ps(r.origin.y), oz = _mm256_set1_ps(r.origin.z);
+    const __m256 dx = _mm256_set1_ps(r.direction.x), dy = _mm256_set1_ps(r.direction.y),
+                 dz = _mm256_set1_ps(r.direction.z);
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), t_min = _mm256_set1_ps(r.t_min);
+    for (int i = 0; i < f->block_count; i++) {
+        const flat_block *block = &f->blocks[i];
+        /* the nearest hit does not matter, only whether there is one */
+        __m256 nearest = _mm256_set1_ps(r.t_max), which = zero, hit_b1 = zero, hit_b2 = zero, any = zero;
+        FLAT_LANE_TEST(__m256, _mm256, _mm256_load_ps, AVX_CMP_NE, AVX_CMP_GE, AVX_CMP_LE, AVX_CMP_GT, AVX_CMP_LT,
+                       block, 0, nearest, which, hit_b1, hit_b2, any);
+        if (_mm256_movemask_ps(any) != 0) {
+            counters->primitive_tests += tested_through(f, i);
+            return true;
+        }
+    }
+    counters->primitive_tests += (uint64_t)f->base.set->count;
+    return false;
+}
+
+static bool closest_hit_sse(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+    counters->primitive_tests += (uint64_t)f->base.set->count;
+    const __m128 ox = _mm_set1_ps(r.origin.x), oy = _mm_set1_ps(r.origin.y), oz = _mm_set1_ps(r.origin.z);
+    const __m128 dx = _mm_set1_ps(r.direction.x), dy = _mm_set1_ps(r.direction.y), dz = _mm_set1_ps(r.direction.z);
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), t_min = _mm_set1_ps(r.t_min);
+    /* the two halves of each block, each with its own lanes' nearest hits */
+    __m128 nearest[2], which[2], hit_b1[2] = {zero, zero}, hit_b2[2] = {zero, zero}, any = zero;
+    nearest[0] = nearest[1] = _mm_set1_ps(r.t_max);
+    which[0] = which[1] = _mm_castsi128_ps(_mm_set1_epi32(-1));
+    for (int i = 0; i < f->block_count; i++) {
+        const flat_block *block = &f->blocks[i];
+        FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT, block, 0,
+                       nearest[0], which[0], hit_b1[0], hit_b2[0], any);
+        FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT, block, 4,
+                       nearest[1], which[1], hit_b1[1], hit_b2[1], any);
+    }
+    if (_mm_movemask_ps(any) == 0)
+        return false;
+    lane_hits h;
+    for (int half = 0; half < 2; half++) {
+        _mm_store_ps(h.t + 4 * half, nearest[half]);
+        _mm_store_ps((float *)h.index + 4 * half, which[half]);
+        _mm_store_ps(h.b1 + 4 * half, hit_b1[half]);
+        _mm_store_ps(h.b2 + 4 * half, hit_b2[half]);
+    }
+    int k = nearest_lane(&h, FLAT_LANES, r.t_max);
+    return k >= 0 && finish(f, &r, h.index[k], h.t[k], h.b1[k], h.b2[k], hit);
+}
+
+static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+    const __m128 ox = _mm_set1_ps(r.origin.x), oy = _mm_set1_ps(r.origin.y), oz = _mm_set1_ps(r.origin.z);
+    const __m128 dx = _mm_set1_ps(r.direction.x), dy = _mm_set1_ps(r.direction.y), dz = _mm_set1_ps(r.direction.z);
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), t_min = _mm_set1_ps(r.t_min);
+    for (int i = 0; i < f->block_count; i++) {
+        const flat_block *block = &f->blocks[i];
+        /* the nearest hit does not matter, only whether there is one */
+        __m128 nearest[2], which[2] = {zero, zero}, hit_b1[2] = {zero, zero}, hit_b2[2] = {zero, zero}, any = zero;
+        nearest[0] = nearest[1] = _mm_set1_ps(r.t_max);
+        FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT, block, 0,
+                       nearest[0], which[0], hit_b1[0], hit_b2[0], any);
+        FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT, block, 4,
+                       nearest[1], which[1], hit_b1[1], hit_b2[1], any);
+        if (_mm_movemask_ps(any) != 0) {
+            counters->primitive_tests += tested_through(f, i);
+            return true;
+        }
+    }
+    counters->primitive_tests += (uint64_t)f->base.set->count;
+    return false;
+}
+#endif
+
+/* ---- build ------------------------------------------------------------------ */
+
+static void flat_destroy(accel *a)
+{
+    flat *f = (flat *)a;
+    free(f->blocks);
+    free(f);
+}
+
+static const accel_ops flat_ops_scalar = {closest_hit_scalar, any_hit_scalar, flat_destroy};
+#if FLAT_HAVE_X86
+static const accel_ops flat_ops_sse = {closest_hit_sse, any_hit_sse, flat_destroy};
+static const accel_ops flat_ops_avx = {closest_hit_avx, any_hit_avx, flat_destroy};
+#endif
+
+flat_kernel flat_best_kernel(void)
+{
+#if FLAT_HAVE_X86
+    return __builtin_cpu_supports("avx") ? FLAT_KERNEL_AVX : FLAT_KERNEL_SSE;
+#else
+    return FLAT_KERNEL_SCALAR;
+#endif
+}
+
+bool flat_set_kernel(accel *a, flat_kernel kernel)
+{
+    flat *f = (flat *)a;
+    switch (kernel) {
+    case FLAT_KERNEL_SCALAR:
+        f->base.ops = &flat_ops_scalar;
+        break;
+#if FLAT_HAVE_X86
+    case FLAT_KERNEL_SSE:
+        f->base.ops = &flat_ops_sse;
+        break;
+    case FLAT_KERNEL_AVX:
+        if (!__builtin_cpu_supports("avx"))
+            return false;
+        f->base.ops = &flat_ops_avx;
+        break;
+#endif
+    default:
+        return false;
+    }
+    f->kernel = kernel;
+    return true;
+}
+
+accel *flat_build(const triangle_set *set)
+{
+    double start = timer_seconds();
+    flat *f = memory_allocate(1, sizeof *f);
+    f->base.set = set;
+    f->block_count = (set->count + FLAT_LANES - 1) / FLAT_LANES;
+    size_t bytes = (size_t)(f->block_count > 0 ? f->block_count : 1) * sizeof(flat_block);
+    f->blocks = aligned_alloc(_Alignof(flat_block), bytes);
+    if (f->blocks == NULL) {
+        fprintf(stderr, "out of memory (asked for %zu bytes)\n", bytes);
+        exit(1);
+    }
+    memset(f->blocks, 0, bytes);
+    for (int i = 0; i < f->block_count * FLAT_LANES; i++) {
+        flat_block *b = &f->blocks[i / FLAT_LANES];
+        int k = i % FLAT_LANES;
+        b->index[k] = -1; /* empty: all zeros, determinant 0 */
+        if (i >= set->count)
+            continue;
+        const triangle *t = &set->triangles[i];
+        vec3 e1 = vec3_sub(t->p1, t->p0), e2 = vec3_sub(t->p2, t->p0);
+        const float p0[3] = {t->p0.x, t->p0.y, t->p0.z}, d1[3] = {e1.x, e1.y, e1.z}, d2[3] = {e2.x, e2.y, e2.z};
+        for (int axis = 0; axis < 3; axis++) {
+            b->p0[axis][k] = p0[axis];
+            b->e1[axis][k] = d1[axis];
+            b->e2[axis][k] = d2[axis];
+        }
+        b->index[k] = i;
+    }
+    flat_set_kernel(&f->base, flat_best_kernel());
+    f->base.stats.name = "flat";
+    f->base.stats.bytes = sizeof *f + bytes;
+    f->base.stats.nodes = 0;
+    f->base.stats.leaves = 1;
+    f->base.stats.max_depth = 0;
+    f->base.stats.references = set->count;
+    f->base.stats.build_seconds = timer_seconds() - start;
+    return &f->base;
+}

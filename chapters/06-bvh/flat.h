@@ -1,0 +1,66 @@
+/* flat.h -- below a few dozen triangles the best tree is no tree.
+ *
+ * A tree pays for itself by the triangles it lets a ray skip. Each node it
+ * visits costs a box test, a decision and a fetch that waits for the one
+ * before it; on a scene of 32 triangles (the Cornell box) a ray visits a
+ * node or two and still tests about ten triangles, a packet of four at a
+ * time, each packet behind a branch. Testing all 32 costs more arithmetic
+ * but none of the waiting: eight triangles per AVX instruction, four
+ * blocks, no branch until the end. That is chapter 03's brute force again,
+ * with the arithmetic of chapter 06's 4-wide leaves made 8 wide.
+ *
+ * The triangles are kept in blocks of eight, structure of arrays (as
+ * bvh4_packet, twice as wide). Three kernels give the same answers: AVX
+ * where the processor has it (asked at run time, so one binary runs
+ * everywhere), SSE (each block as two halves), and a plain C loop. Each
+ * lane does exactly the arithmetic of triangle_intersect_barycentric(), so
+ * every t is the scalar test's, bit for bit; of equal t the lower triangle
+ * index wins, as in chapter 03's brute force.
+ *
+ * Usage:
+ *   accel *a = flat_build(&set);
+ *   if (accel_closest_hit(a, r, &hit, &counters)) ...   same as any accel
+ *   flat_set_kernel(a, FLAT_KERNEL_SCALAR);              the plain C path (tests)
+ *   accel_destroy(a);
+ *
+ * Counters: primitive_tests counts the triangles tested (all of them for a
+ * closest hit; any hit stops after the first block with a hit); no boxes.
+ */
+#ifndef FLAT_H
+#define FLAT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "03-aabb-slabs/accel.h"
+
+/* Eight triangles: P0, E1 = P1 - P0 and E2 = P2 - P0 by coordinate, then
+ * by lane, and which triangle each lane is (-1: an empty lane, all zeros,
+ * whose determinant 0 never hits). 320 bytes. */
+enum { FLAT_LANES = 8 };
+
+typedef struct {
+    _Alignas(32) float p0[3][FLAT_LANES];
+    float e1[3][FLAT_LANES], e2[3][FLAT_LANES];
+    int32_t index[FLAT_LANES];
+} flat_block;
+
+typedef enum { FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR } flat_kernel;
+
+typedef struct {
+    accel base;
+    flat_block *blocks;
+    int block_count;
+    flat_kernel kernel;
+} flat;
+
+/* The blocks of set's triangles, in order; the kernel is the widest the
+ * processor runs. */
+accel *flat_build(const triangle_set *set);
+/* Switch the kernel; false (and nothing changed) if this processor or
+ * build cannot run it. */
+bool flat_set_kernel(accel *a, flat_kernel kernel);
+/* The widest kernel this processor runs. */
+flat_kernel flat_best_kernel(void);
+
+#endif

@@ -1,15 +1,6 @@
 /* shapes.c -- lecture 13: the ray r(t) = o + t d meets a surface. */
 #include "shapes.h"
 
-/* Fill the parts of a hit record every shape fills the same way: orient the
- * geometric normal towards the ray, and remember which side was hit. */
-static void hit_set_normal(hit_record *hit, ray r, vec3 outward_normal)
-{
-    hit->front_face = vec3_dot(r.direction, outward_normal) < 0.0f;
-    hit->normal_geometric = hit->front_face ? outward_normal : vec3_neg(outward_normal);
-    hit->normal_shading = hit->normal_geometric;
-}
-
 /* ---- Ray-sphere: solve |o + t d - c|^2 - R^2 = 0 --------------------------
  * The lecture's quadratic a t^2 + b t + c = 0 with a = d.d, b = 2 (o-c).d,
  * c = (o-c).(o-c) - R^2, solved as the lecture writes it. */
@@ -149,15 +140,7 @@ bool triangle_intersect_barycentric(const triangle *tri, const ray *r, float *t_
 
 void triangle_fill_hit(const triangle *tri, ray r, float t, float b1, float b2, hit_record *hit)
 {
-    hit->t = t;
-    hit->u = b1;
-    hit->v = b2;
-    /* The point from the barycentrics, not o + t d: its error is a few ulps
-     * of the vertices, whatever the distance travelled (see ray.c). */
-    hit->point = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - b1 - b2), vec3_scale(tri->p1, b1)),
-                          vec3_scale(tri->p2, b2));
-    vec3 e1 = vec3_sub(tri->p1, tri->p0), e2 = vec3_sub(tri->p2, tri->p0);
-    hit_set_normal(hit, r, vec3_normalize(vec3_cross(e1, e2)));
+    triangle_fill_hit_normal(tri, triangle_unit_normal(tri), &r, t, b1, b2, hit);
 }
 
 bool triangle_intersect(const triangle *tri, ray r, hit_record *hit)

@@ -56,6 +56,42 @@ bool triangle_intersect_barycentric(const triangle *tri, const ray *r, float *t,
 bool triangle_intersect_watertight(const triangle *tri, const ray *r, float *t, float *b1, float *b2);
 void triangle_fill_hit(const triangle *tri, ray r, float t, float b1, float b2, hit_record *hit);
 
+/* Fill the parts of a hit record every shape fills the same way: orient the
+ * geometric normal towards the ray, and remember which side was hit. */
+static inline void hit_set_normal(hit_record *hit, ray r, vec3 outward_normal)
+{
+    hit->front_face = vec3_dot(r.direction, outward_normal) < 0.0f;
+    hit->normal_geometric = hit->front_face ? outward_normal : vec3_neg(outward_normal);
+    hit->normal_shading = hit->normal_geometric;
+}
+
+/* A triangle's outward unit normal: (P1 - P0) x (P2 - P0), normalised (the
+ * side from which P0, P1, P2 turn counter-clockwise). */
+static inline vec3 triangle_unit_normal(const triangle *tri)
+{
+    vec3 e1 = vec3_sub(tri->p1, tri->p0), e2 = vec3_sub(tri->p2, tri->p0);
+    return vec3_normalize(vec3_cross(e1, e2));
+}
+
+/* triangle_fill_hit() with the triangle's unit normal already at hand
+ * (triangle_unit_normal(), computed once per triangle ahead of time: the
+ * same bits). Normalising costs a square root and a division, one after
+ * the other, for every hit; a structure that stores the normals saves both
+ * (accel.h). Inline, so that an accelerator's hit does not copy the ray
+ * into one more call. */
+static inline void triangle_fill_hit_normal(const triangle *tri, vec3 unit_normal, const ray *r, float t, float b1,
+                                            float b2, hit_record *hit)
+{
+    hit->t = t;
+    hit->u = b1;
+    hit->v = b2;
+    /* The point from the barycentrics, not o + t d: its error is a few ulps
+     * of the vertices, whatever the distance travelled (see ray.h). */
+    hit->point = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - b1 - b2), vec3_scale(tri->p1, b1)),
+                          vec3_scale(tri->p2, b2));
+    hit_set_normal(hit, *r, unit_normal);
+}
+
 float implicit_torus_value(const implicit_torus *torus, vec3 p);
 bool implicit_intersect(const implicit_torus *torus, ray r, hit_record *hit);
 

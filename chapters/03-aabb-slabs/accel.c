@@ -14,7 +14,8 @@ void triangle_set_from_mesh(triangle_set *set, const mesh *m)
     set->boxes = memory_allocate((size_t)m->face_count, sizeof *set->boxes);
     /* every closest hit may read a triangle, at random: 2 MB pages (memory.h) */
     memory_advise_huge(set->triangles, (size_t)m->face_count * sizeof *set->triangles);
-    set->materials = memory_allocate((size_t)m->face_count, sizeof *set->materials);
+    set->surfaces = memory_allocate((size_t)m->face_count, sizeof *set->surfaces);
+    memory_advise_huge(set->surfaces, (size_t)m->face_count * sizeof *set->surfaces); /* read at every hit too */
     set->bounds = aabb_empty();
     set->source = m;
     set->vertex_normals = false;
@@ -22,7 +23,7 @@ void triangle_set_from_mesh(triangle_set *set, const mesh *m)
         triangle t = {mesh_vertex(m, i, 0), mesh_vertex(m, i, 1), mesh_vertex(m, i, 2)};
         const mesh_face *f = &m->faces[i];
         set->triangles[i] = t;
-        set->materials[i] = f->material;
+        set->surfaces[i] = (triangle_surface){triangle_unit_normal(&t), f->material};
         set->vertex_normals |= f->normal[0] >= 0 && f->normal[1] >= 0 && f->normal[2] >= 0;
         set->boxes[i] = aabb_add_point(aabb_add_point(aabb_add_point(aabb_empty(), t.p0), t.p1), t.p2);
         set->bounds = aabb_union(set->bounds, set->boxes[i]);
@@ -38,7 +39,7 @@ void triangle_set_subset(triangle_set *out, const triangle_set *from, const bool
     /* at least one of each, so that an empty set still frees cleanly */
     out->triangles = memory_allocate((size_t)(count > 0 ? count : 1), sizeof *out->triangles);
     out->boxes = memory_allocate((size_t)(count > 0 ? count : 1), sizeof *out->boxes);
-    out->materials = memory_allocate((size_t)(count > 0 ? count : 1), sizeof *out->materials);
+    out->surfaces = memory_allocate((size_t)(count > 0 ? count : 1), sizeof *out->surfaces);
     out->bounds = aabb_empty();
     out->source = NULL;
     out->vertex_normals = false;
@@ -47,7 +48,7 @@ void triangle_set_subset(triangle_set *out, const triangle_set *from, const bool
             continue;
         out->triangles[k] = from->triangles[i];
         out->boxes[k] = from->boxes[i];
-        out->materials[k] = from->materials != NULL ? from->materials[i] : -1;
+        out->surfaces[k] = from->surfaces[i];
         out->bounds = aabb_union(out->bounds, out->boxes[k]);
         k++;
     }
@@ -57,27 +58,16 @@ void triangle_set_free(triangle_set *set)
 {
     free(set->triangles);
     free(set->boxes);
-    free(set->materials);
+    free(set->surfaces);
     set->triangles = NULL;
     set->boxes = NULL;
-    set->materials = NULL;
+    set->surfaces = NULL;
     set->count = 0;
 }
 
-void triangle_set_fill_hit(const triangle_set *set, int index, ray r, float t, float b1, float b2, hit_record *hit)
+void triangle_set_shade_vertex_normal(const triangle_set *set, int index, float b1, float b2, hit_record *hit)
 {
-    triangle_set_fill_hit_from(set, &set->triangles[index], index, r, t, b1, b2, hit);
-}
-
-void triangle_set_fill_hit_from(const triangle_set *set, const triangle *tri, int index, ray r, float t, float b1,
-                                float b2, hit_record *hit)
-{
-    triangle_fill_hit(tri, r, t, b1, b2, hit);
-    hit->shape_id = index;
-    hit->material_id = set->materials != NULL ? set->materials[index] : -1;
     const mesh *m = set->source;
-    if (m == NULL || !set->vertex_normals)
-        return;
     const mesh_face *f = &m->faces[index];
     if (f->normal[0] >= 0 && f->normal[1] >= 0 && f->normal[2] >= 0) {
         /* Interpolated vertex normal, turned to the side of the geometric

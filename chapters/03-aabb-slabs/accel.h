@@ -32,6 +32,13 @@
 #include "rng.h"
 #include "scene_file.h"
 
+/* A triangle's unit normal and material, what its hit record needs
+ * besides the corners (see triangle_set). */
+typedef struct {
+    vec3 normal;
+    int material;
+} triangle_surface;
+
 /* The triangles an accelerator is built over, with their corners copied out
  * of the mesh (the inner loop then reads 36 contiguous bytes per triangle),
  * and each one's bounding box, which every builder needs. */
@@ -41,13 +48,20 @@ typedef struct {
     int count;
     aabb bounds;        /* of all triangles */
     const mesh *source; /* for vertex normals; may be NULL */
-    /* Each triangle's material (its face's, or -1), copied out as well: a
-     * hit then reads 4 bytes from an array of 4 bytes per triangle instead
-     * of the mesh's 40-byte face. On a mesh of a million triangles the
-     * faces (40 MB) are far outside the caches and the copy (4 MB) is not:
-     * one cache miss fewer per hit. The face is read only for meshes with
-     * vertex normals. */
-    int *materials;
+    /* What a hit needs of each triangle besides its corners, copied out of
+     * the mesh or computed once here (16 bytes, which calloc's 16-byte
+     * alignment keeps within one cache line):
+     *   - its material (its face's, or -1): a hit then reads this array
+     *     instead of the mesh's 40-byte face. On a mesh of a million
+     *     triangles the faces (40 MB) are far outside the caches and this
+     *     array (16 MB) less so. The face is read only for meshes with
+     *     vertex normals.
+     *   - its unit normal, triangle_unit_normal() of its corners: normalising
+     *     at every hit is a square root and then a division, one waiting
+     *     for the other, and the shading at the hit waits for both (chapter
+     *     09's README, "Speed"). Beside the material it costs no cache line
+     *     more per hit. */
+    triangle_surface *surfaces;
     bool vertex_normals; /* does any face have vertex normals? */
 } triangle_set;
 
@@ -57,15 +71,35 @@ void triangle_set_free(triangle_set *set);
  * own (triangle i of `out` is the i-th one kept). It has no source mesh:
  * for structures asked only whether something is hit (any hit). */
 void triangle_set_subset(triangle_set *out, const triangle_set *from, const bool *keep);
-/* Fill a hit record for triangle `index` hit at (t, b1, b2): the point, the
- * geometric normal, the interpolated vertex normal where the mesh has them,
- * and the material. */
-void triangle_set_fill_hit(const triangle_set *set, int index, ray r, float t, float b1, float b2, hit_record *hit);
-/* The same, from a copy of triangle `index` the caller already holds (equal
- * to set->triangles[index], bit for bit): a structure that stores the
- * vertices in its leaves saves the read of the set's copy. */
-void triangle_set_fill_hit_from(const triangle_set *set, const triangle *tri, int index, ray r, float t, float b1,
-                                float b2, hit_record *hit);
+/* The interpolated vertex normal of triangle `index` at (b1, b2) as the
+ * hit's shading normal, if its face has vertex normals. */
+void triangle_set_shade_vertex_normal(const triangle_set *set, int index, float b1, float b2, hit_record *hit);
+
+/* Fill a hit record for triangle `index` of the set, hit at (t, b1, b2),
+ * from a copy of the triangle the caller already holds (equal to
+ * set->triangles[index], bit for bit: a structure that stores the vertices
+ * in its leaves saves the read of the set's copy): the point, the
+ * geometric normal, the interpolated vertex normal where the mesh has
+ * them, and the material. Inline: every closest hit of every structure
+ * ends here, and a call would copy the ray and the triangle through
+ * memory once more. */
+static inline void triangle_set_fill_hit_from(const triangle_set *set, const triangle *tri, int index, ray r,
+                                              float t, float b1, float b2, hit_record *hit)
+{
+    const triangle_surface *surface = &set->surfaces[index];
+    triangle_fill_hit_normal(tri, surface->normal, &r, t, b1, b2, hit);
+    hit->shape_id = index;
+    hit->material_id = surface->material;
+    if (set->source != NULL && set->vertex_normals)
+        triangle_set_shade_vertex_normal(set, index, b1, b2, hit);
+}
+
+/* The same, reading the set's own copy of triangle `index`. */
+static inline void triangle_set_fill_hit(const triangle_set *set, int index, ray r, float t, float b1, float b2,
+                                         hit_record *hit)
+{
+    triangle_set_fill_hit_from(set, &set->triangles[index], index, r, t, b1, b2, hit);
+}
 
 typedef struct {
     const char *name;

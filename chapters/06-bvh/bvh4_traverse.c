@@ -290,12 +290,12 @@ static ALWAYS_INLINE void prefetch_child(const bvh4 *b, uint32_t ref)
 #endif
 }
 
-/* A hit will be turned into a hit record from the set's material of the
- * triangle (and the mesh's face, for vertex normals) and, unless the packet
- * gives the vertices back exactly (BVH4_LANE_EXACT), the set's copy of the
- * triangle: ask for them as soon as a hit is found, so they are in the
- * cache by the end of the traversal (usually the first hit found is the
- * closest). */
+/* A hit will be turned into a hit record from the set's material and unit
+ * normal of the triangle (and the mesh's face, for vertex normals) and,
+ * unless the packet gives the vertices back exactly (BVH4_LANE_EXACT), the
+ * set's copy of the triangle: ask for them as soon as a hit is found, so
+ * they are in the cache by the end of the traversal (usually the first hit
+ * found is the closest). */
 static ALWAYS_INLINE void prefetch_hit(const bvh4 *b, int32_t lane_index)
 {
 #if defined(__GNUC__)
@@ -303,8 +303,7 @@ static ALWAYS_INLINE void prefetch_hit(const bvh4 *b, int32_t lane_index)
     if (!(lane_index & BVH4_LANE_EXACT))
         __builtin_prefetch(&b->base.set->triangles[index]);
     const triangle_set *set = b->base.set;
-    if (set->materials != NULL)
-        __builtin_prefetch(&set->materials[index]);
+    __builtin_prefetch(&set->surfaces[index]);
     if (set->source != NULL && set->vertex_normals)
         __builtin_prefetch(&set->source->faces[index]);
 #else

@@ -446,16 +446,19 @@ bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u
 {
     if (sc->emitter_count == 0)
         return false;
-    /* Pick a triangle with probability power / total power (binary search
-     * in the running sum), then a uniform point on it. */
+    /* Pick a triangle with probability power / total power, then a uniform
+     * point on it. The pick is a binary search in the running sum for the
+     * first entry above u_pick x power (the last, if rounding leaves none),
+     * written without a branch on the comparison (GCC turns the obvious
+     * `? :` into one): the way it goes is random, so a branch would be
+     * guessed wrong half the time (the Cornell box's light is two
+     * triangles of equal power). */
     double target = (double)u_pick * sc->emitter_power;
-    int lo = 0, hi = sc->emitter_count - 1;
-    while (lo < hi) {
-        int mid = (lo + hi) / 2;
-        if (sc->emitter_cdf[mid] <= target)
-            lo = mid + 1;
-        else
-            hi = mid;
+    int lo = 0; /* the answer is in [lo, lo + n) */
+    for (int n = sc->emitter_count; n > 1;) {
+        int half = n / 2;
+        lo += half & -(int)(sc->emitter_cdf[lo + half - 1] <= target);
+        n -= half;
     }
     int index = sc->emitters[lo];
     const triangle *t = &sc->triangles.triangles[index];

@@ -98,44 +98,13 @@ bool plane_intersect(const plane *p, ray r, hit_record *hit)
     return true;
 }
 
-/* ---- Ray-triangle: Moller-Trumbore --------------------------------------
- * Solve o + t d = (1 - b1 - b2) P0 + b1 P1 + b2 P2 for (t, b1, b2) by
- * Cramer's rule:
- *   E1 = P1 - P0, E2 = P2 - P0, S = O - P0, S1 = D x E2, S2 = S x E1
- *   [t, b1, b2] = 1 / (S1 . E1) * [S2 . E2, S1 . S, S2 . D]
- * Cost: 1 division, 27 multiplications, 17 additions. The hit is inside the
- * triangle iff b1 >= 0, b2 >= 0, b1 + b2 <= 1. */
+/* ---- Ray-triangle: Moller-Trumbore (the test itself is in shapes.h,
+ * triangle_intersect_edges(), so that the accelerators' plain C kernels
+ * inline the very same arithmetic on the edges they store) ---------------- */
 bool triangle_intersect_barycentric(const triangle *tri, const ray *r, float *t_out, float *b1_out, float *b2_out)
 {
-    vec3 e1 = vec3_sub(tri->p1, tri->p0);
-    vec3 e2 = vec3_sub(tri->p2, tri->p0);
-    vec3 s1 = vec3_cross(r->direction, e2);
-    float determinant = vec3_dot(s1, e1);
-    /* Only an exactly zero determinant (the ray lies parallel to the plane)
-     * is refused. The usual "|det| < 1e-8" cut-off would also refuse every
-     * triangle smaller than about 1e-4 on a side, whatever the ray. A tiny
-     * non-zero determinant can give t = inf or NaN; the comparisons below are
-     * all false for NaN, so such a ray simply misses. */
-    if (determinant == 0.0f)
-        return false;
-    float inverse = 1.0f / determinant;
-    vec3 s = vec3_sub(r->origin, tri->p0);
-    /* The same three products as the formula, computed in an order that
-     * lets most misses leave early: b1 needs only S1 and S. */
-    float b1 = vec3_dot(s1, s) * inverse;
-    if (!(b1 >= 0.0f && b1 <= 1.0f))
-        return false;
-    vec3 s2 = vec3_cross(s, e1);
-    float b2 = vec3_dot(s2, r->direction) * inverse;
-    if (!(b2 >= 0.0f && b1 + b2 <= 1.0f))
-        return false;
-    float t = vec3_dot(s2, e2) * inverse;
-    if (!(t > r->t_min && t < r->t_max))
-        return false;
-    *t_out = t;
-    *b1_out = b1;
-    *b2_out = b2;
-    return true;
+    return triangle_intersect_edges(tri->p0, vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0), r, r->t_max,
+                                    t_out, b1_out, b2_out);
 }
 
 void triangle_fill_hit(const triangle *tri, ray r, float t, float b1, float b2, hit_record *hit)

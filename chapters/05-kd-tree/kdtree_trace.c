@@ -47,37 +47,15 @@ static const float SPLIT_SLACK = 2.0f * (3.0f * 0x1.0p-24f) / (1.0f - 3.0f * 0x1
  * planes go through vertices). */
 static const float HIT_MARGIN = 0x1.0p-16f;
 
-/* Moller-Trumbore, the same operations in the same order as chapter 01's
- * triangle_intersect_barycentric() (so the same t and barycentrics, bit for
- * bit, as brute force gets), but inline: a leaf's loop then keeps the ray in
- * registers instead of calling into another library for every triangle.
- * E1 = P1 - P0, E2 = P2 - P0, S = O - P0, S1 = D x E2, S2 = S x E1;
- * [t, b1, b2] = [S2.E2, S1.S, S2.D] / (S1.E1). */
+/* Moller-Trumbore: chapter 01's test, inline (shapes.h), so the same t
+ * and barycentrics, bit for bit, as brute force gets, while a leaf's loop
+ * keeps the ray in registers instead of calling into another library for
+ * every triangle. */
 static inline bool leaf_triangle_intersect(const triangle *tri, const ray *r, float *t_out, float *b1_out,
                                            float *b2_out)
 {
-    vec3 e1 = vec3_sub(tri->p1, tri->p0);
-    vec3 e2 = vec3_sub(tri->p2, tri->p0);
-    vec3 s1 = vec3_cross(r->direction, e2);
-    float determinant = vec3_dot(s1, e1);
-    if (determinant == 0.0f) /* the ray lies parallel to the triangle's plane */
-        return false;
-    float inverse = 1.0f / determinant;
-    vec3 s = vec3_sub(r->origin, tri->p0);
-    float b1 = vec3_dot(s1, s) * inverse;
-    if (!(b1 >= 0.0f && b1 <= 1.0f))
-        return false;
-    vec3 s2 = vec3_cross(s, e1);
-    float b2 = vec3_dot(s2, r->direction) * inverse;
-    if (!(b2 >= 0.0f && b1 + b2 <= 1.0f))
-        return false;
-    float t = vec3_dot(s2, e2) * inverse;
-    if (!(t > r->t_min && t < r->t_max))
-        return false;
-    *t_out = t;
-    *b1_out = b1;
-    *b2_out = b2;
-    return true;
+    return triangle_intersect_edges(tri->p0, vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0), r, r->t_max,
+                                    t_out, b1_out, b2_out);
 }
 
 typedef struct {

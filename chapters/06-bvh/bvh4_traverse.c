@@ -130,26 +130,8 @@ static inline int triangle_test4_scalar(const bvh4_packet *p, const ray *r, floa
         vec3 p0 = vec3_make(p->p0[0][k], p->p0[1][k], p->p0[2][k]);
         vec3 e1 = vec3_make(p->e1[0][k], p->e1[1][k], p->e1[2][k]);
         vec3 e2 = vec3_make(p->e2[0][k], p->e2[1][k], p->e2[2][k]);
-        vec3 s1 = vec3_cross(r->direction, e2);
-        float determinant = vec3_dot(s1, e1);
-        if (determinant == 0.0f)
-            continue;
-        float inverse = 1.0f / determinant;
-        vec3 s = vec3_sub(r->origin, p0);
-        float u = vec3_dot(s1, s) * inverse;
-        if (!(u >= 0.0f && u <= 1.0f))
-            continue;
-        vec3 s2 = vec3_cross(s, e1);
-        float v = vec3_dot(s2, r->direction) * inverse;
-        if (!(v >= 0.0f && u + v <= 1.0f))
-            continue;
-        float distance = vec3_dot(s2, e2) * inverse;
-        if (!(distance > r->t_min && distance < t_max))
-            continue;
-        t[k] = distance;
-        b1[k] = u;
-        b2[k] = v;
-        mask |= 1 << k;
+        if (triangle_intersect_edges(p0, e1, e2, r, t_max, &t[k], &b1[k], &b2[k]))
+            mask |= 1 << k;
     }
     return mask;
 }

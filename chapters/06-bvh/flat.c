@@ -17,8 +17,9 @@
 #endif
 
 /* ---- the plain C kernel ---------------------------------------------------------
- * Lane by lane, in triangle order, the arithmetic of
- * triangle_intersect_barycentric(): the reference the others must equal.
+ * Lane by lane, in triangle order, chapter 01's test on the stored edges
+ * (triangle_intersect_edges, the arithmetic of
+ * triangle_intersect_barycentric): the reference the others must equal.
  * Returns the lane hit nearest in (t_min, *t_max), or -1, and lowers
  * *t_max to it; a later lane must be strictly nearer to replace it. */
 static int block_closest_scalar(const flat_block *b, const ray *r, float *t_max, float *b1, float *b2)
@@ -28,26 +29,8 @@ static int block_closest_scalar(const flat_block *b, const ray *r, float *t_max,
         vec3 p0 = vec3_make(b->p0[0][k], b->p0[1][k], b->p0[2][k]);
         vec3 e1 = vec3_make(b->e1[0][k], b->e1[1][k], b->e1[2][k]);
         vec3 e2 = vec3_make(b->e2[0][k], b->e2[1][k], b->e2[2][k]);
-        vec3 s1 = vec3_cross(r->direction, e2);
-        float determinant = vec3_dot(s1, e1);
-        if (determinant == 0.0f)
-            continue;
-        float inverse = 1.0f / determinant;
-        vec3 s = vec3_sub(r->origin, p0);
-        float u = vec3_dot(s1, s) * inverse;
-        if (!(u >= 0.0f && u <= 1.0f))
-            continue;
-        vec3 s2 = vec3_cross(s, e1);
-        float v = vec3_dot(s2, r->direction) * inverse;
-        if (!(v >= 0.0f && u + v <= 1.0f))
-            continue;
-        float t = vec3_dot(s2, e2) * inverse;
-        if (!(t > r->t_min && t < *t_max))
-            continue;
-        *t_max = t;
-        *b1 = u;
-        *b2 = v;
-        found = k;
+        if (triangle_intersect_edges(p0, e1, e2, r, *t_max, t_max, b1, b2))
+            found = k;
     }
     return found;
 }

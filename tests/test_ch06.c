@@ -1154,6 +1154,73 @@ static void test_flat_twins_are_caught(void **state)
     mesh_free(&m);
 }
 
+/* Eight rays at once (flat_closest_hit8, flat_any_hit8): each active lane
+ * gets the single ray's answer, bit for bit, and idle lanes are left alone.
+ * `shift` > 0 is the twin: lane k is handed ray k + shift's answer. */
+static long packet_mismatches(int shift, long *compared)
+{
+    long wrong = 0;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        triangle_set set;
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set_from_mesh(&set, &m);
+        if (set.count > 2000) { /* brute force on a big mesh: slow, and nothing new */
+            triangle_set_free(&set);
+            mesh_free(&m);
+            continue;
+        }
+        accel *a = flat_build(&set);
+        pcg32 rng = pcg32_for_pixel(62, (uint64_t)kind);
+        for (int packet = 0; packet < 300; packet++) {
+            ray rays[FLAT_LANES];
+            for (int k = 0; k < FLAT_LANES; k++)
+                rays[k] = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, packet * FLAT_LANES + k);
+            int active = packet % 3 == 0 ? (int)(pcg32_next(&rng) & 0xFF) : 0xFF;
+            hit_record hits[FLAT_LANES];
+            bool found[FLAT_LANES], any[FLAT_LANES];
+            memset(hits, 0, sizeof hits);
+            for (int k = 0; k < FLAT_LANES; k++)
+                found[k] = any[k] = true; /* idle lanes must keep these */
+            ray_counters c = {0};
+            flat_closest_hit8(a, rays, active, hits, found, &c);
+            flat_any_hit8(a, rays, active, any, &c);
+            for (int k = 0; k < FLAT_LANES; k++) {
+                if (!((active >> k) & 1)) {
+                    wrong += !(found[k] && any[k]);
+                    continue;
+                }
+                const ray *r = &rays[(k + shift) % FLAT_LANES];
+                hit_record want;
+                memset(&want, 0, sizeof want);
+                bool want_hit = accel_closest_hit(a, *r, &want, &c);
+                bool same = found[k] == want_hit && any[k] == accel_any_hit(a, *r, &c);
+                if (same && want_hit)
+                    same = memcmp(&hits[k], &want, sizeof want) == 0;
+                wrong += !same;
+                (*compared)++;
+            }
+        }
+        accel_destroy(a);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    return wrong;
+}
+
+static void test_flat_packets_give_each_ray_its_own_answer(void **state)
+{
+    (void)state;
+    long compared = 0, twin_compared = 0;
+    long wrong = packet_mismatches(0, &compared);
+    long twin = packet_mismatches(1, &twin_compared);
+    print_message("flat packets (%s kernel): %ld rays, %ld wrong; each lane given its neighbour's answer: %ld wrong\n",
+                  flat_best_kernel() == FLAT_KERNEL_AVX ? "avx" : "one ray at a time", compared, wrong, twin);
+    assert_true(compared > 5000);
+    assert_int_equal(wrong, 0);
+    assert_true(twin > compared / 4);
+}
+
 static void test_flat_empty_set_builds_and_misses(void **state)
 {
     (void)state;
@@ -1389,6 +1456,7 @@ int main(void)
         cmocka_unit_test(test_flat_equals_brute_force_bit_for_bit),
         cmocka_unit_test(test_flat_twins_are_caught),
         cmocka_unit_test(test_flat_empty_set_builds_and_misses),
+        cmocka_unit_test(test_flat_packets_give_each_ray_its_own_answer),
         cmocka_unit_test(test_bvh4_stream_gives_each_ray_its_own_answer),
     };
     return cmocka_run_group_tests_name("ch06 bvh", tests, NULL, NULL);

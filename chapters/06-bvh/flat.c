@@ -272,6 +272,171 @@ static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
 }
 #endif
 
+/* ---- eight rays against one triangle at a time ----------------------------------
+ * The rays' origins, directions and ends as eight lanes; each triangle's P0,
+ * E1, E2 broadcast to all eight; the lane arithmetic of FLAT_LANE_TEST with
+ * the roles swapped. The triangles go in order and a later one must be
+ * strictly nearer, so of equal t the lower index wins, as for one ray. */
+#if FLAT_HAVE_X86
+typedef struct {
+    __m256 ox, oy, oz, dx, dy, dz, t_min, t_max;
+} ray8;
+
+__attribute__((target("avx"))) static inline ray8 ray8_load(const ray *rays, int active)
+{
+    _Alignas(32) float v[8][FLAT_LANES];
+    for (int k = 0; k < FLAT_LANES; k++) {
+        const ray *r = &rays[k];
+        bool on = (active >> k) & 1;
+        v[0][k] = on ? r->origin.x : 0.0f;
+        v[1][k] = on ? r->origin.y : 0.0f;
+        v[2][k] = on ? r->origin.z : 0.0f;
+        v[3][k] = on ? r->direction.x : 0.0f;
+        v[4][k] = on ? r->direction.y : 0.0f;
+        v[5][k] = on ? r->direction.z : 0.0f;
+        /* an idle lane's interval (0, 0) is empty: it never hits */
+        v[6][k] = on ? r->t_min : 0.0f;
+        v[7][k] = on ? r->t_max : 0.0f;
+    }
+    return (ray8){_mm256_load_ps(v[0]), _mm256_load_ps(v[1]), _mm256_load_ps(v[2]), _mm256_load_ps(v[3]),
+                  _mm256_load_ps(v[4]), _mm256_load_ps(v[5]), _mm256_load_ps(v[6]), _mm256_load_ps(v[7])};
+}
+
+/* Moller-Trumbore of triangle (block, lane j) for the eight rays: the mask
+ * of rays that hit it in (t_min, nearest), and their t, b1, b2. */
+#define FLAT_RAYS_TEST(block, j, R, nearest, ok_out, t_out, u_out, v_out)                                            \
+    do {                                                                                                           \
+        const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);                                       \
+        __m256 e1x = _mm256_broadcast_ss(&(block)->e1[0][j]), e1y = _mm256_broadcast_ss(&(block)->e1[1][j]);       \
+        __m256 e1z = _mm256_broadcast_ss(&(block)->e1[2][j]);                                                      \
+        __m256 e2x = _mm256_broadcast_ss(&(block)->e2[0][j]), e2y = _mm256_broadcast_ss(&(block)->e2[1][j]);       \
+        __m256 e2z = _mm256_broadcast_ss(&(block)->e2[2][j]);                                                      \
+        __m256 s1x = _mm256_sub_ps(_mm256_mul_ps((R).dy, e2z), _mm256_mul_ps((R).dz, e2y));                        \
+        __m256 s1y = _mm256_sub_ps(_mm256_mul_ps((R).dz, e2x), _mm256_mul_ps((R).dx, e2z));                        \
+        __m256 s1z = _mm256_sub_ps(_mm256_mul_ps((R).dx, e2y), _mm256_mul_ps((R).dy, e2x));                        \
+        __m256 determinant = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(s1x, e1x), _mm256_mul_ps(s1y, e1y)),         \
+                                           _mm256_mul_ps(s1z, e1z));                                               \
+        __m256 ok = AVX_CMP_NE(determinant, zero);                                                                 \
+        __m256 inverse = _mm256_div_ps(one, determinant);                                                          \
+        __m256 sx = _mm256_sub_ps((R).ox, _mm256_broadcast_ss(&(block)->p0[0][j]));                                \
+        __m256 sy = _mm256_sub_ps((R).oy, _mm256_broadcast_ss(&(block)->p0[1][j]));                                \
+        __m256 sz = _mm256_sub_ps((R).oz, _mm256_broadcast_ss(&(block)->p0[2][j]));                                \
+        __m256 u = _mm256_mul_ps(                                                                                  \
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(s1x, sx), _mm256_mul_ps(s1y, sy)), _mm256_mul_ps(s1z, sz)),   \
+            inverse);                                                                                              \
+        ok = _mm256_and_ps(ok, _mm256_and_ps(AVX_CMP_GE(u, zero), AVX_CMP_LE(u, one)));                            \
+        __m256 s2x = _mm256_sub_ps(_mm256_mul_ps(sy, e1z), _mm256_mul_ps(sz, e1y));                                \
+        __m256 s2y = _mm256_sub_ps(_mm256_mul_ps(sz, e1x), _mm256_mul_ps(sx, e1z));                                \
+        __m256 s2z = _mm256_sub_ps(_mm256_mul_ps(sx, e1y), _mm256_mul_ps(sy, e1x));                                \
+        __m256 v = _mm256_mul_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(s2x, (R).dx), _mm256_mul_ps(s2y, (R).dy)), \
+                                               _mm256_mul_ps(s2z, (R).dz)),                                        \
+                                 inverse);                                                                         \
+        ok = _mm256_and_ps(ok, _mm256_and_ps(AVX_CMP_GE(v, zero), AVX_CMP_LE(_mm256_add_ps(u, v), one)));          \
+        __m256 t = _mm256_mul_ps(                                                                                  \
+            _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(s2x, e2x), _mm256_mul_ps(s2y, e2y)), _mm256_mul_ps(s2z, e2z)), \
+            inverse);                                                                                              \
+        ok_out = _mm256_and_ps(ok, _mm256_and_ps(AVX_CMP_GT(t, (R).t_min), AVX_CMP_LT(t, nearest)));               \
+        t_out = t;                                                                                                 \
+        u_out = u;                                                                                                 \
+        v_out = v;                                                                                                 \
+    } while (0)
+
+__attribute__((target("avx"))) static int closest_hit8_avx(const flat *f, const ray *rays, int active,
+                                                           lane_hits *out)
+{
+    const ray8 R = ray8_load(rays, active);
+    __m256 nearest = R.t_max, which = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    __m256 hit_b1 = _mm256_setzero_ps(), hit_b2 = _mm256_setzero_ps();
+    for (int i = 0; i < f->block_count; i++) {
+        const flat_block *block = &f->blocks[i];
+        for (int j = 0; j < FLAT_LANES && block->index[j] >= 0; j++) {
+            __m256 hit, hit_t, hit_u, hit_v;
+            FLAT_RAYS_TEST(block, j, R, nearest, hit, hit_t, hit_u, hit_v);
+            __m256 index = _mm256_castsi256_ps(_mm256_set1_epi32(block->index[j]));
+            nearest = _mm256_or_ps(_mm256_and_ps(hit, hit_t), _mm256_andnot_ps(hit, nearest));
+            which = _mm256_or_ps(_mm256_and_ps(hit, index), _mm256_andnot_ps(hit, which));
+            hit_b1 = _mm256_or_ps(_mm256_and_ps(hit, hit_u), _mm256_andnot_ps(hit, hit_b1));
+            hit_b2 = _mm256_or_ps(_mm256_and_ps(hit, hit_v), _mm256_andnot_ps(hit, hit_b2));
+        }
+    }
+    _mm256_store_ps(out->t, nearest);
+    _mm256_store_ps((float *)out->index, which);
+    _mm256_store_ps(out->b1, hit_b1);
+    _mm256_store_ps(out->b2, hit_b2);
+    int found = _mm256_movemask_ps(_mm256_cmp_ps(nearest, R.t_max, _CMP_LT_OQ)) & active;
+    _mm256_zeroupper(); /* before the SSE code the caller runs (see closest_hit_avx) */
+    return found;
+}
+
+__attribute__((target("avx"))) static int any_hit8_avx(const flat *f, const ray *rays, int active, int *blocks)
+{
+    const ray8 R = ray8_load(rays, active);
+    __m256 any = _mm256_setzero_ps();
+    int found = 0, i = 0;
+    while (i < f->block_count && found != active) {
+        const flat_block *block = &f->blocks[i++];
+        for (int j = 0; j < FLAT_LANES && block->index[j] >= 0; j++) {
+            __m256 hit, hit_t, hit_u, hit_v;
+            FLAT_RAYS_TEST(block, j, R, R.t_max, hit, hit_t, hit_u, hit_v);
+            (void)hit_t;
+            (void)hit_u;
+            (void)hit_v;
+            any = _mm256_or_ps(any, hit);
+        }
+        found = _mm256_movemask_ps(any) & active;
+    }
+    *blocks = i;
+    _mm256_zeroupper();
+    return found;
+}
+#endif
+
+void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, hit_record hits[FLAT_LANES],
+                       bool found[FLAT_LANES], ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+#if FLAT_HAVE_X86
+    if (f->kernel == FLAT_KERNEL_AVX) {
+        lane_hits h;
+        int hit = closest_hit8_avx(f, rays, active, &h);
+        for (int k = 0; k < FLAT_LANES; k++) {
+            if (!((active >> k) & 1))
+                continue;
+            counters->primitive_tests += (uint64_t)f->base.set->count;
+            found[k] = (hit >> k) & 1;
+            if (found[k])
+                triangle_set_fill_hit(f->base.set, h.index[k], rays[k], h.t[k], h.b1[k], h.b2[k], &hits[k]);
+        }
+        return;
+    }
+#endif
+    for (int k = 0; k < FLAT_LANES; k++)
+        if ((active >> k) & 1)
+            found[k] = accel_closest_hit(a, rays[k], &hits[k], counters);
+}
+
+void flat_any_hit8(const accel *a, const ray rays[FLAT_LANES], int active, bool found[FLAT_LANES],
+                   ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+#if FLAT_HAVE_X86
+    if (f->kernel == FLAT_KERNEL_AVX) {
+        int blocks;
+        int hit = any_hit8_avx(f, rays, active, &blocks);
+        uint64_t tested = blocks > 0 ? tested_through(f, blocks - 1) : 0;
+        for (int k = 0; k < FLAT_LANES; k++)
+            if ((active >> k) & 1) {
+                counters->primitive_tests += tested;
+                found[k] = (hit >> k) & 1;
+            }
+        return;
+    }
+#endif
+    for (int k = 0; k < FLAT_LANES; k++)
+        if ((active >> k) & 1)
+            found[k] = accel_any_hit(a, rays[k], counters);
+}
+
 /* ---- build ------------------------------------------------------------------ */
 
 static void flat_destroy(accel *a)
@@ -286,6 +451,8 @@ static const accel_ops flat_ops_scalar = {closest_hit_scalar, any_hit_scalar, fl
 static const accel_ops flat_ops_sse = {closest_hit_sse, any_hit_sse, flat_destroy};
 static const accel_ops flat_ops_avx = {closest_hit_avx, any_hit_avx, flat_destroy};
 #endif
+
+bool flat_is(const accel *a) { return a != NULL && a->ops->destroy == flat_destroy; }
 
 flat_kernel flat_best_kernel(void)
 {

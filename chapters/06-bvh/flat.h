@@ -62,5 +62,21 @@ accel *flat_build(const triangle_set *set);
 bool flat_set_kernel(accel *a, flat_kernel kernel);
 /* The widest kernel this processor runs. */
 flat_kernel flat_best_kernel(void);
+/* Was `a` built by flat_build()? */
+bool flat_is(const accel *a);
+
+/* Eight rays at once, the other way round: each lane a ray, each step one
+ * triangle for all eight (a path tracer that follows eight paths at once,
+ * chapter 09's path_tracer_wide.c). Lane k, if bit k of `active` is set,
+ * gets what accel_closest_hit() gives rays[k] alone, bit for bit (found[k],
+ * hits[k]); other lanes are left as they were. With the AVX kernel, eight
+ * rays per instruction; else each ray alone. primitive_tests counts every
+ * triangle for every active ray. */
+void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, hit_record hits[FLAT_LANES],
+                       bool found[FLAT_LANES], ray_counters *counters);
+/* The same for any hit: found[k] is accel_any_hit() of rays[k]. The eight
+ * stop together, once every active ray has found a hit. */
+void flat_any_hit8(const accel *a, const ray rays[FLAT_LANES], int active, bool found[FLAT_LANES],
+                   ray_counters *counters);
 
 #endif

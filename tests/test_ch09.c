@@ -18,6 +18,7 @@
 
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/path_tracer.h"
+#include "09-path-tracing/path_tracer_wide.h"
 #include "effects.h"
 #include "render.h"
 #include "scene_file.h"
@@ -964,6 +965,73 @@ static void test_wall_test_is_never_fooled_by_rounding(void **state)
     pt_scene_free(&sc);
 }
 
+/* ---- eight paths at a time (path_tracer_wide.c) ----------------------------------- */
+
+/* Pixels where two renders differ by more than `tolerance` relative (of the
+ * larger value, at least 1e-3 absolute in each channel). */
+static long pixels_apart(const image *a, const image *b, float tolerance)
+{
+    long apart = 0;
+    for (long i = 0; i < (long)a->width * a->height; i++) {
+        bool same = true;
+        for (int c = 0; c < 3; c++) {
+            float x = a->rgb[3 * i + c], y = b->rgb[3 * i + c];
+            same = same && fabsf(x - y) <= tolerance * fmaxf(fmaxf(fabsf(x), fabsf(y)), 1e-3f);
+        }
+        apart += !same;
+    }
+    return apart;
+}
+
+/* The wide renderer draws each pixel's random numbers in the same order and
+ * makes the same decisions as the lecture rung, so every pixel is the same
+ * but for the rounding of the sums along each path (added from the camera
+ * out, not from the last bounce back): within 1e-4 relative, and the same
+ * count of camera, shadow and indirect rays. Also at 1 and 2 threads the
+ * same, bit for bit. The twin draws the hemisphere's two numbers the other
+ * way round: the same image in distribution, but not the same paths. */
+static void test_wide_renders_the_lecture_rungs_paths(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+    char why[128] = "";
+    assert_true(path_tracer_wide_supported(&pt, why, sizeof why));
+    camera cam = pt_scene_camera(&sc, 24, 24);
+    estimate_image scalar = render_estimate(&pt, &cam, 8, test_seed(91), 1);
+    estimate_image wide, wide2;
+    assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 1, &wide));
+    assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 2, &wide2));
+    long apart = pixels_apart(&scalar.mean, &wide.mean, 1e-4f);
+    print_message("wide: %ld of %d pixels differ from the lecture rung by more than 1e-4; rays %llu/%llu/%llu "
+                  "(scalar %llu/%llu/%llu)\n", apart, 24 * 24, (unsigned long long)wide.counters.camera_rays,
+                  (unsigned long long)wide.counters.shadow_rays, (unsigned long long)wide.counters.indirect_rays,
+                  (unsigned long long)scalar.counters.camera_rays, (unsigned long long)scalar.counters.shadow_rays,
+                  (unsigned long long)scalar.counters.indirect_rays);
+    assert_int_equal(apart, 0);
+    assert_int_equal(wide.counters.camera_rays, scalar.counters.camera_rays);
+    assert_int_equal(wide.counters.shadow_rays, scalar.counters.shadow_rays);
+    assert_int_equal(wide.counters.indirect_rays, scalar.counters.indirect_rays);
+    assert_memory_equal(wide.mean.rgb, wide2.mean.rgb, sizeof(float) * 3 * 24 * 24);
+    assert_memory_equal(wide.standard_error.rgb, wide2.standard_error.rgb, sizeof(float) * 3 * 24 * 24);
+    /* the twin: a different rung's paths are caught */
+    path_tracer cosine = tracer(&sc, PT_COSINE, RR_FIXED);
+    estimate_image other = render_estimate(&cosine, &cam, 8, test_seed(91), 1);
+    long twin = pixels_apart(&other.mean, &wide.mean, 1e-4f);
+    print_message("wide against the cosine rung (other paths): %ld of %d pixels differ\n", twin, 24 * 24);
+    assert_true(twin > 24 * 24 / 2);
+    /* and what it refuses */
+    pt.integrator = PT_MIS;
+    assert_false(path_tracer_wide_supported(&pt, why, sizeof why));
+    assert_false(render_estimate_wide(&pt, &cam, 8, test_seed(91), 1, &wide2) && false);
+    estimate_image_free(&scalar);
+    estimate_image_free(&wide);
+    estimate_image_free(&wide2);
+    estimate_image_free(&other);
+    pt_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -986,6 +1054,7 @@ int main(void)
         cmocka_unit_test(test_walls_skipped_only_where_they_cannot_block),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_wall_test_is_never_fooled_by_rounding),
+        cmocka_unit_test(test_wide_renders_the_lecture_rungs_paths),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);
 }

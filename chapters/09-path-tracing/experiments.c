@@ -1,5 +1,6 @@
 /* experiments.c -- measuring error against time (see experiments.h). */
 #include "experiments.h"
+#include "09-path-tracing/path_tracer_wide.h"
 
 #include <errno.h>
 #include <math.h>
@@ -385,6 +386,7 @@ typedef struct {
     int rr_start_depth;
     const char *label;
     bool walls_off;
+    bool wide; /* eight paths at a time (path_tracer_wide.c) */
 } speed_case;
 
 /* Every case counts at most SPEED_MAX_DEPTH bounces, Ray Tracing: The Rest of
@@ -396,12 +398,13 @@ typedef struct {
  * roulette at all, the full 50 bounces (RTROWL). */
 enum { SPEED_MAX_DEPTH = 50 };
 static const speed_case speed_cases[] = {
-    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8", false},
-    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, walls off", true},
-    {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8", false},
-    {PT_MIS, RR_FIXED, 0, "mis, P_RR 0.8", false},
-    {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput after 5 (smallpt)", false},
-    {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)", false},
+    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8", false, false},
+    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, walls off", true, false},
+    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, 8 paths at a time", false, true},
+    {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8", false, false},
+    {PT_MIS, RR_FIXED, 0, "mis, P_RR 0.8", false, false},
+    {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput after 5 (smallpt)", false, false},
+    {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)", false, false},
 };
 _Static_assert(sizeof speed_cases / sizeof speed_cases[0] == EXPERIMENT_SPEED_CASES,
                "experiments.h: EXPERIMENT_SPEED_CASES is the number of speed cases");
@@ -426,6 +429,9 @@ int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int 
         pt.max_depth = SPEED_MAX_DEPTH;
         if (speed_cases[k].rr_start_depth > 0)
             pt.rr_start_depth = speed_cases[k].rr_start_depth;
+        char why[128];
+        if (speed_cases[k].wide && !path_tracer_wide_supported(&pt, why, sizeof why))
+            printf("%s: not here (%s), one path at a time instead\n", speed_cases[k].label, why);
         /* 1 and 2 threads take turns, repeat after repeat, so that both see
          * the same machine: on a shared or virtual machine the speed drifts
          * by 10 % over seconds, and the best of runs taken back to back
@@ -434,7 +440,9 @@ int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int 
         for (int r = 0; r < repeats; r++) {
             for (int threads = 1; threads <= 2; threads++) {
                 double cpu_start = experiment_cpu_seconds();
-                estimate_image e = render_estimate(&pt, &cam, spp, 1, threads);
+                estimate_image e;
+                if (!speed_cases[k].wide || !render_estimate_wide(&pt, &cam, spp, 1, threads, &e))
+                    e = render_estimate(&pt, &cam, spp, 1, threads);
                 double cpu = experiment_cpu_seconds() - cpu_start;
                 best_wall[threads - 1] = fmin(best_wall[threads - 1], e.seconds);
                 best_cpu[threads - 1] = fmin(best_cpu[threads - 1], cpu);

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "09-path-tracing/experiments.h"
+#include "09-path-tracing/path_tracer_wide.h"
 #include "effects.h"
 #include "09-path-tracing/path_tracer.h"
 #include "cli.h"
@@ -42,7 +43,7 @@ int main(int argc, char **argv)
     /* integrator NULL and max_depth -1: not given, so the scene file's (or the default) */
     const char *integrator = NULL, *rr = "fixed", *scene_name = "cornell", *obj = NULL, *data = NULL;
     const char *bench_csv = NULL, *walls = "on";
-    bool bench = false;
+    bool bench = false, wide = false;
     float rr_probability = 0.8f, time_budget = 0.0f, target_error = 0.0f;
     int max_depth = -1, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
     const cli_flag extras[] = {
@@ -65,6 +66,9 @@ int main(int argc, char **argv)
         {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 96)", 8, 1024},
         {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached reference (default 4096)", 16, 1 << 20},
         {"--experiment-spp", CLI_INT, &experiment_spp, "N", "largest spp of the experiments (default 256)", 1, 1 << 16},
+        {"--wide", CLI_BOOL, &wide, NULL,
+         "eight paths at a time, their rays traced eight per AVX instruction (the lecture rung, on a scene of "
+         "at most 64 triangles, diffuse, no spheres or point lights): the lecture rung's image, faster", 0, 0},
         {"--bench", CLI_BOOL, &bench, NULL,
          "print seconds per million camera samples on the Cornell box for every rung, 1 and 2 threads "
          "taking turns (a square of --width pixels, --spp samples; best of 5)", 0, 0},
@@ -219,6 +223,32 @@ int main(int argc, char **argv)
         if (status == 0 && !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
             fprintf(stderr, "09-path-tracing: %s\n", err);
             status = 1;
+        }
+        estimate_image_free(&e);
+    } else if (wide) {
+        /* Eight paths at a time (path_tracer_wide.h): no progress line and
+         * no --explain, which follow one path. */
+        camera cam = pt_scene_camera(&sc, opts.width, opts.height);
+        char why[128];
+        estimate_image e;
+        if (!path_tracer_wide_supported(&pt, why, sizeof why)) {
+            fprintf(stderr, "09-path-tracing: --wide: not for this render: %s\n", why);
+            pt_scene_free(&sc);
+            return 2;
+        }
+        render_estimate_wide(&pt, &cam, opts.spp, opts.seed, opts.threads, &e);
+        char counters_path[4096];
+        counters_path_for_image(opts.out, counters_path, sizeof counters_path);
+        if (!image_write(&e.mean, opts.out, opts.exposure, err, sizeof err) ||
+            !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
+            fprintf(stderr, "09-path-tracing: %s\n", err);
+            status = 1;
+        } else if (!opts.quiet) {
+            printf("09-path-tracing: %dx%d, %d spp, 8 paths at a time, %d threads, %.3f s -> %s\n", opts.width,
+                   opts.height, opts.spp, opts.threads, e.seconds, opts.out);
+            counters_print(stdout, &e.counters, e.seconds);
+            printf("lecture: %.3f s per million camera samples (%d threads, 8 paths at a time)\n",
+                   e.seconds / ((double)opts.width * opts.height * opts.spp) * 1e6, opts.threads);
         }
         estimate_image_free(&e);
     } else {

@@ -272,8 +272,13 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
             return l_dir;
         }
     } else {
-        /* wi uniform on the hemisphere around n: pdf = 1 / (2 pi) */
-        vec3 local = sample_uniform_hemisphere(vec2_make(pt_random_float(rng), pt_random_float(rng)));
+        /* wi uniform on the hemisphere around n: pdf = 1 / (2 pi). The two
+         * numbers in a fixed order: C leaves the order of a call's arguments
+         * open, and GCC drew the second coordinate first, so that order is
+         * kept (the images stay as they were) and now holds for any
+         * compiler, and for path_tracer_wide.c. */
+        float u_y = pt_random_float(rng), u_x = pt_random_float(rng);
+        vec3 local = sample_uniform_hemisphere(vec2_make(u_x, u_y));
         s.wi = frame_to_world(n, local);
         s.pdf = uniform_hemisphere_pdf();
         s.weight = vec3_scale(bsdf_eval(m, n, wo, s.wi), local.z / s.pdf); /* f_r cos / pdf */

@@ -1,0 +1,45 @@
+/* path_tracer_wide.h -- the lecture's path tracer, eight paths at a time.
+ *
+ * One path is a chain: each bounce waits for the ray before it, and the
+ * processor has little to do while it waits. Eight paths -- eight pixels,
+ * each with its own random numbers, its samples one after another -- are
+ * eight chains side by side: their rays are traced together, eight per AVX
+ * instruction (chapter 06's flat_closest_hit8 and flat_any_hit8), and
+ * their shading, still one path at a time, gives the processor eight
+ * independent things to do instead of one. A lane whose path ends starts its
+ * pixel's next sample; a lane whose pixel is done takes the next pixel.
+ *
+ * Each pixel draws the same random numbers in the same order as
+ * path_trace_radiance() and makes the same decisions (the same rays, hits,
+ * light samples and roulette), so its samples are the lecture rung's but for
+ * rounding: the sum along a path is added from the camera out instead of
+ * from the last bounce back (the recursion), which moves the last bits.
+ *
+ * For the lecture rung on a scene the flat set holds (at most 64
+ * triangles: chapter 09's Cornell box), diffuse materials only, no spheres
+ * and no point lights; path_tracer_wide_supported() says why not otherwise.
+ *
+ * Usage:
+ *   estimate_image e;
+ *   if (render_estimate_wide(&pt, &cam, spp, seed, threads, &e)) ... else render_estimate(...)
+ */
+#ifndef PATH_TRACER_WIDE_H
+#define PATH_TRACER_WIDE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "09-path-tracing/experiments.h"
+#include "09-path-tracing/path_tracer.h"
+
+/* Can pt render eight paths at a time? If not, why (into why, if not NULL). */
+bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_size);
+
+/* render_estimate(), eight paths at a time: the same per-pixel streams, the
+ * same counters but for primitive_tests (every triangle for every ray, in
+ * a packet that runs until all its rays are answered). False, and *out
+ * untouched, if not supported. */
+bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int threads,
+                          estimate_image *out);
+
+#endif

@@ -10,9 +10,10 @@
  * with the arithmetic of chapter 06's 4-wide leaves made 8 wide.
  *
  * The triangles are kept in blocks of eight, structure of arrays (as
- * bvh4_packet, twice as wide). Three kernels give the same answers: AVX
+ * bvh4_packet, twice as wide). Four kernels give the same answers: AVX
  * where the processor has it (asked at run time, so one binary runs
- * everywhere), SSE (each block as two halves), and a plain C loop. Each
+ * everywhere; compiled once more for AVX-512's 32 registers, where it has
+ * those), SSE (each block as two halves), and a plain C loop. Each
  * lane does exactly the arithmetic of triangle_intersect_barycentric(), so
  * every t is the scalar test's, bit for bit; of equal t the lower triangle
  * index wins, as in chapter 03's brute force.
@@ -45,7 +46,8 @@ typedef struct {
     int32_t index[FLAT_LANES];
 } flat_block;
 
-typedef enum { FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR } flat_kernel;
+/* AVX512: the AVX code with AVX-512's 32 registers (still 8 lanes). */
+typedef enum { FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR } flat_kernel;
 
 typedef struct {
     accel base;

@@ -49,7 +49,22 @@ typedef struct {
     vec3 throughput;   /* the product of f cos / pdf / P_RR before that vertex */
     vec3 pending;      /* a light sample's contribution, if its shadow ray gets through */
     bool goes_on;      /* after this vertex: trace r (set to the next ray) */
+    /* Shadow rays wait in the row's queue until there are eight (below):
+     * how many of this sample's do, and the sample before it, ended but
+     * still waiting for some (at most one: it is settled before the next
+     * one ends, so samples reach the pixel's mean in order). */
+    int sample_id, unsettled;
+    bool waiting;
+    int waiting_unsettled;
+    vec3 waiting_radiance;
 } lane;
+
+/* A shadow ray waiting in the queue, and what it brings if it gets through. */
+typedef struct {
+    ray r;
+    vec3 contribution;
+    int lane, sample_id;
+} queued_shadow;
 
 typedef struct {
     const path_tracer *pt;
@@ -59,6 +74,9 @@ typedef struct {
     image *mean, *standard_error;
     int y, next_x; /* the row, and its next pixel not yet given to a lane */
     ray_counters *counters;
+    lane *lanes;
+    queued_shadow queue[2 * FLAT_LANES];
+    int queued;
 } row_job;
 
 static bool is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
@@ -86,16 +104,18 @@ static void start_pixel(lane *l, row_job *job)
     l->x = job->next_x++;
     l->y = job->y;
     l->samples_left = job->spp;
+    l->sample_id = 0;
+    l->unsettled = 0;
+    l->waiting = false;
     l->rng = pcg32_for_pixel(job->seed, (uint64_t)l->y * (uint64_t)job->cam->width + (uint64_t)l->x);
     memset(l->channel, 0, sizeof l->channel);
     start_sample(l, job);
 }
 
-/* The sample is done: into the pixel's mean (NaN and Inf dropped, as
- * render_pixel() does), then the next sample or the next pixel. */
-static void end_sample(lane *l, row_job *job)
+/* A sample's radiance into its pixel's mean (NaN and Inf dropped, as
+ * render_pixel() does). */
+static void settle(lane *l, vec3 s, row_job *job)
 {
-    vec3 s = l->radiance;
     if (vec3_is_finite(s)) {
         welford_add(&l->channel[0], s.x);
         welford_add(&l->channel[1], s.y);
@@ -103,10 +123,70 @@ static void end_sample(lane *l, row_job *job)
     } else {
         job->counters->nonfinite_samples++;
     }
+}
+
+/* Trace the first n queued shadow rays (n <= 8) as one packet, and give
+ * each that gets through its contribution, to the sample it belongs to:
+ * the lane's current one, or the one before, which is settled once its
+ * last shadow ray is traced. */
+static void trace_queued(row_job *job, int n)
+{
+    const pt_scene *sc = job->pt->scene;
+    ray rays[FLAT_LANES];
+    bool blocked[FLAT_LANES];
+    if (n <= 0)
+        return;
+    for (int k = 0; k < n; k++)
+        rays[k] = job->queue[k].r;
+    flat_any_hit8(sc->bvh, rays, (1 << n) - 1, blocked, job->counters);
+    for (int k = 0; k < n; k++) {
+        const queued_shadow *q = &job->queue[k];
+        lane *l = &job->lanes[q->lane];
+        if (q->sample_id == l->sample_id) {
+            if (!blocked[k])
+                l->radiance = vec3_add(l->radiance, q->contribution);
+            l->unsettled--;
+            continue;
+        }
+        if (!blocked[k])
+            l->waiting_radiance = vec3_add(l->waiting_radiance, q->contribution);
+        if (--l->waiting_unsettled == 0) {
+            settle(l, l->waiting_radiance, job);
+            l->waiting = false;
+        }
+    }
+    job->queued -= n;
+    memmove(job->queue, job->queue + n, (size_t)job->queued * sizeof job->queue[0]);
+}
+
+/* Settle the lane's waiting sample: its shadow rays were queued before
+ * any of the current sample's, so tracing from the front of the queue
+ * reaches them first, in packets as full as the queue allows. */
+static void settle_waiting(lane *l, row_job *job)
+{
+    while (l->waiting && job->queued > 0)
+        trace_queued(job, job->queued < FLAT_LANES ? job->queued : FLAT_LANES);
+}
+
+/* The sample's path is done: into the pixel's mean once its shadow rays
+ * are traced, then the next sample or the next pixel. */
+static void end_sample(lane *l, row_job *job)
+{
+    settle_waiting(l, job); /* the sample before it must reach the mean first */
+    if (l->unsettled == 0) {
+        settle(l, l->radiance, job);
+    } else {
+        l->waiting = true;
+        l->waiting_unsettled = l->unsettled;
+        l->waiting_radiance = l->radiance;
+    }
+    l->sample_id++;
+    l->unsettled = 0;
     if (--l->samples_left > 0) {
         start_sample(l, job);
         return;
     }
+    settle_waiting(l, job); /* the pixel's last sample */
     image_set(job->mean, l->x, l->y,
               vec3_make((float)welford_mean(&l->channel[0]), (float)welford_mean(&l->channel[1]),
                         (float)welford_mean(&l->channel[2])));
@@ -185,21 +265,22 @@ static void render_row(row_job *job)
     const path_tracer *pt = job->pt;
     const pt_scene *sc = pt->scene;
     lane lanes[LANES];
+    job->lanes = lanes;
+    job->queued = 0;
     for (int k = 0; k < LANES; k++)
         start_pixel(&lanes[k], job);
     for (;;) {
         int active = 0;
-        ray rays[LANES], shadows[LANES];
+        ray rays[LANES];
         for (int k = 0; k < LANES; k++) {
             rays[k] = lanes[k].r;
             active |= (lanes[k].x >= 0) << k;
         }
         if (active == 0)
-            return;
+            return; /* every pixel written, so no shadow ray waits */
         hit_record hits[LANES];
-        bool found[LANES], blocked[LANES];
+        bool found[LANES];
         flat_closest_hit8(sc->bvh, rays, active, hits, found, job->counters);
-        int shadow_lanes = 0;
         for (int k = 0; k < LANES; k++) {
             lane *l = &lanes[k];
             if (!((active >> k) & 1))
@@ -215,19 +296,21 @@ static void render_row(row_job *job)
                 l->wo = vec3_normalize(vec3_neg(l->r.direction));
                 l->camera = false;
             }
-            shadow_lanes |= shade_vertex(l, &hits[k], pt, &shadows[k], job->counters) << k;
+            ray shadow;
+            if (shade_vertex(l, &hits[k], pt, &shadow, job->counters)) {
+                job->queue[job->queued++] = (queued_shadow){shadow, l->pending, k, l->sample_id};
+                l->unsettled++;
+            }
         }
-        /* The shadow rays, eight at a time, against every triangle: the
-         * walls (pt_scene_occluded) were tried here and saved nothing, their
-         * test per ray costing what the ten triangles cost. */
-        if (shadow_lanes != 0)
-            flat_any_hit8(sc->bvh, shadows, shadow_lanes, blocked, job->counters);
+        /* The shadow rays wait until there are eight: a light sample that
+         * faces away needs none, so one step's would fill a packet a little
+         * over half, and cost as much as a full one. */
+        while (job->queued >= LANES)
+            trace_queued(job, LANES);
         for (int k = 0; k < LANES; k++) {
             lane *l = &lanes[k];
             if (!((active >> k) & 1))
                 continue;
-            if (((shadow_lanes >> k) & 1) && !blocked[k])
-                l->radiance = vec3_add(l->radiance, l->pending);
             if (l->goes_on)
                 l->depth++;
             else
@@ -254,7 +337,8 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
         ray_counters mine = {0};
 #pragma omp for schedule(dynamic, 1)
         for (int y = 0; y < cam->height; y++) {
-            row_job job = {pt, cam, spp, seed, &e.mean, &e.standard_error, y, 0, &mine};
+            row_job job = {.pt = pt, .cam = cam, .spp = spp, .seed = seed, .mean = &e.mean,
+                           .standard_error = &e.standard_error, .y = y, .counters = &mine};
             render_row(&job);
         }
 #pragma omp critical(render_wide_counters)

@@ -1015,6 +1015,12 @@ static void test_wide_renders_the_lecture_rungs_paths(void **state)
     assert_int_equal(wide.counters.indirect_rays, scalar.counters.indirect_rays);
     assert_memory_equal(wide.mean.rgb, wide2.mean.rgb, sizeof(float) * 3 * 24 * 24);
     assert_memory_equal(wide.standard_error.rgb, wide2.standard_error.rgb, sizeof(float) * 3 * 24 * 24);
+    estimate_image_free(&wide2);
+    /* the light samples' arithmetic lane by lane instead of in AVX: the same bits */
+    path_tracer_wide_use_avx(false);
+    assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 1, &wide2));
+    path_tracer_wide_use_avx(true);
+    assert_memory_equal(wide.mean.rgb, wide2.mean.rgb, sizeof(float) * 3 * 24 * 24);
     /* the twin: a different rung's paths are caught */
     path_tracer cosine = tracer(&sc, PT_COSINE, RR_FIXED);
     estimate_image other = render_estimate(&cosine, &cam, 8, test_seed(91), 1);

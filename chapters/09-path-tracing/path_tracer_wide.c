@@ -13,7 +13,19 @@
 #include "stats.h"
 #include "timer.h"
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#define WIDE_HAVE_AVX 1
+#include <immintrin.h>
+#else
+#define WIDE_HAVE_AVX 0
+#endif
+
 enum { LANES = FLAT_LANES };
+
+/* path_tracer_wide_use_avx(): the light samples' arithmetic in AVX where
+ * the processor has it, or lane by lane (the same bits; for the tests). */
+static bool use_avx = true;
+void path_tracer_wide_use_avx(bool on) { use_avx = on; }
 
 bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_size)
 {
@@ -47,7 +59,6 @@ typedef struct {
     vec3 wo;           /* the direction back along r, for that vertex */
     vec3 radiance;     /* gathered so far */
     vec3 throughput;   /* the product of f cos / pdf / P_RR before that vertex */
-    vec3 pending;      /* a light sample's contribution, if its shadow ray gets through */
     bool goes_on;      /* after this vertex: trace r (set to the next ray) */
     /* Shadow rays wait in the row's queue until there are eight (below):
      * how many of this sample's do, and the sample before it, ended but
@@ -77,6 +88,7 @@ typedef struct {
     lane *lanes;
     queued_shadow queue[2 * FLAT_LANES];
     int queued;
+    bool avx; /* light_math_avx, where the processor has AVX */
 } row_job;
 
 static bool is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
@@ -196,67 +208,144 @@ static void end_sample(lane *l, row_job *job)
     start_pixel(l, job);
 }
 
-/* What shade() of path_tracer.c does at one vertex, for the lecture rung
- * on diffuse surfaces, in the same order and with the same random numbers:
- * the light sample (its shadow ray built into *shadow, its contribution
- * into l->pending, times the throughput), then the roulette and the next
- * direction (l->r, l->goes_on). Returns whether a shadow ray is to be
- * traced. */
-static bool shade_vertex(lane *l, const hit_record *hit, const path_tracer *pt, ray *shadow, ray_counters *counters)
+/* ---- one vertex of eight paths ------------------------------------------------
+ * What shade() of path_tracer.c does at a vertex, for the lecture rung on
+ * diffuse surfaces, in the same order and with the same random numbers,
+ * in three parts: each lane picks its point on a light (pick_light); the
+ * light sample's arithmetic runs for all eight lanes at once (light_math);
+ * each lane then queues its shadow ray and draws the roulette and its next
+ * direction (continue_path). */
+
+/* The eight lanes' light samples, structure of arrays: what light_math
+ * reads (the hit point p, shading normal n, direction back wo, albedo,
+ * throughput; the point on the light, its normal, radiance and pdf per
+ * unit area) and writes (each lane's contribution, times its throughput). */
+typedef struct {
+    _Alignas(32) float p[3][LANES], n[3][LANES], wo[3][LANES], albedo[3][LANES], throughput[3][LANES];
+    _Alignas(32) float x_light[3][LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];
+    _Alignas(32) float contribution[3][LANES];
+} light_lanes;
+
+static void lanes_set(float v[3][LANES], int k, vec3 x)
 {
-    const pt_scene *sc = pt->scene;
-    const pt_material *m = &sc->materials[hit->material_id];
+    v[0][k] = x.x;
+    v[1][k] = x.y;
+    v[2][k] = x.z;
+}
+
+/* Lane k's random numbers for its light sample, and the point they pick:
+ * false if there is no light to sample. */
+static bool pick_light(lane *l, const hit_record *hit, const pt_scene *sc, light_lanes *L, int k)
+{
+    vec3 x_light, n_light;
+    int light_material;
+    float u_pick = pcg32_float(&l->rng), u1 = pcg32_float(&l->rng), u2 = pcg32_float(&l->rng);
+    if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &n_light, &light_material))
+        return false;
+    lanes_set(L->p, k, hit->point);
+    lanes_set(L->n, k, hit->normal_shading);
+    lanes_set(L->wo, k, l->wo);
+    lanes_set(L->albedo, k, sc->materials[hit->material_id].albedo);
+    lanes_set(L->throughput, k, l->throughput);
+    lanes_set(L->x_light, k, x_light);
+    lanes_set(L->n_light, k, n_light);
+    lanes_set(L->le, k, sc->materials[light_material].emission);
+    L->pdf_area[k] = pt_scene_emitter_pdf_area(sc, light_material);
+    return true;
+}
+
+/* sample_direct_light()'s arithmetic for one lane, exactly: the mask bit
+ * says whether the sample adds anything (light and surface face each
+ * other, f is not black), and the contribution is what it adds, times the
+ * throughput, if its shadow ray gets through. */
+static int light_math_lane(light_lanes *L, int k)
+{
+#define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
+    vec3 to_light = vec3_sub(AT(x_light), AT(p));
+    float distance2 = vec3_length_squared(to_light);
+    vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
+    vec3 n = AT(n);
+    float cos_theta = vec3_dot(n, wi);
+    float cos_theta_light = -vec3_dot(AT(n_light), wi);
+    if (!(cos_theta_light > 0.0f && cos_theta > 0.0f))
+        return 0;
+    /* bsdf_eval() of a diffuse surface */
+    if (vec3_dot(n, wi) <= 0.0f || vec3_dot(n, AT(wo)) <= 0.0f)
+        return 0;
+    vec3 f = vec3_scale(AT(albedo), 1.0f / (float)PI);
+    if (is_black(f))
+        return 0;
+    float pdf_light = distance2 * L->pdf_area[k] / cos_theta_light;
+    vec3 contribution = vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * 1.0f));
+    lanes_set(L->contribution, k, contribution);
+    return 1 << k;
+#undef AT
+}
+
+#if WIDE_HAVE_AVX
+/* The same for the lanes of `lanes`, eight per AVX instruction: the same
+ * operations in the same order (sqrt and division are exact in IEEE, so
+ * every lane gets the very bits of light_math_lane). */
+__attribute__((target("avx"))) static int light_math_avx(light_lanes *L, int lanes)
+{
+#define LOAD3(v, i) _mm256_load_ps(L->v[i])
+#define DOT(ax, ay, az, bx, by, bz)                                                                          \
+    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz))
+    const __m256 zero = _mm256_setzero_ps();
+    __m256 tx = _mm256_sub_ps(LOAD3(x_light, 0), LOAD3(p, 0)), ty = _mm256_sub_ps(LOAD3(x_light, 1), LOAD3(p, 1)),
+           tz = _mm256_sub_ps(LOAD3(x_light, 2), LOAD3(p, 2));
+    __m256 distance2 = DOT(tx, ty, tz, tx, ty, tz);
+    __m256 inverse = _mm256_div_ps(_mm256_set1_ps(1.0f), _mm256_sqrt_ps(distance2));
+    __m256 wx = _mm256_mul_ps(tx, inverse), wy = _mm256_mul_ps(ty, inverse), wz = _mm256_mul_ps(tz, inverse);
+    __m256 nx = LOAD3(n, 0), ny = LOAD3(n, 1), nz = LOAD3(n, 2);
+    __m256 cos_theta = DOT(nx, ny, nz, wx, wy, wz);
+    __m256 cos_theta_light = _mm256_sub_ps(zero, DOT(LOAD3(n_light, 0), LOAD3(n_light, 1), LOAD3(n_light, 2), wx, wy, wz));
+    __m256 cos_wo = DOT(nx, ny, nz, LOAD3(wo, 0), LOAD3(wo, 1), LOAD3(wo, 2));
+    __m256 ok = _mm256_and_ps(_mm256_cmp_ps(cos_theta_light, zero, _CMP_GT_OQ), _mm256_cmp_ps(cos_theta, zero, _CMP_GT_OQ));
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(cos_wo, zero, _CMP_GT_OQ));
+    const __m256 inv_pi = _mm256_set1_ps(1.0f / (float)PI);
+    __m256 fx = _mm256_mul_ps(LOAD3(albedo, 0), inv_pi), fy = _mm256_mul_ps(LOAD3(albedo, 1), inv_pi),
+           fz = _mm256_mul_ps(LOAD3(albedo, 2), inv_pi);
+    __m256 black = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(fx, zero, _CMP_EQ_OQ), _mm256_cmp_ps(fy, zero, _CMP_EQ_OQ)),
+                                 _mm256_cmp_ps(fz, zero, _CMP_EQ_OQ));
+    ok = _mm256_andnot_ps(black, ok);
+    __m256 pdf_light = _mm256_div_ps(_mm256_mul_ps(distance2, _mm256_load_ps(L->pdf_area)), cos_theta_light);
+    __m256 scale = _mm256_mul_ps(_mm256_div_ps(cos_theta, pdf_light), _mm256_set1_ps(1.0f));
+    _mm256_store_ps(L->contribution[0], _mm256_mul_ps(LOAD3(throughput, 0), _mm256_mul_ps(_mm256_mul_ps(LOAD3(le, 0), fx), scale)));
+    _mm256_store_ps(L->contribution[1], _mm256_mul_ps(LOAD3(throughput, 1), _mm256_mul_ps(_mm256_mul_ps(LOAD3(le, 1), fy), scale)));
+    _mm256_store_ps(L->contribution[2], _mm256_mul_ps(LOAD3(throughput, 2), _mm256_mul_ps(_mm256_mul_ps(LOAD3(le, 2), fz), scale)));
+    int mask = _mm256_movemask_ps(ok) & lanes;
+    _mm256_zeroupper();
+    return mask;
+#undef LOAD3
+#undef DOT
+}
+#endif
+
+/* The roulette and the next direction, after the light sample: l->r and
+ * l->goes_on. */
+static void continue_path(lane *l, const hit_record *hit, const path_tracer *pt, ray_counters *counters)
+{
+    const pt_material *m = &pt->scene->materials[hit->material_id];
     vec3 n = hit->normal_shading;
-    bool needs_shadow = false;
     l->goes_on = false;
-    l->pending = vec3_splat(0.0f);
-    if (l->depth + 1 <= pt->max_depth) {
-        /* sample_direct_light(), with_mis false */
-        vec3 x_light, n_light;
-        int light_material;
-        float u_pick = pcg32_float(&l->rng), u1 = pcg32_float(&l->rng), u2 = pcg32_float(&l->rng);
-        if (pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &n_light, &light_material)) {
-            vec3 to_light = vec3_sub(x_light, hit->point);
-            float distance2 = vec3_length_squared(to_light);
-            vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-            float cos_theta = vec3_dot(n, wi);
-            float cos_theta_light = -vec3_dot(n_light, wi);
-            if (cos_theta_light > 0.0f && cos_theta > 0.0f) {
-                vec3 f = bsdf_eval(m, n, l->wo, wi);
-                if (!is_black(f)) {
-                    float pdf_light = distance2 * pt_scene_emitter_pdf_area(sc, light_material) / cos_theta_light;
-                    vec3 le = sc->materials[light_material].emission;
-                    vec3 contribution = vec3_scale(vec3_mul(le, f), cos_theta / pdf_light * 1.0f);
-                    l->pending = vec3_mul(l->throughput, contribution);
-                    if (pt->effects & EFFECT_SHADOWS) {
-                        *shadow = ray_spawn_to(hit->point, hit->normal_geometric, x_light, n_light);
-                        counters->shadow_rays++;
-                        needs_shadow = true;
-                    } else {
-                        l->radiance = vec3_add(l->radiance, l->pending);
-                    }
-                }
-            }
-        }
-    }
     if (l->depth + 2 > pt->max_depth || !(pt->effects & EFFECT_INDIRECT))
-        return needs_shadow;
+        return;
     float p_rr = pt->russian_roulette == RR_OFF ? 1.0f : pt->rr_probability;
     if (pt->russian_roulette != RR_OFF && pcg32_float(&l->rng) >= p_rr)
-        return needs_shadow;
+        return;
     float u_y = pcg32_float(&l->rng), u_x = pcg32_float(&l->rng); /* shade()'s order */
     vec3 local = sample_uniform_hemisphere(vec2_make(u_x, u_y));
     vec3 wi = frame_to_world(n, local);
     float pdf = uniform_hemisphere_pdf();
     vec3 weight = vec3_scale(bsdf_eval(m, n, l->wo, wi), local.z / pdf);
     if (is_black(weight))
-        return needs_shadow;
+        return;
     counters->indirect_rays++;
     l->r = ray_spawn(hit->point, hit->normal_geometric, wi);
     l->wo = vec3_neg(wi);
     l->throughput = vec3_scale(vec3_mul(l->throughput, weight), 1.0f / p_rr);
     l->goes_on = true;
-    return needs_shadow;
 }
 
 /* One row of the image, eight pixels at a time. */
@@ -281,6 +370,8 @@ static void render_row(row_job *job)
         hit_record hits[LANES];
         bool found[LANES];
         flat_closest_hit8(sc->bvh, rays, active, hits, found, job->counters);
+        light_lanes L;
+        int picked = 0, hit_lanes = 0;
         for (int k = 0; k < LANES; k++) {
             lane *l = &lanes[k];
             if (!((active >> k) & 1))
@@ -290,17 +381,43 @@ static void render_row(row_job *job)
                 l->goes_on = false;
                 continue;
             }
+            hit_lanes |= 1 << k;
             if (l->camera) { /* what the eye sees directly: the emission at the first hit */
                 const pt_material *m = &sc->materials[hits[k].material_id];
                 l->radiance = hits[k].front_face ? m->emission : vec3_splat(0.0f);
                 l->wo = vec3_normalize(vec3_neg(l->r.direction));
                 l->camera = false;
             }
-            ray shadow;
-            if (shade_vertex(l, &hits[k], pt, &shadow, job->counters)) {
-                job->queue[job->queued++] = (queued_shadow){shadow, l->pending, k, l->sample_id};
-                l->unsettled++;
+            if (l->depth + 1 <= pt->max_depth && pick_light(l, &hits[k], sc, &L, k))
+                picked |= 1 << k;
+        }
+        int lit = 0;
+#if WIDE_HAVE_AVX
+        if (picked != 0 && job->avx)
+            lit = light_math_avx(&L, picked);
+        else
+#endif
+            for (int k = 0; k < LANES; k++)
+                if ((picked >> k) & 1)
+                    lit |= light_math_lane(&L, k);
+        for (int k = 0; k < LANES; k++) {
+            lane *l = &lanes[k];
+            if (!((hit_lanes >> k) & 1))
+                continue;
+            if ((lit >> k) & 1) {
+                vec3 contribution = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
+                if (pt->effects & EFFECT_SHADOWS) {
+                    vec3 x_light = vec3_make(L.x_light[0][k], L.x_light[1][k], L.x_light[2][k]);
+                    vec3 n_light = vec3_make(L.n_light[0][k], L.n_light[1][k], L.n_light[2][k]);
+                    ray shadow = ray_spawn_to(hits[k].point, hits[k].normal_geometric, x_light, n_light);
+                    job->counters->shadow_rays++;
+                    job->queue[job->queued++] = (queued_shadow){shadow, contribution, k, l->sample_id};
+                    l->unsettled++;
+                } else {
+                    l->radiance = vec3_add(l->radiance, contribution);
+                }
             }
+            continue_path(l, &hits[k], pt, job->counters);
         }
         /* The shadow rays wait until there are eight: a light sample that
          * faces away needs none, so one step's would fill a packet a little
@@ -331,6 +448,11 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
     memset(&e.counters, 0, sizeof e.counters);
     if (threads <= 0)
         threads = omp_get_max_threads();
+#if WIDE_HAVE_AVX
+    const bool avx = use_avx && __builtin_cpu_supports("avx");
+#else
+    const bool avx = false;
+#endif
     double start = timer_seconds();
 #pragma omp parallel num_threads(threads)
     {
@@ -338,7 +460,7 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
 #pragma omp for schedule(dynamic, 1)
         for (int y = 0; y < cam->height; y++) {
             row_job job = {.pt = pt, .cam = cam, .spp = spp, .seed = seed, .mean = &e.mean,
-                           .standard_error = &e.standard_error, .y = y, .counters = &mine};
+                           .standard_error = &e.standard_error, .y = y, .counters = &mine, .avx = avx};
             render_row(&job);
         }
 #pragma omp critical(render_wide_counters)

@@ -42,4 +42,10 @@ bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_siz
 bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int threads,
                           estimate_image *out);
 
+/* The light samples' arithmetic eight lanes per AVX instruction (true,
+ * the default, where the processor has AVX) or one lane at a time: the
+ * same bits either way (tests/test_ch09.c). Not thread-safe: set it before
+ * rendering. */
+void path_tracer_wide_use_avx(bool on);
+
 #endif

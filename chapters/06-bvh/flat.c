@@ -359,31 +359,38 @@ flat_kernel flat_best_kernel(void)
 #endif
 }
 
-bool flat_set_kernel(accel *a, flat_kernel kernel)
+bool flat_kernel_runs(flat_kernel kernel)
 {
-    flat *f = (flat *)a;
     switch (kernel) {
     case FLAT_KERNEL_SCALAR:
-        f->base.ops = &flat_ops_scalar;
-        break;
+        return true;
 #if FLAT_HAVE_X86
     case FLAT_KERNEL_SSE:
-        f->base.ops = &flat_ops_sse;
-        break;
+        return true;
     case FLAT_KERNEL_AVX:
-        if (!__builtin_cpu_supports("avx"))
-            return false;
-        f->base.ops = &flat_ops_avx;
-        break;
+        return __builtin_cpu_supports("avx");
     case FLAT_KERNEL_AVX512:
-        if (!has_avx512())
-            return false;
-        f->base.ops = &flat_ops_avx512;
-        break;
+        return has_avx512();
 #endif
     default:
         return false;
     }
+}
+
+bool flat_set_kernel(accel *a, flat_kernel kernel)
+{
+    static const accel_ops *const ops[] = {
+#if FLAT_HAVE_X86
+        [FLAT_KERNEL_AVX512] = &flat_ops_avx512,
+        [FLAT_KERNEL_AVX] = &flat_ops_avx,
+        [FLAT_KERNEL_SSE] = &flat_ops_sse,
+#endif
+        [FLAT_KERNEL_SCALAR] = &flat_ops_scalar,
+    };
+    if (!flat_kernel_runs(kernel))
+        return false;
+    flat *f = (flat *)a;
+    f->base.ops = ops[kernel];
     f->kernel = kernel;
     return true;
 }

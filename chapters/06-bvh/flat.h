@@ -59,6 +59,8 @@ typedef struct {
 /* The blocks of set's triangles, in order; the kernel is the widest the
  * processor runs. */
 accel *flat_build(const triangle_set *set);
+/* Does this processor (and build) run the kernel? */
+bool flat_kernel_runs(flat_kernel kernel);
 /* Switch the kernel; false (and nothing changed) if this processor or
  * build cannot run it. */
 bool flat_set_kernel(accel *a, flat_kernel kernel);

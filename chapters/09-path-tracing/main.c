@@ -87,6 +87,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "09-path-tracing: --bench-csv %s: only with --bench\ntry --help\n", bench_csv);
         return 2;
     }
+    if (wide && (bench || data != NULL || time_budget > 0.0f || target_error > 0.0f)) {
+        fprintf(stderr, "09-path-tracing: --wide renders one image: not with --bench (which has a row for it), "
+                        "--data, --time-budget or --target-error\ntry --help\n");
+        return 2;
+    }
 
     path_tracer pt;
     pt_scene sc;
@@ -231,6 +236,11 @@ int main(int argc, char **argv)
         camera cam = pt_scene_camera(&sc, opts.width, opts.height);
         char why[128];
         estimate_image e;
+        if (opts.explain) {
+            fprintf(stderr, "09-path-tracing: --explain follows one path, --wide eight at once: use one of them\n");
+            pt_scene_free(&sc);
+            return 2;
+        }
         if (!path_tracer_wide_supported(&pt, why, sizeof why)) {
             fprintf(stderr, "09-path-tracing: --wide: not for this render: %s\n", why);
             pt_scene_free(&sc);

@@ -4,10 +4,12 @@
  * processor has little to do while it waits. Eight paths -- eight pixels,
  * each with its own random numbers, its samples one after another -- are
  * eight chains side by side: their rays are traced together, eight per AVX
- * instruction (chapter 06's flat_closest_hit8 and flat_any_hit8), and
- * their shading, still one path at a time, gives the processor eight
- * independent things to do instead of one. A lane whose path ends starts its
- * pixel's next sample; a lane whose pixel is done takes the next pixel.
+ * instruction (chapter 06's flat_closest_hit8 and flat_any_hit8, shadow
+ * rays queued until there are eight), so is the light sample's arithmetic,
+ * and the rest of the shading, one path at a time, gives the processor
+ * eight independent things to do instead of one. A lane whose path ends
+ * starts its pixel's next sample; a lane whose pixel is done takes the next
+ * pixel.
  *
  * Each pixel draws the same random numbers in the same order as
  * path_trace_radiance() and makes the same decisions (the same rays, hits,

@@ -8,6 +8,7 @@
 #define VEC3_H
 
 #include <math.h>
+#include <stdbool.h>
 
 #define PI 3.14159265358979323846
 
@@ -38,6 +39,9 @@ static inline float vec3_max_component(vec3 a) { return fmaxf(a.x, fmaxf(a.y, a.
 /* Axis by index (0 = x, 1 = y, 2 = z), for code that loops over the three slabs. */
 static inline float vec3_axis(vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
 static inline vec3 vec3_lerp(vec3 a, vec3 b, float t) { return vec3_add(vec3_scale(a, 1.0f - t), vec3_scale(b, t)); }
+/* All three channels exactly 0: a BSDF value or weight that adds nothing
+ * (so no ray needs tracing for it). */
+static inline bool vec3_is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
 static inline int vec3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 /* Luminance of a linear-sRGB colour (Rec. 709 weights). */
 static inline float vec3_luminance(vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }

@@ -29,7 +29,6 @@ static vec3 random_unit(pcg32 *rng)
     return vec3_make(s * cosf(phi), s * sinf(phi), z);
 }
 
-static bool vec3_is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
 
 /* ---- Fresnel ---------------------------------------------------------------- */
 

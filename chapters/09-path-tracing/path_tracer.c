@@ -41,7 +41,6 @@ bool pt_integrator_parse(const char *name, pt_integrator *out)
     return false;
 }
 
-static bool is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
 
 /* ---- effects ------------------------------------------------------------------
  * Does a path go on from a non-delta surface of this material? Diffuse
@@ -127,7 +126,7 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
             explain_line(explain_depth, "light sample: faces away or lies below the surface: no shadow ray");
         if (cos_theta_light > 0.0f && cos_theta > 0.0f) {
             vec3 f = bsdf_eval(m, n, wo, wi);
-            if (!is_black(f)) {
+            if (!vec3_is_black(f)) {
                 /* The shadow ray must reach the light sample itself. */
                 /* No shadow ray when the effects analysis proved nothing can
                  * block a light (or the scene turned shadows off). */
@@ -176,7 +175,7 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
         if (cos_theta <= 0.0f)
             continue;
         vec3 f = bsdf_eval(m, n, wo, wi);
-        if (is_black(f))
+        if (vec3_is_black(f))
             continue;
         bool visible = true;
         if (pt->effects & EFFECT_SHADOWS) {
@@ -284,7 +283,7 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
         s.weight = vec3_scale(bsdf_eval(m, n, wo, s.wi), local.z / s.pdf); /* f_r cos / pdf */
         s.is_delta = false;
         s.is_transmission = false;
-        if (is_black(s.weight))
+        if (vec3_is_black(s.weight))
             return l_dir;
     }
     count_continuation(counters, &s);
@@ -369,7 +368,7 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_co
         /* Emission found by this ray. Light sampling at the previous vertex
          * already counted emitting triangles; with MIS both count, weighted. */
         vec3 le = emitted(sc, &hit);
-        if (!is_black(le)) {
+        if (!vec3_is_black(le)) {
             bool light_sampled = hit.shape_id >= 0; /* emitting triangles are in the light table */
             if (emission_counts || !light_sampled) {
                 radiance = vec3_add(radiance, vec3_mul(throughput, le));
@@ -426,7 +425,7 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_co
             s.is_delta = false;
             s.is_transmission = false;
         }
-        if (is_black(s.weight))
+        if (vec3_is_black(s.weight))
             break;
         if (s.is_delta && !delta_allowed(pt, &s)) {
             explain_line(indent, "no %s effect: the path ends here", s.is_transmission ? "refraction" : "reflection");

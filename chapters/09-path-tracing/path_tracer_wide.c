@@ -96,7 +96,6 @@ typedef struct {
     const float *pdf_area;
 } row_job;
 
-static bool is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
 
 /* A lane's next camera sample, drawn as render_pixel() draws it (jitter
  * within the pixel: two numbers). */
@@ -279,7 +278,7 @@ static int light_math_lane(light_lanes *L, int k)
     if (vec3_dot(n, wi) <= 0.0f || vec3_dot(n, AT(wo)) <= 0.0f)
         return 0;
     vec3 f = vec3_scale(AT(albedo), 1.0f / (float)PI);
-    if (is_black(f))
+    if (vec3_is_black(f))
         return 0;
     float pdf_light = distance2 * L->pdf_area[k] / cos_theta_light;
     vec3 contribution = vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * 1.0f));
@@ -345,7 +344,7 @@ static void continue_path(lane *l, const hit_record *hit, const path_tracer *pt,
     vec3 wi = frame_to_world(n, local);
     float pdf = uniform_hemisphere_pdf();
     vec3 weight = vec3_scale(bsdf_eval(m, n, l->wo, wi), local.z / pdf);
-    if (is_black(weight))
+    if (vec3_is_black(weight))
         return;
     counters->indirect_rays++;
     l->r = ray_spawn(hit->point, hit->normal_geometric, wi);

@@ -61,7 +61,6 @@ double distribution_glossy_rays_per_camera_ray(int glossy_samples, int max_depth
     return total;
 }
 
-static bool is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
 
 /* The power heuristic for a sample of technique a, taken n_a times, when
  * technique b (n_b samples) could also have drawn it (Veach 1997, 9.2.4:
@@ -112,7 +111,7 @@ static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, v
         if (!(cos_theta > 0.0f && cos_light > 0.0f))
             continue; /* the light faces away, or lies below the surface */
         vec3 f = bsdf_eval(m, n, wo, wi);
-        if (is_black(f))
+        if (vec3_is_black(f))
             continue;
         if (dt->effects & EFFECT_SHADOWS) {
             counters->shadow_rays++;
@@ -134,7 +133,7 @@ static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, v
         vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
         float cos_theta = vec3_dot(n, wi);
         vec3 f = cos_theta > 0.0f ? bsdf_eval(m, n, wo, wi) : vec3_splat(0.0f);
-        if (is_black(f))
+        if (vec3_is_black(f))
             continue;
         if (dt->effects & EFFECT_SHADOWS) {
             counters->shadow_rays++;
@@ -185,7 +184,7 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
     /* Emission. Emitting static triangles are the lights the samples aim
      * at; a glossy ray that finds one shares it with them by MIS. */
     vec3 le = hit.front_face ? m->emission : vec3_splat(0.0f);
-    if (!is_black(le)) {
+    if (!vec3_is_black(le)) {
         if (how.emission_counts || hit.shape_id < 0) {
             radiance = le;
         } else {
@@ -215,7 +214,7 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
         for (int k = 0; k < dt->glossy_samples; k++) {
             bsdf_sample_result s;
             vec2 u = vec2_make(pcg32_float(rng), pcg32_float(rng));
-            if (!bsdf_sample(m, n, wo, u, 0.0f, hit.front_face, &s) || is_black(s.weight))
+            if (!bsdf_sample(m, n, wo, u, 0.0f, hit.front_face, &s) || vec3_is_black(s.weight))
                 continue;
             counters->indirect_rays++;
             timed_ray next = {ray_spawn(hit.point, hit.normal_geometric, s.wi), tr.time};

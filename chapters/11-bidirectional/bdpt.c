@@ -34,7 +34,6 @@ bdpt bdpt_defaults(const pt_scene *scene, const camera *cam)
     return b;
 }
 
-static bool is_black(vec3 c) { return c.x == 0.0f && c.y == 0.0f && c.z == 0.0f; }
 
 bool bdpt_supports(const pt_scene *sc, char *err, size_t err_size)
 {
@@ -51,11 +50,11 @@ bool bdpt_supports(const pt_scene *sc, char *err, size_t err_size)
         return false;
     }
     for (int i = 0; i < sc->sphere_count; i++)
-        if (!is_black(sc->materials[sc->spheres[i].material].emission)) {
+        if (!vec3_is_black(sc->materials[sc->spheres[i].material].emission)) {
             snprintf(err, err_size, "sphere #%d emits: only emitting triangles are lights here", i);
             return false;
         }
-    if (!is_black(sc->environment)) {
+    if (!vec3_is_black(sc->environment)) {
         snprintf(err, err_size, "the scene has an environment (background) light: only emitting triangles are "
                  "lights here");
         return false;
@@ -184,7 +183,7 @@ static int random_walk(const bdpt *b, ray r, vec3 beta, float pdf_dir, bdpt_vert
         vec3 wo = vec3_normalize(vec3_neg(r.direction));
         bsdf_sample_result s;
         vec2 u = vec2_make(pcg32_float(rng), pcg32_float(rng));
-        if (!bsdf_sample(m, v->normal, wo, u, pcg32_float(rng), v->front_face, &s) || is_black(s.weight))
+        if (!bsdf_sample(m, v->normal, wo, u, pcg32_float(rng), v->front_face, &s) || vec3_is_black(s.weight))
             break;
         /* Russian roulette */
         if (count > b->rr_start_depth) {
@@ -353,7 +352,7 @@ static void connect_to_camera(const bdpt *b, const bdpt_vertex *light, int s, co
     if (!bdpt_camera_project(b->cam, y->point, &px, &py))
         return;
     vec3 f = end_factor(b, y, s >= 2 ? &light[s - 2] : NULL, eye->point);
-    if (is_black(f))
+    if (vec3_is_black(f))
         return;
     vec3 d = vec3_sub(eye->point, y->point);
     float distance2 = vec3_length_squared(d), distance = sqrtf(distance2);
@@ -380,14 +379,14 @@ static vec3 connect(const bdpt *b, const bdpt_vertex *light, int s, const bdpt_v
     vec3 c;
     if (s == 0) {
         const pt_material *m = &sc->materials[z->material];
-        if (!z->front_face || is_black(m->emission))
+        if (!z->front_face || vec3_is_black(m->emission))
             return vec3_splat(0.0f);
         c = vec3_mul(z->beta, m->emission);
     } else {
         const bdpt_vertex *y = &light[s - 1];
         vec3 f_y = end_factor(b, y, s >= 2 ? &light[s - 2] : NULL, z->point);
         vec3 f_z = end_factor(b, z, &camera[t - 2], y->point);
-        if (is_black(f_y) || is_black(f_z))
+        if (vec3_is_black(f_y) || vec3_is_black(f_z))
             return vec3_splat(0.0f);
         vec3 d = vec3_sub(z->point, y->point);
         float distance2 = vec3_length_squared(d), distance = sqrtf(distance2);

@@ -29,7 +29,6 @@ static vec3 random_unit(pcg32 *rng)
     return vec3_make(s * cosf(phi), s * sinf(phi), z);
 }
 
-
 /* ---- Fresnel ---------------------------------------------------------------- */
 
 /* R at normal incidence is ((eta_i - eta_t) / (eta_i + eta_t))^2 = (0.5 / 2.5)^2 = 0.04,

@@ -503,9 +503,9 @@ int main(int argc, char **argv)
         n = experiment_speed_scene(&sc, label, size, spp, reps, rows[k]);
     }
     use_kernel(&sc, ours, ours_occluders);
-    printf("\nours / Embree (wall s/M)                       1 thread  2 threads\n");
+    printf("\nours / Embree (wall s/M)                         1 thread  2 threads\n");
     for (int c = 0; c < n; c++)
-        printf("%-42s %9.2fx %9.2fx\n", rows[0][c].label, rows[0][c].wall[0] / rows[1][c].wall[0],
+        printf("%-44s %9.2fx %9.2fx\n", rows[0][c].label, rows[0][c].wall[0] / rows[1][c].wall[0],
                rows[0][c].wall[1] / rows[1][c].wall[1]);
     if (csv != NULL) {
         fprintf(csv, "tracer,case,threads,wall_s_per_msample,cpu_s_per_msample,rays_per_sample,scaling\n");

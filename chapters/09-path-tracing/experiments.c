@@ -392,10 +392,12 @@ typedef struct {
 /* Every case counts at most SPEED_MAX_DEPTH bounces, Ray Tracing: The Rest of
  * Your Life's max_depth for its Cornell box. The second is the first with
  * every shadow ray tested against the walls too (scene_pt.c, "walls cast no
- * shadows"): what they save. The last two are the
- * comparisons: Russian roulette only after 5 bounces, on the throughput
- * (smallpt continues with probability max(albedo) after depth 5), and no
- * roulette at all, the full 50 bounces (RTROWL). */
+ * shadows"): what they save. The last four are the comparisons at the
+ * references' depths, the issue's target: Russian roulette only after 5
+ * bounces, on the throughput (smallpt continues with probability
+ * max(albedo) after depth 5), and no roulette at all, the full 50 bounces
+ * (RTROWL), each by MIS one path at a time and by the lecture rung eight
+ * paths at a time. */
 enum { SPEED_MAX_DEPTH = 50 };
 static const speed_case speed_cases[] = {
     {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8", false, false},
@@ -404,7 +406,9 @@ static const speed_case speed_cases[] = {
     {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8", false, false},
     {PT_MIS, RR_FIXED, 0, "mis, P_RR 0.8", false, false},
     {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput after 5 (smallpt)", false, false},
+    {PT_LECTURE, RR_THROUGHPUT, 5, "lecture, smallpt's depth, 8 paths at a time", false, true},
     {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)", false, false},
+    {PT_LECTURE, RR_OFF, 0, "lecture, RTROWL's depth, 8 paths at a time", false, true},
 };
 _Static_assert(sizeof speed_cases / sizeof speed_cases[0] == EXPERIMENT_SPEED_CASES,
                "experiments.h: EXPERIMENT_SPEED_CASES is the number of speed cases");
@@ -416,7 +420,7 @@ int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int 
     double million_samples = (double)size * (double)size * (double)spp * 1e-6;
     printf("%s %dx%d, %d spp (%.2f M camera samples), max depth %d, best of %d runs\n", label, size, size, spp,
            million_samples, SPEED_MAX_DEPTH, repeats);
-    printf("%-42s %7s %12s %12s %10s %8s\n", "case", "threads", "s/M (wall)", "s/M (CPU)", "rays/spl", "scaling");
+    printf("%-44s %7s %12s %12s %10s %8s\n", "case", "threads", "s/M (wall)", "s/M (CPU)", "rays/spl", "scaling");
     const int n_cases = (int)(sizeof speed_cases / sizeof speed_cases[0]);
     for (int k = 0; k < n_cases; k++) {
         /* A shallow copy, to turn the walls off for one case: the same
@@ -455,7 +459,7 @@ int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int 
             row.wall[threads - 1] = best_wall[threads - 1] / million_samples;
             row.cpu[threads - 1] = best_cpu[threads - 1] / million_samples;
             row.scaling[threads - 1] = best_wall[0] / best_wall[threads - 1];
-            printf("%-42s %7d %12.3f %12.3f %10.2f %7.2fx\n", row.label, threads, row.wall[threads - 1],
+            printf("%-44s %7d %12.3f %12.3f %10.2f %7.2fx\n", row.label, threads, row.wall[threads - 1],
                    row.cpu[threads - 1], rays, row.scaling[threads - 1]);
             fflush(stdout);
         }

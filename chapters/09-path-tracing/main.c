@@ -45,11 +45,13 @@ int main(int argc, char **argv)
     const char *bench_csv = NULL, *walls = "on";
     bool bench = false, wide = false;
     float rr_probability = 0.8f, time_budget = 0.0f, target_error = 0.0f;
-    int max_depth = -1, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
+    int max_depth = -1, rr_start = 3, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
     const cli_flag extras[] = {
         {"--integrator", CLI_STRING, &integrator, "NAME", "lecture (default), cosine or mis: the rung of the ladder", 0, 0},
         {"--rr", CLI_STRING, &rr, "MODE", "Russian roulette: fixed (default, P_RR), throughput, or off", 0, 0},
         {"--rr-probability", CLI_FLOAT, &rr_probability, "P", "P_RR for --rr fixed (default 0.8)", 0.01, 1.0},
+        {"--rr-start", CLI_INT, &rr_start, "N",
+         "--rr throughput: bounces before the roulette starts (default 3; smallpt's depth is 5)", 0, 1000},
         {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
         {"--builtin", CLI_STRING, &scene_name, "NAME",
          "cornell (default), materials (glossy metal, glass), veach (glossy plates, lights of 4 sizes), furnace, "
@@ -162,6 +164,7 @@ int main(int argc, char **argv)
     pt.integrator = chosen;
     pt.russian_roulette = rr_mode;
     pt.rr_probability = rr_probability;
+    pt.rr_start_depth = rr_start;
     pt.max_depth = max_depth;
 
     int status = 0;

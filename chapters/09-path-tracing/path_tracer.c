@@ -197,6 +197,15 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
     return radiance;
 }
 
+/* --explain: the roulette's draw and what it decided. */
+static void explain_roulette(const path_tracer *pt, int indent, float u_rr, float q)
+{
+    bool fixed = pt->russian_roulette == RR_FIXED;
+    explain_line(indent, "Russian roulette%s: u = %.4f %s %s = %.3g: %s", fixed ? "" : " on throughput", (double)u_rr,
+                 u_rr >= q ? ">=" : "<", fixed ? "P_RR" : "q", (double)q,
+                 u_rr >= q ? "the path ends" : fixed ? "continue, dividing by P_RR" : "continue, dividing by q");
+}
+
 static void count_continuation(ray_counters *counters, const bsdf_sample_result *s)
 {
     if (!s->is_delta)
@@ -220,8 +229,10 @@ static void count_continuation(ray_counters *counters, const bsdf_sample_result 
  * the scene bring the environment, which no light sample covers. Glass and
  * mirrors reflect into single directions no hemisphere sample can find; there
  * the BSDF is sampled instead, and the emission the ray then meets does
- * count. `depth` is the number of bounces before p. */
-static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int depth, pt_random *rng, ray_counters *counters)
+ * count. `depth` is the number of bounces before p, `throughput` the
+ * product of f cos / pdf / P_RR along the path to p. */
+static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int depth, vec3 throughput, pt_random *rng,
+                  ray_counters *counters)
 {
     const pt_scene *sc = pt->scene;
     const pt_material *m = &sc->materials[hit->material_id];
@@ -251,12 +262,12 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
     }
 
     /* Russian roulette: continue with probability P_RR, and divide what the
-     * continued path brings by P_RR, so the expectation is unchanged. */
-    float p_rr = pt->russian_roulette == RR_OFF ? 1.0f : pt->rr_probability;
-    if (pt->russian_roulette != RR_OFF) {
+     * continued path brings by P_RR, so the expectation is unchanged. (With
+     * --rr throughput the probability is q, from the path's throughput.) */
+    float p_rr = 1.0f;
+    if (path_tracer_roulette(pt, depth, throughput, &p_rr)) {
         float u_rr = pt_random_float(rng);
-        explain_line(indent, "Russian roulette: u = %.4f %s P_RR = %.3g: %s", (double)u_rr, u_rr >= p_rr ? ">=" : "<",
-                     (double)p_rr, u_rr >= p_rr ? "the path ends" : "continue, dividing by P_RR");
+        explain_roulette(pt, indent, u_rr, p_rr);
         if (u_rr >= p_rr)
             return l_dir;
     }
@@ -300,7 +311,10 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
     if (pt_scene_intersect(sc, next, &q, counters)) {
         if (explain_on())
             explain_pt_hit(sc, &q, indent + 1);
-        incoming = shade(pt, &q, vec3_neg(s.wi), depth + 1, rng, counters);
+        /* the throughput to q, for --rr throughput, multiplied as
+         * path_tracer_wide.c multiplies it so both decide alike */
+        vec3 throughput_q = vec3_scale(vec3_mul(throughput, s.weight), 1.0f / p_rr);
+        incoming = shade(pt, &q, vec3_neg(s.wi), depth + 1, throughput_q, rng, counters);
         /* Emission seen through a delta bounce was not light-sampled. */
         if (delta)
             incoming = vec3_add(incoming, emitted(sc, &q));
@@ -332,7 +346,7 @@ static vec3 trace_lecture(const path_tracer *pt, ray r, pt_random *rng, ray_coun
     /* What the eye sees directly: the emission at the first hit, plus the
      * light reflected there. */
     vec3 wo = vec3_normalize(vec3_neg(r.direction));
-    return vec3_add(emitted(pt->scene, &hit), shade(pt, &hit, wo, 0, rng, counters));
+    return vec3_add(emitted(pt->scene, &hit), shade(pt, &hit, wo, 0, vec3_splat(1.0f), rng, counters));
 }
 
 /* ---- the later rungs, as a loop ---------------------------------------------
@@ -434,21 +448,10 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_co
         throughput = vec3_mul(throughput, s.weight);
 
         /* Russian roulette */
-        if (pt->russian_roulette == RR_FIXED) {
+        float q;
+        if (path_tracer_roulette(pt, depth, throughput, &q)) {
             float u_rr = pt_random_float(rng);
-            explain_line(indent, "Russian roulette: u = %.4f %s P_RR = %.3g: %s", (double)u_rr,
-                         u_rr >= pt->rr_probability ? ">=" : "<", (double)pt->rr_probability,
-                         u_rr >= pt->rr_probability ? "the path ends" : "continue, throughput / P_RR");
-            if (u_rr >= pt->rr_probability)
-                break;
-            throughput = vec3_scale(throughput, 1.0f / pt->rr_probability);
-        } else if (pt->russian_roulette == RR_THROUGHPUT && depth + 1 >= pt->rr_start_depth) {
-            /* Continue in proportion to what the path can still carry: a
-             * path through dark surfaces ends sooner. */
-            float q = fminf(1.0f, vec3_max_component(throughput));
-            float u_rr = pt_random_float(rng);
-            explain_line(indent, "Russian roulette on throughput: u = %.4f %s q = %.3g: %s", (double)u_rr,
-                         u_rr >= q ? ">=" : "<", (double)q, u_rr >= q ? "the path ends" : "continue, throughput / q");
+            explain_roulette(pt, indent, u_rr, q);
             if (u_rr >= q)
                 break;
             throughput = vec3_scale(throughput, 1.0f / q);

@@ -51,6 +51,30 @@ typedef struct {
 
 path_tracer path_tracer_defaults(const pt_scene *scene);
 
+/* Russian roulette before bounce depth + 1 (depth bounces already made),
+ * with `throughput` the path's product of f cos / pdf (and earlier 1/q) up
+ * to that point: false if no roulette is played there; else true, and the
+ * probability q that the path goes on in *q. Every rung asks this one
+ * question, so RR_FIXED and RR_THROUGHPUT mean the same in each. */
+static inline bool path_tracer_roulette(const path_tracer *pt, int depth, vec3 throughput, float *q)
+{
+    switch (pt->russian_roulette) {
+    case RR_FIXED:
+        *q = pt->rr_probability;
+        return true;
+    case RR_THROUGHPUT:
+        /* continue in proportion to what the path can still carry: a path
+         * through dark surfaces ends sooner */
+        if (depth + 1 < pt->rr_start_depth)
+            return false;
+        *q = fminf(1.0f, vec3_max_component(throughput));
+        return true;
+    case RR_OFF:
+        break;
+    }
+    return false;
+}
+
 /* render.h's radiance_fn; ctx points to a path_tracer. */
 vec3 path_trace_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *counters);
 

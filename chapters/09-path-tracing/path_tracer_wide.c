@@ -336,8 +336,8 @@ static void continue_path(lane *l, const hit_record *hit, const path_tracer *pt,
     l->goes_on = false;
     if (l->depth + 2 > pt->max_depth || !(pt->effects & EFFECT_INDIRECT))
         return;
-    float p_rr = pt->russian_roulette == RR_OFF ? 1.0f : pt->rr_probability;
-    if (pt->russian_roulette != RR_OFF && pcg32_float(&l->rng) >= p_rr)
+    float p_rr = 1.0f;
+    if (path_tracer_roulette(pt, l->depth, l->throughput, &p_rr) && pcg32_float(&l->rng) >= p_rr)
         return;
     float u_y = pcg32_float(&l->rng), u_x = pcg32_float(&l->rng); /* shade()'s order */
     vec3 local = sample_uniform_hemisphere(vec2_make(u_x, u_y));

@@ -23,7 +23,7 @@ static const float PI_OVER_2_F = (float)(PI / 2.0);
 static const float ONE_MINUS_EPSILON_F = 0x1.fffffep-1f;
 
 /* sqrt of something that is >= 0 in real numbers but may round to -1e-8. */
-static float safe_sqrt(float x) { return sqrtf(fmaxf(0.0f, x)); }
+static float safe_sqrt(float x) { return sqrtf(x > 0.0f ? x : 0.0f); } /* not fmaxf: GCC calls libm for it */
 
 /* The azimuth of (x, y) as a fraction of a turn, in [0, 1). */
 static float azimuth_fraction(float x, float y)
@@ -48,8 +48,9 @@ vec3 sample_uniform_hemisphere(vec2 u)
 {
     float z = u.x;
     float r = safe_sqrt(1.0f - z * z);
-    float phi = TWO_PI_F * u.y;
-    return vec3_make(r * cosf(phi), r * sinf(phi), z);
+    float sin_phi, cos_phi; /* phi = 2 pi u.y */
+    sincos_turns(u.y, &sin_phi, &cos_phi);
+    return vec3_make(r * cos_phi, r * sin_phi, z);
 }
 
 float uniform_hemisphere_pdf(void) { return INV_TWO_PI_F; }
@@ -86,8 +87,9 @@ vec3 sample_uniform_sphere(vec2 u)
 {
     float z = 1.0f - 2.0f * u.x;
     float r = safe_sqrt(1.0f - z * z);
-    float phi = TWO_PI_F * u.y;
-    return vec3_make(r * cosf(phi), r * sinf(phi), z);
+    float sin_phi, cos_phi; /* phi = 2 pi u.y */
+    sincos_turns(u.y, &sin_phi, &cos_phi);
+    return vec3_make(r * cos_phi, r * sin_phi, z);
 }
 
 float uniform_sphere_pdf(void) { return 0.25f * INV_PI_F; }
@@ -154,8 +156,9 @@ vec2 invert_uniform_disk_concentric(vec2 p)
 vec2 sample_uniform_disk_polar(vec2 u)
 {
     float r = sqrtf(u.x);
-    float phi = TWO_PI_F * u.y;
-    return vec2_make(r * cosf(phi), r * sinf(phi));
+    float sin_phi, cos_phi; /* phi = 2 pi u.y */
+    sincos_turns(u.y, &sin_phi, &cos_phi);
+    return vec2_make(r * cos_phi, r * sin_phi);
 }
 
 vec2 invert_uniform_disk_polar(vec2 p)
@@ -209,8 +212,9 @@ vec3 sample_uniform_cone(vec2 u, float cos_theta_max)
 {
     float cos_theta = (1.0f - u.x) + u.x * cos_theta_max;
     float sin_theta = safe_sqrt(1.0f - cos_theta * cos_theta);
-    float phi = TWO_PI_F * u.y;
-    return vec3_make(sin_theta * cosf(phi), sin_theta * sinf(phi), cos_theta);
+    float sin_phi, cos_phi; /* phi = 2 pi u.y */
+    sincos_turns(u.y, &sin_phi, &cos_phi);
+    return vec3_make(sin_theta * cos_phi, sin_theta * sin_phi, cos_theta);
 }
 
 float uniform_cone_pdf(float cos_theta_max) { return 1.0f / (TWO_PI_F * (1.0f - cos_theta_max)); }

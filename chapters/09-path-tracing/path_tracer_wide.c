@@ -61,7 +61,6 @@ typedef struct {
     vec3 wo;           /* the direction back along r, for that vertex */
     vec3 radiance;     /* gathered so far */
     vec3 throughput;   /* the product of f cos / pdf / P_RR before that vertex */
-    bool goes_on;      /* after this vertex: trace r (set to the next ray) */
     /* Shadow rays wait in the row's queue until there are eight (below):
      * how many of this sample's do, and the sample before it, ended but
      * still waiting for some (at most one: it is settled before the next
@@ -215,20 +214,26 @@ static void end_sample(lane *l, row_job *job)
 /* ---- one vertex of eight paths ------------------------------------------------
  * What shade() of path_tracer.c does at a vertex, for the lecture rung on
  * diffuse surfaces, in the same order and with the same random numbers,
- * in three parts: each lane picks its point on a light (pick_light); the
+ * in four parts: each lane picks its point on a light (pick_light); the
  * light sample's arithmetic runs for all eight lanes at once (light_math);
- * each lane then queues its shadow ray and draws the roulette and its next
- * direction (continue_path). */
+ * each lane then queues its shadow ray and draws the roulette and the two
+ * numbers of its next direction (roll_bounce); the bounce's arithmetic runs
+ * for all eight at once (bounce_math). */
 
-/* The eight lanes' light samples, structure of arrays: what light_math
- * reads (the hit point p, shading normal n, direction back wo, albedo,
+/* The eight lanes' vertices, structure of arrays: what light_math reads
+ * (the hit point p, shading normal n, direction back wo, albedo,
  * throughput; the point on the light, its normal, radiance and pdf per
- * unit area) and writes (each lane's contribution, times its throughput). */
+ * unit area) and writes (each lane's contribution, times its throughput);
+ * what bounce_math reads (n, wo, albedo, throughput again; the
+ * hemisphere's two numbers, 1 / P_RR) and writes (the next direction wi
+ * and the throughput after the bounce). */
 typedef struct {
     _Alignas(32) float p[3][LANES], n[3][LANES], wo[3][LANES], albedo[3][LANES], throughput[3][LANES];
     _Alignas(32) float x_light[3][LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];
     _Alignas(32) float contribution[3][LANES];
-} light_lanes;
+    _Alignas(32) float u_x[LANES], u_y[LANES], rr_scale[LANES];
+    _Alignas(32) float wi[3][LANES], throughput_next[3][LANES];
+} vertex_lanes;
 
 static void lanes_set(float v[3][LANES], int k, vec3 x)
 {
@@ -239,19 +244,13 @@ static void lanes_set(float v[3][LANES], int k, vec3 x)
 
 /* Lane k's random numbers for its light sample, and the point they pick:
  * false if there is no light to sample. */
-static bool pick_light(lane *l, const hit_record *hit, const pt_scene *sc, const float *pdf_area, light_lanes *L,
-                       int k)
+static bool pick_light(lane *l, const pt_scene *sc, const float *pdf_area, vertex_lanes *L, int k)
 {
     vec3 x_light, n_light;
     int light_material;
     float u_pick = pcg32_float(&l->rng), u1 = pcg32_float(&l->rng), u2 = pcg32_float(&l->rng);
     if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &n_light, &light_material))
         return false;
-    lanes_set(L->p, k, hit->point);
-    lanes_set(L->n, k, hit->normal_shading);
-    lanes_set(L->wo, k, l->wo);
-    lanes_set(L->albedo, k, sc->materials[hit->material_id].albedo);
-    lanes_set(L->throughput, k, l->throughput);
     lanes_set(L->x_light, k, x_light);
     lanes_set(L->n_light, k, n_light);
     lanes_set(L->le, k, sc->materials[light_material].emission);
@@ -263,7 +262,7 @@ static bool pick_light(lane *l, const hit_record *hit, const pt_scene *sc, const
  * says whether the sample adds anything (light and surface face each
  * other, f is not black), and the contribution is what it adds, times the
  * throughput, if its shadow ray gets through. */
-static int light_math_lane(light_lanes *L, int k)
+static int light_math_lane(vertex_lanes *L, int k)
 {
 #define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
     vec3 to_light = vec3_sub(AT(x_light), AT(p));
@@ -291,7 +290,7 @@ static int light_math_lane(light_lanes *L, int k)
 /* The same for the lanes of `lanes`, eight per AVX instruction: the same
  * operations in the same order (sqrt and division are exact in IEEE, so
  * every lane gets the very bits of light_math_lane). */
-__attribute__((target("avx"))) static int light_math_avx(light_lanes *L, int lanes)
+__attribute__((target("avx"))) static int light_math_avx(vertex_lanes *L, int lanes)
 {
 #define LOAD3(v, i) _mm256_load_ps(L->v[i])
 #define DOT(ax, ay, az, bx, by, bz)                                                                          \
@@ -327,31 +326,112 @@ __attribute__((target("avx"))) static int light_math_avx(light_lanes *L, int lan
 }
 #endif
 
-/* The roulette and the next direction, after the light sample: l->r and
- * l->goes_on. */
-static void continue_path(lane *l, const hit_record *hit, const path_tracer *pt, ray_counters *counters)
+/* The roulette and the two numbers of the next direction, after the light
+ * sample, drawn as shade() draws them: the lane's bit if the path may go on
+ * (bounce_math then decides whether its f cos / pdf is black). */
+static int roll_bounce(lane *l, const path_tracer *pt, vertex_lanes *L, int k)
 {
-    const pt_material *m = &pt->scene->materials[hit->material_id];
-    vec3 n = hit->normal_shading;
-    l->goes_on = false;
     if (l->depth + 2 > pt->max_depth || !(pt->effects & EFFECT_INDIRECT))
-        return;
+        return 0;
     float p_rr = 1.0f;
     if (path_tracer_roulette(pt, l->depth, l->throughput, &p_rr) && pcg32_float(&l->rng) >= p_rr)
-        return;
-    float u_y = pcg32_float(&l->rng), u_x = pcg32_float(&l->rng); /* shade()'s order */
-    vec3 local = sample_uniform_hemisphere(vec2_make(u_x, u_y));
-    vec3 wi = frame_to_world(n, local);
-    float pdf = uniform_hemisphere_pdf();
-    vec3 weight = vec3_scale(bsdf_eval(m, n, l->wo, wi), local.z / pdf);
-    if (vec3_is_black(weight))
-        return;
-    counters->indirect_rays++;
-    l->r = ray_spawn(hit->point, hit->normal_geometric, wi);
-    l->wo = vec3_neg(wi);
-    l->throughput = vec3_scale(vec3_mul(l->throughput, weight), 1.0f / p_rr);
-    l->goes_on = true;
+        return 0;
+    L->u_y[k] = pcg32_float(&l->rng); /* shade()'s order */
+    L->u_x[k] = pcg32_float(&l->rng);
+    L->rr_scale[k] = 1.0f / p_rr;
+    return 1 << k;
 }
+
+/* shade()'s bounce for one lane, exactly: wi uniform on the hemisphere,
+ * f cos / pdf, the throughput after it; the lane's bit if that is not black. */
+static int bounce_math_lane(vertex_lanes *L, int k)
+{
+#define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
+    vec3 n = AT(n), local = sample_uniform_hemisphere(vec2_make(L->u_x[k], L->u_y[k]));
+    vec3 wi = frame_to_world(n, local);
+    /* bsdf_eval() of a diffuse surface */
+    vec3 f = vec3_dot(n, wi) <= 0.0f || vec3_dot(n, AT(wo)) <= 0.0f ? vec3_splat(0.0f)
+                                                                     : vec3_scale(AT(albedo), 1.0f / (float)PI);
+    vec3 weight = vec3_scale(f, local.z / uniform_hemisphere_pdf());
+    if (vec3_is_black(weight))
+        return 0;
+    lanes_set(L->wi, k, wi);
+    lanes_set(L->throughput_next, k, vec3_scale(vec3_mul(AT(throughput), weight), L->rr_scale[k]));
+    return 1 << k;
+#undef AT
+}
+
+#if WIDE_HAVE_AVX
+/* The same for the lanes of `lanes`, eight per AVX instruction, operation
+ * for operation: sample_uniform_hemisphere() with chapter 08's
+ * sincos_turns(), frame_to_world() with vec3_basis(), bsdf_eval(). */
+__attribute__((target("avx"))) static int bounce_math_avx(vertex_lanes *L, int lanes)
+{
+#define LOAD3(v, i) _mm256_load_ps(L->v[i])
+#define DOT(ax, ay, az, bx, by, bz)                                                                          \
+    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz))
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), sign_bit = _mm256_set1_ps(-0.0f);
+    /* sample_uniform_hemisphere: z = u_x, r = sqrt(max(0, 1 - z^2)) */
+    __m256 z = _mm256_load_ps(L->u_x);
+    __m256 r = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(one, _mm256_mul_ps(z, z)), zero));
+    /* sincos_turns(u_y) */
+    __m256 u = _mm256_load_ps(L->u_y);
+    __m256 q = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(4.0f), u),
+                                                                     _mm256_set1_ps(0.5f))));
+    __m256 rest = _mm256_sub_ps(u, _mm256_mul_ps(_mm256_set1_ps(0.25f), q));
+    __m256 r2 = _mm256_mul_ps(rest, rest);
+#define POLY_STEP(acc, c) _mm256_add_ps(_mm256_mul_ps(acc, r2), _mm256_set1_ps(c))
+    __m256 p = _mm256_set1_ps(0x1.4bbc38p+5f);
+    p = _mm256_mul_ps(POLY_STEP(POLY_STEP(POLY_STEP(p, -0x1.32ca6cp+6f), 0x1.466bbap+6f), -0x1.4abbcep+5f), r2);
+    __m256 sin_r = _mm256_add_ps(_mm256_mul_ps(rest, _mm256_set1_ps(0x1.921fb6p+2f)), _mm256_mul_ps(rest, p));
+    __m256 c = _mm256_set1_ps(0x1.d9f7b2p+5f);
+    c = _mm256_mul_ps(POLY_STEP(POLY_STEP(POLY_STEP(c, -0x1.55c664p+6f), 0x1.03c1dep+6f), -0x1.3bd3ccp+4f), r2);
+    __m256 cos_r = _mm256_add_ps(one, c);
+#undef POLY_STEP
+    /* the quarter turn: odd ones swap, 2 and 3 negate the sine, 1 and 2 the cosine */
+    __m256 q1 = _mm256_cmp_ps(q, one, _CMP_EQ_OQ), q2 = _mm256_cmp_ps(q, _mm256_set1_ps(2.0f), _CMP_EQ_OQ),
+           q3 = _mm256_cmp_ps(q, _mm256_set1_ps(3.0f), _CMP_EQ_OQ);
+    __m256 odd = _mm256_or_ps(q1, q3);
+    __m256 sin_phi = _mm256_xor_ps(_mm256_blendv_ps(sin_r, cos_r, odd), _mm256_and_ps(_mm256_or_ps(q2, q3), sign_bit));
+    __m256 cos_phi = _mm256_xor_ps(_mm256_blendv_ps(cos_r, sin_r, odd), _mm256_and_ps(_mm256_or_ps(q1, q2), sign_bit));
+    __m256 lx = _mm256_mul_ps(r, cos_phi), ly = _mm256_mul_ps(r, sin_phi), lz = z;
+    /* frame_to_world: vec3_basis(n) */
+    __m256 nx = LOAD3(n, 0), ny = LOAD3(n, 1), nz = LOAD3(n, 2);
+    __m256 sign = _mm256_or_ps(_mm256_and_ps(nz, sign_bit), one);
+    __m256 a = _mm256_div_ps(_mm256_set1_ps(-1.0f), _mm256_add_ps(sign, nz));
+    __m256 cc = _mm256_mul_ps(_mm256_mul_ps(nx, ny), a);
+    __m256 tx = _mm256_add_ps(one, _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(sign, nx), nx), a));
+    __m256 ty = _mm256_mul_ps(sign, cc), tz = _mm256_mul_ps(_mm256_xor_ps(sign, sign_bit), nx);
+    __m256 bx = cc, by = _mm256_add_ps(sign, _mm256_mul_ps(_mm256_mul_ps(ny, ny), a)), bz = _mm256_xor_ps(ny, sign_bit);
+#define TO_WORLD(t, b, n) _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(t, lx), _mm256_mul_ps(b, ly)), _mm256_mul_ps(n, lz))
+    __m256 wx = TO_WORLD(tx, bx, nx), wy = TO_WORLD(ty, by, ny), wz = TO_WORLD(tz, bz, nz);
+#undef TO_WORLD
+    /* bsdf_eval: rho / pi where both directions are above the surface */
+    __m256 above = _mm256_and_ps(_mm256_cmp_ps(DOT(nx, ny, nz, wx, wy, wz), zero, _CMP_GT_OQ),
+                                 _mm256_cmp_ps(DOT(nx, ny, nz, LOAD3(wo, 0), LOAD3(wo, 1), LOAD3(wo, 2)), zero, _CMP_GT_OQ));
+    const __m256 inv_pi = _mm256_set1_ps(1.0f / (float)PI);
+    __m256 scale = _mm256_div_ps(lz, _mm256_set1_ps(uniform_hemisphere_pdf()));
+    __m256 fx = _mm256_and_ps(_mm256_mul_ps(LOAD3(albedo, 0), inv_pi), above),
+           fy = _mm256_and_ps(_mm256_mul_ps(LOAD3(albedo, 1), inv_pi), above),
+           fz = _mm256_and_ps(_mm256_mul_ps(LOAD3(albedo, 2), inv_pi), above);
+    __m256 weight_x = _mm256_mul_ps(fx, scale), weight_y = _mm256_mul_ps(fy, scale), weight_z = _mm256_mul_ps(fz, scale);
+    __m256 black = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(weight_x, zero, _CMP_EQ_OQ),
+                                               _mm256_cmp_ps(weight_y, zero, _CMP_EQ_OQ)),
+                                 _mm256_cmp_ps(weight_z, zero, _CMP_EQ_OQ));
+    _mm256_store_ps(L->wi[0], wx);
+    _mm256_store_ps(L->wi[1], wy);
+    _mm256_store_ps(L->wi[2], wz);
+    __m256 rr_scale = _mm256_load_ps(L->rr_scale);
+    _mm256_store_ps(L->throughput_next[0], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 0), weight_x), rr_scale));
+    _mm256_store_ps(L->throughput_next[1], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 1), weight_y), rr_scale));
+    _mm256_store_ps(L->throughput_next[2], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 2), weight_z), rr_scale));
+    int mask = ~_mm256_movemask_ps(black) & lanes;
+    _mm256_zeroupper();
+    return mask;
+#undef LOAD3
+#undef DOT
+}
+#endif
 
 /* One row of the image, eight pixels at a time. */
 static void render_row(row_job *job)
@@ -375,7 +455,7 @@ static void render_row(row_job *job)
         hit_record hits[LANES];
         bool found[LANES];
         flat_closest_hit8(sc->bvh, rays, active, hits, found, job->counters);
-        light_lanes L;
+        vertex_lanes L;
         int picked = 0, hit_lanes = 0;
         for (int k = 0; k < LANES; k++) {
             lane *l = &lanes[k];
@@ -383,7 +463,6 @@ static void render_row(row_job *job)
                 continue;
             if (!found[k]) { /* left the scene: the environment */
                 l->radiance = vec3_add(l->radiance, vec3_mul(l->throughput, sc->environment));
-                l->goes_on = false;
                 continue;
             }
             hit_lanes |= 1 << k;
@@ -393,10 +472,15 @@ static void render_row(row_job *job)
                 l->wo = vec3_normalize(vec3_neg(l->r.direction));
                 l->camera = false;
             }
-            if (l->depth + 1 <= pt->max_depth && pick_light(l, &hits[k], sc, job->pdf_area, &L, k))
+            lanes_set(L.p, k, hits[k].point);
+            lanes_set(L.n, k, hits[k].normal_shading);
+            lanes_set(L.wo, k, l->wo);
+            lanes_set(L.albedo, k, sc->materials[hits[k].material_id].albedo);
+            lanes_set(L.throughput, k, l->throughput);
+            if (l->depth + 1 <= pt->max_depth && pick_light(l, sc, job->pdf_area, &L, k))
                 picked |= 1 << k;
         }
-        int lit = 0;
+        int lit = 0, bounce = 0;
 #if WIDE_HAVE_AVX
         if (picked != 0 && job->avx)
             lit = light_math_avx(&L, picked);
@@ -422,7 +506,19 @@ static void render_row(row_job *job)
                     l->radiance = vec3_add(l->radiance, contribution);
                 }
             }
-            continue_path(l, &hits[k], pt, job->counters);
+            bounce |= roll_bounce(l, pt, &L, k);
+        }
+#if WIDE_HAVE_AVX
+        if (bounce != 0 && job->avx)
+            bounce = bounce_math_avx(&L, bounce);
+        else
+#endif
+        {
+            int lanes_on = 0;
+            for (int k = 0; k < LANES; k++)
+                if ((bounce >> k) & 1)
+                    lanes_on |= bounce_math_lane(&L, k);
+            bounce = lanes_on;
         }
         /* The shadow rays wait until there are eight: a light sample that
          * faces away needs none, so one step's would fill a packet a little
@@ -433,10 +529,16 @@ static void render_row(row_job *job)
             lane *l = &lanes[k];
             if (!((active >> k) & 1))
                 continue;
-            if (l->goes_on)
+            if ((bounce >> k) & 1) { /* the next ray, from this vertex */
+                vec3 wi = vec3_make(L.wi[0][k], L.wi[1][k], L.wi[2][k]);
+                job->counters->indirect_rays++;
+                l->r = ray_spawn(hits[k].point, hits[k].normal_geometric, wi);
+                l->wo = vec3_neg(wi);
+                l->throughput = vec3_make(L.throughput_next[0][k], L.throughput_next[1][k], L.throughput_next[2][k]);
                 l->depth++;
-            else
+            } else {
                 end_sample(l, job);
+            }
         }
     }
 }

@@ -19,6 +19,8 @@
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/path_tracer.h"
 #include "09-path-tracing/path_tracer_wide.h"
+#include "09-path-tracing/spawn_avx.h"
+#include "08-monte-carlo/sampling.h"
 #include "effects.h"
 #include "render.h"
 #include "scene_file.h"
@@ -1071,6 +1073,110 @@ static void test_wide_renders_the_lecture_rungs_paths(void **state)
     pt_scene_free(&sc);
 }
 
+/* ---- spawn_avx.h: ray.h's offsets, eight lanes at a time -----------------
+ * ray_spawn8() and ray_spawn_to8() against ray_spawn() and ray_spawn_to(),
+ * bit for bit, on points whose coordinates are the hard cases of ray.h's
+ * offset: exactly 0 and -0, just under and at 1/32 (where the fixed offset
+ * hands over to ulps), small and large, of either sign; normals facing
+ * either way. The twin is a reference that forgets to pull the shadow ray's
+ * far end off the light: the same comparison must see it. */
+#if SPAWN_HAVE_AVX2
+static float hard_coordinate(pcg32 *rng)
+{
+    static const float cases[] = {0.0f, -0.0f, 0x1.fffffep-6f, -0x1.fffffep-6f, 0x1.0p-5f, -0x1.0p-5f,
+                                  1e-3f, -1e-3f, 1.0f, -1.0f, 278.0f, -278.0f, 548.8f, 5e6f, -5e6f};
+    uint32_t pick = pcg32_next(rng) % 20;
+    if (pick < sizeof cases / sizeof cases[0])
+        return cases[pick];
+    return (pcg32_float(rng) - 0.5f) * 1200.0f;
+}
+
+static vec3 hard_point(pcg32 *rng) { return vec3_make(hard_coordinate(rng), hard_coordinate(rng), hard_coordinate(rng)); }
+
+static vec3 random_direction(pcg32 *rng)
+{
+    return sample_uniform_sphere(vec2_make(pcg32_float(rng), pcg32_float(rng)));
+}
+
+static bool same_bits(vec3 a, vec3 b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+static ray spawn_to_without_far_end(vec3 point, vec3 n, vec3 target, vec3 target_normal)
+{
+    (void)target_normal;
+    vec3 side = vec3_dot(vec3_sub(target, point), n) < 0.0f ? vec3_neg(n) : n;
+    vec3 origin = ray_offset_origin(point, side);
+    return ray_make(origin, vec3_sub(target, origin));
+}
+
+typedef ray (*spawn_to_fn)(vec3 point, vec3 n, vec3 target, vec3 target_normal);
+
+/* Rays whose spawned origin or shadow ray differs from the reference's in
+ * any bit, of `batches` batches of eight. */
+SPAWN_TARGET static long spawns_apart(spawn_to_fn reference, int batches, uint64_t seed)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    long apart = 0;
+    for (int b = 0; b < batches; b++) {
+        _Alignas(32) float in[5][3][8];
+        vec3 v[5][8];
+        for (int k = 0; k < 8; k++) {
+            v[0][k] = hard_point(&rng);       /* point */
+            v[1][k] = random_direction(&rng); /* its normal */
+            v[2][k] = random_direction(&rng); /* a direction to leave in */
+            v[3][k] = hard_point(&rng);       /* a target */
+            v[4][k] = random_direction(&rng); /* its normal */
+            for (int a = 0; a < 5; a++) {
+                in[a][0][k] = v[a][k].x;
+                in[a][1][k] = v[a][k].y;
+                in[a][2][k] = v[a][k].z;
+            }
+        }
+        __m256 m[5][3], origin[3], shadow_origin[3], shadow_direction[3];
+        for (int a = 0; a < 5; a++)
+            for (int c = 0; c < 3; c++)
+                m[a][c] = _mm256_load_ps(in[a][c]);
+        ray_spawn8(m[0], m[1], m[2], origin);
+        ray_spawn_to8(m[0], m[1], m[3], m[4], shadow_origin, shadow_direction);
+        _Alignas(32) float out[3][3][8];
+        for (int c = 0; c < 3; c++) {
+            _mm256_store_ps(out[0][c], origin[c]);
+            _mm256_store_ps(out[1][c], shadow_origin[c]);
+            _mm256_store_ps(out[2][c], shadow_direction[c]);
+        }
+        for (int k = 0; k < 8; k++) {
+            ray spawned = ray_spawn(v[0][k], v[1][k], v[2][k]);
+            ray shadow = reference(v[0][k], v[1][k], v[3][k], v[4][k]);
+            bool same = same_bits(spawned.origin, vec3_make(out[0][0][k], out[0][1][k], out[0][2][k])) &&
+                        same_bits(shadow.origin, vec3_make(out[1][0][k], out[1][1][k], out[1][2][k])) &&
+                        same_bits(shadow.direction, vec3_make(out[2][0][k], out[2][1][k], out[2][2][k]));
+            apart += !same;
+        }
+    }
+    _mm256_zeroupper();
+    return apart;
+}
+#endif
+
+static void test_spawn_avx_is_ray_h_bit_for_bit(void **state)
+{
+    (void)state;
+#if SPAWN_HAVE_AVX2
+    if (!__builtin_cpu_supports("avx2")) {
+        print_message("no AVX2 here: nothing to compare\n");
+        return;
+    }
+    enum { BATCHES = 20000 };
+    long apart = spawns_apart(ray_spawn_to, BATCHES, test_seed(93));
+    print_message("spawn_avx.h: %ld of %d rays differ from ray.h's in any bit\n", apart, 8 * BATCHES);
+    assert_int_equal(apart, 0);
+    long twin = spawns_apart(spawn_to_without_far_end, BATCHES, test_seed(93));
+    print_message("twin (the far end not pulled off the light): %ld of %d differ\n", twin, 8 * BATCHES);
+    assert_true(twin > 8 * BATCHES / 2);
+#else
+    print_message("not an x86-64 build: nothing to compare\n");
+#endif
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1094,6 +1200,7 @@ int main(void)
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_wall_test_is_never_fooled_by_rounding),
         cmocka_unit_test(test_wide_renders_the_lecture_rungs_paths),
+        cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);
 }

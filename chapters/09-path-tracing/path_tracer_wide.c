@@ -15,17 +15,16 @@
 #include "stats.h"
 #include "timer.h"
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#define WIDE_HAVE_AVX 1
-#include <immintrin.h>
-#else
-#define WIDE_HAVE_AVX 0
-#endif
+#include "09-path-tracing/spawn_avx.h"
+
+/* The lanes' arithmetic in AVX needs AVX2 for the rays' offsets
+ * (spawn_avx.h); without it, lane by lane. */
+#define WIDE_HAVE_AVX SPAWN_HAVE_AVX2
 
 enum { LANES = FLAT_LANES };
 
-/* path_tracer_wide_use_avx(): the light samples' arithmetic in AVX where
- * the processor has it, or lane by lane (the same bits; for the tests). */
+/* path_tracer_wide_use_avx(): the lanes' arithmetic in AVX2 where the
+ * processor has it, or lane by lane (the same bits; for the tests). */
 static bool use_avx = true;
 void path_tracer_wide_use_avx(bool on) { use_avx = on; }
 
@@ -221,18 +220,18 @@ static void end_sample(lane *l, row_job *job)
  * for all eight at once (bounce_math). */
 
 /* The eight lanes' vertices, structure of arrays: what light_math reads
- * (the hit point p, shading normal n, direction back wo, albedo,
- * throughput; the point on the light, its normal, radiance and pdf per
- * unit area) and writes (each lane's contribution, times its throughput);
- * what bounce_math reads (n, wo, albedo, throughput again; the
- * hemisphere's two numbers, 1 / P_RR) and writes (the next direction wi
- * and the throughput after the bounce). */
+ * (the hit point p, geometric normal ng, shading normal n, direction back
+ * wo, albedo, throughput; the point on the light, its normal, radiance and
+ * pdf per unit area) and writes (each lane's contribution, times its
+ * throughput, and its shadow ray); what bounce_math reads (p, ng, n, wo,
+ * albedo, throughput again; the hemisphere's two numbers, 1 / P_RR) and
+ * writes (the next ray and the throughput after the bounce). */
 typedef struct {
-    _Alignas(32) float p[3][LANES], n[3][LANES], wo[3][LANES], albedo[3][LANES], throughput[3][LANES];
+    _Alignas(32) float p[3][LANES], ng[3][LANES], n[3][LANES], wo[3][LANES], albedo[3][LANES], throughput[3][LANES];
     _Alignas(32) float x_light[3][LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];
-    _Alignas(32) float contribution[3][LANES];
+    _Alignas(32) float contribution[3][LANES], shadow_origin[3][LANES], shadow_direction[3][LANES];
     _Alignas(32) float u_x[LANES], u_y[LANES], rr_scale[LANES];
-    _Alignas(32) float wi[3][LANES], throughput_next[3][LANES];
+    _Alignas(32) float wi[3][LANES], next_origin[3][LANES], throughput_next[3][LANES];
 } vertex_lanes;
 
 static void lanes_set(float v[3][LANES], int k, vec3 x)
@@ -282,6 +281,9 @@ static int light_math_lane(vertex_lanes *L, int k)
     float pdf_light = distance2 * L->pdf_area[k] / cos_theta_light;
     vec3 contribution = vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * 1.0f));
     lanes_set(L->contribution, k, contribution);
+    ray shadow = ray_spawn_to(AT(p), AT(ng), AT(x_light), AT(n_light));
+    lanes_set(L->shadow_origin, k, shadow.origin);
+    lanes_set(L->shadow_direction, k, shadow.direction);
     return 1 << k;
 #undef AT
 }
@@ -290,7 +292,7 @@ static int light_math_lane(vertex_lanes *L, int k)
 /* The same for the lanes of `lanes`, eight per AVX instruction: the same
  * operations in the same order (sqrt and division are exact in IEEE, so
  * every lane gets the very bits of light_math_lane). */
-__attribute__((target("avx"))) static int light_math_avx(vertex_lanes *L, int lanes)
+SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes)
 {
 #define LOAD3(v, i) _mm256_load_ps(L->v[i])
 #define DOT(ax, ay, az, bx, by, bz)                                                                          \
@@ -318,6 +320,16 @@ __attribute__((target("avx"))) static int light_math_avx(vertex_lanes *L, int la
     _mm256_store_ps(L->contribution[0], _mm256_mul_ps(LOAD3(throughput, 0), _mm256_mul_ps(_mm256_mul_ps(LOAD3(le, 0), fx), scale)));
     _mm256_store_ps(L->contribution[1], _mm256_mul_ps(LOAD3(throughput, 1), _mm256_mul_ps(_mm256_mul_ps(LOAD3(le, 1), fy), scale)));
     _mm256_store_ps(L->contribution[2], _mm256_mul_ps(LOAD3(throughput, 2), _mm256_mul_ps(_mm256_mul_ps(LOAD3(le, 2), fz), scale)));
+    /* the shadow ray: ray_spawn_to() */
+    const __m256 p[3] = {LOAD3(p, 0), LOAD3(p, 1), LOAD3(p, 2)}, ng[3] = {LOAD3(ng, 0), LOAD3(ng, 1), LOAD3(ng, 2)};
+    const __m256 x_light[3] = {LOAD3(x_light, 0), LOAD3(x_light, 1), LOAD3(x_light, 2)};
+    const __m256 n_light[3] = {LOAD3(n_light, 0), LOAD3(n_light, 1), LOAD3(n_light, 2)};
+    __m256 origin[3], direction[3];
+    ray_spawn_to8(p, ng, x_light, n_light, origin, direction);
+    for (int c = 0; c < 3; c++) {
+        _mm256_store_ps(L->shadow_origin[c], origin[c]);
+        _mm256_store_ps(L->shadow_direction[c], direction[c]);
+    }
     int mask = _mm256_movemask_ps(ok) & lanes;
     _mm256_zeroupper();
     return mask;
@@ -356,6 +368,7 @@ static int bounce_math_lane(vertex_lanes *L, int k)
     if (vec3_is_black(weight))
         return 0;
     lanes_set(L->wi, k, wi);
+    lanes_set(L->next_origin, k, ray_spawn(AT(p), AT(ng), wi).origin);
     lanes_set(L->throughput_next, k, vec3_scale(vec3_mul(AT(throughput), weight), L->rr_scale[k]));
     return 1 << k;
 #undef AT
@@ -365,7 +378,7 @@ static int bounce_math_lane(vertex_lanes *L, int k)
 /* The same for the lanes of `lanes`, eight per AVX instruction, operation
  * for operation: sample_uniform_hemisphere() with chapter 08's
  * sincos_turns(), frame_to_world() with vec3_basis(), bsdf_eval(). */
-__attribute__((target("avx"))) static int bounce_math_avx(vertex_lanes *L, int lanes)
+SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
 {
 #define LOAD3(v, i) _mm256_load_ps(L->v[i])
 #define DOT(ax, ay, az, bx, by, bz)                                                                          \
@@ -421,6 +434,13 @@ __attribute__((target("avx"))) static int bounce_math_avx(vertex_lanes *L, int l
     _mm256_store_ps(L->wi[0], wx);
     _mm256_store_ps(L->wi[1], wy);
     _mm256_store_ps(L->wi[2], wz);
+    /* the next ray's origin: ray_spawn() */
+    const __m256 point[3] = {LOAD3(p, 0), LOAD3(p, 1), LOAD3(p, 2)}, ng[3] = {LOAD3(ng, 0), LOAD3(ng, 1), LOAD3(ng, 2)};
+    const __m256 wi[3] = {wx, wy, wz};
+    __m256 origin[3];
+    ray_spawn8(point, ng, wi, origin);
+    for (int c = 0; c < 3; c++)
+        _mm256_store_ps(L->next_origin[c], origin[c]);
     __m256 rr_scale = _mm256_load_ps(L->rr_scale);
     _mm256_store_ps(L->throughput_next[0], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 0), weight_x), rr_scale));
     _mm256_store_ps(L->throughput_next[1], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 1), weight_y), rr_scale));
@@ -473,6 +493,7 @@ static void render_row(row_job *job)
                 l->camera = false;
             }
             lanes_set(L.p, k, hits[k].point);
+            lanes_set(L.ng, k, hits[k].normal_geometric);
             lanes_set(L.n, k, hits[k].normal_shading);
             lanes_set(L.wo, k, l->wo);
             lanes_set(L.albedo, k, sc->materials[hits[k].material_id].albedo);
@@ -496,9 +517,10 @@ static void render_row(row_job *job)
             if ((lit >> k) & 1) {
                 vec3 contribution = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
                 if (pt->effects & EFFECT_SHADOWS) {
-                    vec3 x_light = vec3_make(L.x_light[0][k], L.x_light[1][k], L.x_light[2][k]);
-                    vec3 n_light = vec3_make(L.n_light[0][k], L.n_light[1][k], L.n_light[2][k]);
-                    ray shadow = ray_spawn_to(hits[k].point, hits[k].normal_geometric, x_light, n_light);
+                    ray shadow = ray_make(vec3_make(L.shadow_origin[0][k], L.shadow_origin[1][k], L.shadow_origin[2][k]),
+                                          vec3_make(L.shadow_direction[0][k], L.shadow_direction[1][k],
+                                                    L.shadow_direction[2][k]));
+                    shadow.t_max = 1.0f; /* ray_spawn_to's */
                     job->counters->shadow_rays++;
                     job->queue[job->queued++] = (queued_shadow){shadow, contribution, k, l->sample_id};
                     l->unsettled++;
@@ -532,7 +554,7 @@ static void render_row(row_job *job)
             if ((bounce >> k) & 1) { /* the next ray, from this vertex */
                 vec3 wi = vec3_make(L.wi[0][k], L.wi[1][k], L.wi[2][k]);
                 job->counters->indirect_rays++;
-                l->r = ray_spawn(hits[k].point, hits[k].normal_geometric, wi);
+                l->r = ray_make(vec3_make(L.next_origin[0][k], L.next_origin[1][k], L.next_origin[2][k]), wi);
                 l->wo = vec3_neg(wi);
                 l->throughput = vec3_make(L.throughput_next[0][k], L.throughput_next[1][k], L.throughput_next[2][k]);
                 l->depth++;
@@ -556,7 +578,7 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
     if (threads <= 0)
         threads = omp_get_max_threads();
 #if WIDE_HAVE_AVX
-    const bool avx = use_avx && __builtin_cpu_supports("avx");
+    const bool avx = use_avx && __builtin_cpu_supports("avx2");
 #else
     const bool avx = false;
 #endif

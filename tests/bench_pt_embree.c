@@ -505,8 +505,9 @@ int main(int argc, char **argv)
     use_kernel(&sc, ours, ours_occluders);
     printf("\nours / Embree (wall s/M)                         1 thread  2 threads\n");
     for (int c = 0; c < n; c++)
-        printf("%-44s %9.2fx %9.2fx\n", rows[0][c].label, rows[0][c].wall[0] / rows[1][c].wall[0],
-               rows[0][c].wall[1] / rows[1][c].wall[1]);
+        printf("%-44s %9.2fx %9.2fx%s\n", rows[0][c].label, rows[0][c].wall[0] / rows[1][c].wall[0],
+               rows[0][c].wall[1] / rows[1][c].wall[1],
+               rows[0][c].wide != rows[1][c].wide ? "   (ours 8 paths at a time, Embree's one: not the kernels alone)" : "");
     if (csv != NULL) {
         fprintf(csv, "tracer,case,threads,wall_s_per_msample,cpu_s_per_msample,rays_per_sample,scaling\n");
         for (int k = 0; k < 2; k++)

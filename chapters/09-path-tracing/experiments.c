@@ -434,7 +434,8 @@ int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int 
         if (speed_cases[k].rr_start_depth > 0)
             pt.rr_start_depth = speed_cases[k].rr_start_depth;
         char why[128];
-        if (speed_cases[k].wide && !path_tracer_wide_supported(&pt, why, sizeof why))
+        bool wide = speed_cases[k].wide && path_tracer_wide_supported(&pt, why, sizeof why);
+        if (speed_cases[k].wide && !wide)
             printf("%s: not here (%s), one path at a time instead\n", speed_cases[k].label, why);
         /* 1 and 2 threads take turns, repeat after repeat, so that both see
          * the same machine: on a shared or virtual machine the speed drifts
@@ -445,7 +446,7 @@ int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int 
             for (int threads = 1; threads <= 2; threads++) {
                 double cpu_start = experiment_cpu_seconds();
                 estimate_image e;
-                if (!speed_cases[k].wide || !render_estimate_wide(&pt, &cam, spp, 1, threads, &e))
+                if (!wide || !render_estimate_wide(&pt, &cam, spp, 1, threads, &e))
                     e = render_estimate(&pt, &cam, spp, 1, threads);
                 double cpu = experiment_cpu_seconds() - cpu_start;
                 best_wall[threads - 1] = fmin(best_wall[threads - 1], e.seconds);
@@ -454,7 +455,7 @@ int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int 
                 estimate_image_free(&e);
             }
         }
-        experiment_speed_row row = {.label = speed_cases[k].label, .rays_per_sample = rays};
+        experiment_speed_row row = {.label = speed_cases[k].label, .rays_per_sample = rays, .wide = wide};
         for (int threads = 1; threads <= 2; threads++) {
             row.wall[threads - 1] = best_wall[threads - 1] / million_samples;
             row.cpu[threads - 1] = best_cpu[threads - 1] / million_samples;

@@ -89,6 +89,7 @@ typedef struct {
     double wall[2], cpu[2]; /* seconds per million camera samples */
     double scaling[2];      /* the 1-thread wall time over this one's */
     double rays_per_sample;
+    bool wide; /* rendered eight paths at a time (path_tracer_wide.h) */
 } experiment_speed_row;
 int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int spp, int repeats,
                            experiment_speed_row *rows);

@@ -88,7 +88,7 @@ typedef struct {
     lane *lanes;
     queued_shadow queue[2 * FLAT_LANES];
     int queued;
-    bool avx; /* light_math_avx, where the processor has AVX */
+    bool avx; /* light_math_avx and bounce_math_avx, where the processor has AVX2 */
     /* pt_scene_emitter_pdf_area() of each material, worked out once: a
      * division in double at every light sample was 5 % of the time */
     const float *pdf_area;

@@ -5,9 +5,11 @@
  * each with its own random numbers, its samples one after another -- are
  * eight chains side by side: their rays are traced together, eight per AVX
  * instruction (chapter 06's flat_closest_hit8 and flat_any_hit8, shadow
- * rays queued until there are eight), so is the light sample's arithmetic,
- * and the rest of the shading, one path at a time, gives the processor
- * eight independent things to do instead of one. A lane whose path ends
+ * rays queued until there are eight), so are the light sample's and the
+ * bounce's arithmetic and the two rays' offsets (AVX2, where the processor
+ * has it; lane by lane, with the same bits, where not), and the rest of the
+ * shading, one path at a time, gives the processor eight independent things
+ * to do instead of one. A lane whose path ends
  * starts its pixel's next sample; a lane whose pixel is done takes the next
  * pixel.
  *
@@ -17,7 +19,7 @@
  * rounding: the sum along a path is added from the camera out instead of
  * from the last bounce back (the recursion), which moves the last bits.
  *
- * For the lecture rung on a scene the flat set holds (at most 64
+ * For the lecture rung (any Russian roulette) on a scene the flat set holds (at most 64
  * triangles: chapter 09's Cornell box), diffuse materials only, no spheres
  * and no point lights; path_tracer_wide_supported() says why not otherwise.
  *
@@ -44,8 +46,9 @@ bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_siz
 bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int threads,
                           estimate_image *out);
 
-/* The light samples' arithmetic eight lanes per AVX instruction (true,
- * the default, where the processor has AVX) or one lane at a time: the
+/* The lanes' arithmetic (light sample, bounce, ray offsets) eight lanes
+ * per AVX instruction (true, the default, where the processor has AVX2) or
+ * one lane at a time: the
  * same bits either way (tests/test_ch09.c). Not thread-safe: set it before
  * rendering. */
 void path_tracer_wide_use_avx(bool on);

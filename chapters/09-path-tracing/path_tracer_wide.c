@@ -289,14 +289,17 @@ static int light_math_lane(vertex_lanes *L, int k)
 }
 
 #if WIDE_HAVE_AVX
+/* For light_math_avx and bounce_math_avx: a field of L for eight lanes, and
+ * vec3_dot()'s sum, in its order. */
+#define LOAD3(v, i) _mm256_load_ps(L->v[i])
+#define DOT(ax, ay, az, bx, by, bz)                                                                          \
+    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz))
+
 /* The same for the lanes of `lanes`, eight per AVX instruction: the same
  * operations in the same order (sqrt and division are exact in IEEE, so
  * every lane gets the very bits of light_math_lane). */
 SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes)
 {
-#define LOAD3(v, i) _mm256_load_ps(L->v[i])
-#define DOT(ax, ay, az, bx, by, bz)                                                                          \
-    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz))
     const __m256 zero = _mm256_setzero_ps();
     __m256 tx = _mm256_sub_ps(LOAD3(x_light, 0), LOAD3(p, 0)), ty = _mm256_sub_ps(LOAD3(x_light, 1), LOAD3(p, 1)),
            tz = _mm256_sub_ps(LOAD3(x_light, 2), LOAD3(p, 2));
@@ -333,8 +336,6 @@ SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes)
     int mask = _mm256_movemask_ps(ok) & lanes;
     _mm256_zeroupper();
     return mask;
-#undef LOAD3
-#undef DOT
 }
 #endif
 
@@ -380,9 +381,6 @@ static int bounce_math_lane(vertex_lanes *L, int k)
  * sincos_turns(), frame_to_world() with vec3_basis(), bsdf_eval(). */
 SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
 {
-#define LOAD3(v, i) _mm256_load_ps(L->v[i])
-#define DOT(ax, ay, az, bx, by, bz)                                                                          \
-    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz))
     const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), sign_bit = _mm256_set1_ps(-0.0f);
     /* sample_uniform_hemisphere: z = u_x, r = sqrt(max(0, 1 - z^2)) */
     __m256 z = _mm256_load_ps(L->u_x);

@@ -95,11 +95,7 @@ static int block_closest_scalar(const flat_block *b, const ray *r, float *t_max,
 #if FLAT_HAVE_X86
 /* The lanes' nearest hits, compared: the nearest t, of equal t the lowest
  * triangle index -- what testing them one by one in order gives. */
-typedef struct {
-    _Alignas(32) float t[FLAT_LANES];
-    int32_t index[FLAT_LANES];
-    float b1[FLAT_LANES], b2[FLAT_LANES];
-} lane_hits;
+typedef flat_hits8 lane_hits;
 
 static int nearest_lane(const lane_hits *h, int lanes, float t_max)
 {
@@ -282,29 +278,45 @@ typedef struct {
 #undef FLAT_NAME
 #endif
 
+int flat_closest_hit8_raw(const accel *a, const ray rays[FLAT_LANES], int active, flat_hits8 *hits,
+                          ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+    int hit = 0;
+#if FLAT_HAVE_X86
+    if (f->kernel == FLAT_KERNEL_AVX || f->kernel == FLAT_KERNEL_AVX512) {
+        hit = f->kernel == FLAT_KERNEL_AVX512 ? closest_hit8_avx512(f, rays, active, hits)
+                                              : closest_hit8_avx(f, rays, active, hits);
+        counters->primitive_tests += (uint64_t)__builtin_popcount((unsigned)active) * (uint64_t)f->base.set->count;
+        return hit;
+    }
+#endif
+    for (int k = 0; k < FLAT_LANES; k++) {
+        hit_record record;
+        if (((active >> k) & 1) && accel_closest_hit(a, rays[k], &record, counters)) {
+            hits->t[k] = record.t;
+            hits->index[k] = record.shape_id;
+            hits->b1[k] = record.u;
+            hits->b2[k] = record.v;
+            hit |= 1 << k;
+        }
+    }
+    return hit;
+}
+
 void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, hit_record hits[FLAT_LANES],
                        bool found[FLAT_LANES], ray_counters *counters)
 {
     const flat *f = (const flat *)a;
-#if FLAT_HAVE_X86
-    if (f->kernel == FLAT_KERNEL_AVX || f->kernel == FLAT_KERNEL_AVX512) {
-        lane_hits h;
-        int hit = f->kernel == FLAT_KERNEL_AVX512 ? closest_hit8_avx512(f, rays, active, &h)
-                                                  : closest_hit8_avx(f, rays, active, &h);
-        for (int k = 0; k < FLAT_LANES; k++) {
-            if (!((active >> k) & 1))
-                continue;
-            counters->primitive_tests += (uint64_t)f->base.set->count;
-            found[k] = (hit >> k) & 1;
-            if (found[k])
-                triangle_set_fill_hit(f->base.set, h.index[k], rays[k], h.t[k], h.b1[k], h.b2[k], &hits[k]);
-        }
-        return;
+    flat_hits8 h;
+    int hit = flat_closest_hit8_raw(a, rays, active, &h, counters);
+    for (int k = 0; k < FLAT_LANES; k++) {
+        if (!((active >> k) & 1))
+            continue;
+        found[k] = (hit >> k) & 1;
+        if (found[k])
+            triangle_set_fill_hit(f->base.set, h.index[k], rays[k], h.t[k], h.b1[k], h.b2[k], &hits[k]);
     }
-#endif
-    for (int k = 0; k < FLAT_LANES; k++)
-        if ((active >> k) & 1)
-            found[k] = accel_closest_hit(a, rays[k], &hits[k], counters);
 }
 
 void flat_any_hit8(const accel *a, const ray rays[FLAT_LANES], int active, bool found[FLAT_LANES],

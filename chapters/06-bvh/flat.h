@@ -78,6 +78,18 @@ bool flat_is(const accel *a);
  * triangle for every active ray. */
 void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, hit_record hits[FLAT_LANES],
                        bool found[FLAT_LANES], ray_counters *counters);
+/* The same, stopped before the hit records are made: lane k's nearest t,
+ * the index of its triangle in the set and the barycentrics b1, b2, what
+ * triangle_set_fill_hit() makes lane k's record from; the bits of the
+ * lanes that hit. For a caller that makes its own records, eight at a time
+ * (path_tracer_wide.c). The other lanes' entries mean nothing. */
+typedef struct {
+    _Alignas(32) float t[FLAT_LANES];
+    int32_t index[FLAT_LANES];
+    float b1[FLAT_LANES], b2[FLAT_LANES];
+} flat_hits8;
+int flat_closest_hit8_raw(const accel *a, const ray rays[FLAT_LANES], int active, flat_hits8 *hits,
+                          ray_counters *counters);
 /* The same for any hit: found[k] is accel_any_hit() of rays[k]. The eight
  * stop together, once every active ray has found a hit. */
 void flat_any_hit8(const accel *a, const ray rays[FLAT_LANES], int active, bool found[FLAT_LANES],

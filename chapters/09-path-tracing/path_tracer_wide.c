@@ -451,6 +451,79 @@ SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
 }
 #endif
 
+/* ---- the hit records -----------------------------------------------------------
+ * What triangle_set_fill_hit() makes of a lane's hit, as far as shading
+ * needs it: the point (from the barycentrics), the geometric normal facing
+ * the ray, the shading normal, the material and its albedo, and whether
+ * the front was hit; written straight into the lanes' arrays. */
+static int hit_record_lane(const pt_scene *sc, const ray rays[LANES], const flat_hits8 *hits, int k, vertex_lanes *L,
+                           int material[LANES])
+{
+    hit_record hit;
+    triangle_set_fill_hit(&sc->triangles, hits->index[k], rays[k], hits->t[k], hits->b1[k], hits->b2[k], &hit);
+    lanes_set(L->p, k, hit.point);
+    lanes_set(L->ng, k, hit.normal_geometric);
+    lanes_set(L->n, k, hit.normal_shading);
+    lanes_set(L->albedo, k, sc->materials[hit.material_id].albedo);
+    material[k] = hit.material_id;
+    return hit.front_face << k;
+}
+
+#if WIDE_HAVE_AVX
+/* The same for the lanes of `lanes`, eight per instruction, the triangles'
+ * corners, normals and materials gathered by index (AVX2). Only where the
+ * triangles have no vertex normals: then the shading normal is the
+ * geometric one. */
+SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const ray rays[LANES], const flat_hits8 *hits, int lanes,
+                                        vertex_lanes *L, int material[LANES])
+{
+    const triangle_set *set = &sc->triangles;
+    _Static_assert(sizeof(triangle) == 9 * sizeof(float), "a triangle is its nine coordinates");
+    _Static_assert(sizeof(triangle_surface) == 4 * sizeof(float), "a surface is a normal and a material");
+    _Static_assert(sizeof(ray) == 8 * sizeof(float), "a ray is eight floats");
+    _Static_assert(sizeof(pt_material) % sizeof(float) == 0, "materials are a whole number of floats");
+    const __m256i lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+    __m256i hit_mask = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(lanes), lane_bits), lane_bits);
+    /* lanes without a hit read triangle 0, and their answers are not used */
+    __m256i index = _mm256_and_si256(_mm256_load_si256((const __m256i *)hits->index), hit_mask);
+    __m256i corner = _mm256_mullo_epi32(index, _mm256_set1_epi32(9)), surface = _mm256_slli_epi32(index, 2);
+    const float *t0 = &set->triangles[0].p0.x;
+    __m256 b1 = _mm256_load_ps(hits->b1), b2 = _mm256_load_ps(hits->b2);
+    __m256 w0 = _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(1.0f), b1), b2);
+    __m256 point[3];
+    for (int c = 0; c < 3; c++) {
+        __m256 p0 = _mm256_i32gather_ps(t0 + c, corner, 4), p1 = _mm256_i32gather_ps(t0 + 3 + c, corner, 4),
+               p2 = _mm256_i32gather_ps(t0 + 6 + c, corner, 4);
+        point[c] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(p0, w0), _mm256_mul_ps(p1, b1)), _mm256_mul_ps(p2, b2));
+    }
+    const float *s0 = &set->surfaces[0].normal.x;
+    __m256 normal[3], direction[3];
+    const __m256i ray_index = _mm256_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56);
+    for (int c = 0; c < 3; c++) {
+        normal[c] = _mm256_i32gather_ps(s0 + c, surface, 4);
+        direction[c] = _mm256_i32gather_ps(&rays[0].direction.x + c, ray_index, 4);
+    }
+    __m256i materials = _mm256_i32gather_epi32(&set->surfaces[0].material, surface, 4);
+    /* hit_set_normal: the front if the ray comes against the outward normal */
+    __m256 front = _mm256_cmp_ps(spawn_dot8(direction, normal), _mm256_setzero_ps(), _CMP_LT_OQ);
+    __m256 flip = _mm256_andnot_ps(front, _mm256_set1_ps(-0.0f));
+    const int material_floats = (int)(sizeof(pt_material) / sizeof(float));
+    __m256i albedo_at = _mm256_mullo_epi32(materials, _mm256_set1_epi32(material_floats));
+    const float *a0 = &sc->materials[0].albedo.x;
+    for (int c = 0; c < 3; c++) {
+        __m256 ng = _mm256_xor_ps(normal[c], flip);
+        _mm256_store_ps(L->p[c], point[c]);
+        _mm256_store_ps(L->ng[c], ng);
+        _mm256_store_ps(L->n[c], ng);
+        _mm256_store_ps(L->albedo[c], _mm256_i32gather_ps(a0 + c, albedo_at, 4));
+    }
+    _mm256_storeu_si256((__m256i *)material, materials);
+    int front_bits = _mm256_movemask_ps(front) & lanes;
+    _mm256_zeroupper();
+    return front_bits;
+}
+#endif
+
 /* One row of the image, eight pixels at a time. */
 static void render_row(row_job *job)
 {
@@ -470,31 +543,32 @@ static void render_row(row_job *job)
         }
         if (active == 0)
             return; /* every pixel written, so no shadow ray waits */
-        hit_record hits[LANES];
-        bool found[LANES];
-        flat_closest_hit8(sc->bvh, rays, active, hits, found, job->counters);
+        flat_hits8 hits;
+        int hit_lanes = flat_closest_hit8_raw(sc->bvh, rays, active, &hits, job->counters);
         vertex_lanes L;
-        int picked = 0, hit_lanes = 0;
+        int material[LANES], front = 0, picked = 0;
+#if WIDE_HAVE_AVX
+        if (hit_lanes != 0 && job->avx && !sc->triangles.vertex_normals)
+            front = hit_records_avx(sc, rays, &hits, hit_lanes, &L, material);
+        else
+#endif
+            for (int k = 0; k < LANES; k++)
+                if ((hit_lanes >> k) & 1)
+                    front |= hit_record_lane(sc, rays, &hits, k, &L, material);
         for (int k = 0; k < LANES; k++) {
             lane *l = &lanes[k];
             if (!((active >> k) & 1))
                 continue;
-            if (!found[k]) { /* left the scene: the environment */
+            if (!((hit_lanes >> k) & 1)) { /* left the scene: the environment */
                 l->radiance = vec3_add(l->radiance, vec3_mul(l->throughput, sc->environment));
                 continue;
             }
-            hit_lanes |= 1 << k;
             if (l->camera) { /* what the eye sees directly: the emission at the first hit */
-                const pt_material *m = &sc->materials[hits[k].material_id];
-                l->radiance = hits[k].front_face ? m->emission : vec3_splat(0.0f);
+                l->radiance = (front >> k) & 1 ? sc->materials[material[k]].emission : vec3_splat(0.0f);
                 l->wo = vec3_normalize(vec3_neg(l->r.direction));
                 l->camera = false;
             }
-            lanes_set(L.p, k, hits[k].point);
-            lanes_set(L.ng, k, hits[k].normal_geometric);
-            lanes_set(L.n, k, hits[k].normal_shading);
             lanes_set(L.wo, k, l->wo);
-            lanes_set(L.albedo, k, sc->materials[hits[k].material_id].albedo);
             lanes_set(L.throughput, k, l->throughput);
             if (l->depth + 1 <= pt->max_depth && pick_light(l, sc, job->pdf_area, &L, k))
                 picked |= 1 << k;

@@ -213,16 +213,17 @@ static void end_sample(lane *l, row_job *job)
 /* ---- one vertex of eight paths ------------------------------------------------
  * What shade() of path_tracer.c does at a vertex, for the lecture rung on
  * diffuse surfaces, in the same order and with the same random numbers,
- * in four parts: each lane picks its point on a light (pick_light); the
- * light sample's arithmetic runs for all eight lanes at once (light_math);
+ * in five parts: the hit records are made for all eight lanes at once
+ * (hit_records, below); each lane picks its point on a light (pick_light);
+ * the light sample's arithmetic runs for all eight at once (light_math);
  * each lane then queues its shadow ray and draws the roulette and the two
  * numbers of its next direction (roll_bounce); the bounce's arithmetic runs
  * for all eight at once (bounce_math). */
 
 /* The eight lanes' vertices, structure of arrays: what light_math reads
- * (the hit point p, geometric normal ng, shading normal n, direction back
- * wo, albedo, throughput; the point on the light, its normal, radiance and
- * pdf per unit area) and writes (each lane's contribution, times its
+ * (the hit point p, geometric normal ng, shading normal n and albedo, from
+ * the hit records; direction back wo and throughput, from the lanes; the
+ * point on the light, its normal, radiance and pdf per unit area) and writes (each lane's contribution, times its
  * throughput, and its shadow ray); what bounce_math reads (p, ng, n, wo,
  * albedo, throughput again; the hemisphere's two numbers, 1 / P_RR) and
  * writes (the next ray and the throughput after the bounce). */

@@ -243,8 +243,9 @@ ray *accel_aimed_rays(const triangle_set *set, int count, uint64_t seed)
     pcg32 rng = pcg32_for_pixel(seed, 0x9120);
     vec3 lo = set->bounds.lo, e = aabb_extent(set->bounds);
     for (int i = 0; i < count; i++) {
-        vec3 o = vec3_make(lo.x + e.x * pcg32_float(&rng), lo.y + e.y * pcg32_float(&rng),
-                           lo.z + e.z * pcg32_float(&rng));
+        /* in a written order (C leaves a call's argument order open): GCC's */
+        float u_z = pcg32_float(&rng), u_y = pcg32_float(&rng), u_x = pcg32_float(&rng);
+        vec3 o = vec3_make(lo.x + e.x * u_x, lo.y + e.y * u_y, lo.z + e.z * u_z);
         const triangle *t = &set->triangles[pcg32_bounded(&rng, (uint32_t)set->count)];
         vec3 target = vec3_scale(vec3_add(vec3_add(t->p0, t->p1), t->p2), 1.0f / 3.0f);
         rays[i] = ray_make(o, vec3_normalize(vec3_sub(target, o)));

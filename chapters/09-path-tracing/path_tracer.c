@@ -274,7 +274,9 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
 
     bsdf_sample_result s;
     if (delta) {
-        vec2 u = vec2_make(pt_random_float(rng), pt_random_float(rng));
+        /* in a written order, GCC's (see shade() below) */
+        float u_y = pt_random_float(rng), u_x = pt_random_float(rng);
+        vec2 u = vec2_make(u_x, u_y);
         if (!bsdf_sample(m, n, wo, u, pt_random_float(rng), hit->front_face, &s))
             return l_dir;
         if (!delta_allowed(pt, &s)) {
@@ -425,7 +427,9 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_co
         /* The next direction: from the BSDF (MIS, and always for delta
          * surfaces), or cosine-weighted on the hemisphere. */
         bsdf_sample_result s;
-        vec2 u = vec2_make(pt_random_float(rng), pt_random_float(rng));
+        /* in a written order, GCC's (see shade() below) */
+        float u_y = pt_random_float(rng), u_x = pt_random_float(rng);
+        vec2 u = vec2_make(u_x, u_y);
         if (mis || delta) {
             if (!bsdf_sample(m, n, wo, u, pt_random_float(rng), hit.front_face, &s))
                 break;

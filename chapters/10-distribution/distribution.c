@@ -213,7 +213,9 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
         vec3 sum = vec3_splat(0.0f);
         for (int k = 0; k < dt->glossy_samples; k++) {
             bsdf_sample_result s;
-            vec2 u = vec2_make(pcg32_float(rng), pcg32_float(rng));
+            /* in a written order (C leaves a call's argument order open): GCC's */
+            float u_y = pcg32_float(rng), u_x = pcg32_float(rng);
+            vec2 u = vec2_make(u_x, u_y);
             if (!bsdf_sample(m, n, wo, u, 0.0f, hit.front_face, &s) || vec3_is_black(s.weight))
                 continue;
             counters->indirect_rays++;
@@ -272,7 +274,8 @@ vec3 distribution_radiance(const void *ctx, ray pinhole, pcg32 *rng, ray_counter
     /* The pixel position came from the render loop (stratified); now the
      * lens and the shutter. Both are drawn always, so that the streams of
      * the later numbers do not depend on the settings. */
-    vec2 u_lens = vec2_make(pcg32_float(rng), pcg32_float(rng));
+    float u_lens_y = pcg32_float(rng), u_lens_x = pcg32_float(rng); /* in GCC's order, written out */
+    vec2 u_lens = vec2_make(u_lens_x, u_lens_y);
     float u_time = pcg32_float(rng);
     timed_ray camera_ray = {thin_lens_ray(&dt->lens, pinhole, u_lens), dt->motion ? u_time : 0.0f};
     if (explain_on()) {

@@ -182,7 +182,9 @@ static int random_walk(const bdpt *b, ray r, vec3 beta, float pdf_dir, bdpt_vert
         const pt_material *m = &sc->materials[v->material];
         vec3 wo = vec3_normalize(vec3_neg(r.direction));
         bsdf_sample_result s;
-        vec2 u = vec2_make(pcg32_float(rng), pcg32_float(rng));
+        /* in a written order (C leaves a call's argument order open): GCC's */
+        float u_y = pcg32_float(rng), u_x = pcg32_float(rng);
+        vec2 u = vec2_make(u_x, u_y);
         if (!bsdf_sample(m, v->normal, wo, u, pcg32_float(rng), v->front_face, &s) || vec3_is_black(s.weight))
             break;
         /* Russian roulette */
@@ -225,7 +227,8 @@ static int light_subpath(const bdpt *b, bdpt_vertex *path, pcg32 *rng, ray_count
 {
     const pt_scene *sc = b->scene;
     float u_pick = pcg32_float(rng), u1 = pcg32_float(rng), u2 = pcg32_float(rng);
-    vec2 u_dir = vec2_make(pcg32_float(rng), pcg32_float(rng));
+    float u_dir_y = pcg32_float(rng), u_dir_x = pcg32_float(rng); /* in GCC's order, written out */
+    vec2 u_dir = vec2_make(u_dir_x, u_dir_y);
     bdpt_vertex *y0 = &path[0];
     memset(y0, 0, sizeof *y0);
     if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &y0->point, &y0->normal, &y0->material))

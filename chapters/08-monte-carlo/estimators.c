@@ -213,13 +213,17 @@ static void sobol_directions(int dimension, uint32_t v[32])
  * estimate at N = 2^m is the same. */
 static void points_sobol_owen(pcg32 *rng, int n, int dimension, double *u)
 {
-    uint32_t seed[2] = {pcg32_next(rng), pcg32_next(rng)};
+    /* each draw its own declaration: the order of an initializer list's
+     * side effects is left open by C */
+    uint32_t seed_first = pcg32_next(rng), seed_second = pcg32_next(rng);
+    uint32_t seed[2] = {seed_first, seed_second};
     /* A random digital shift after the hash: xor with a uniformly random
      * word flips each bit regardless of the bits above it, so it is itself a
      * nested scramble (the nets survive), and it makes every point exactly
      * uniform over the 2^32 fractions whatever the hash's quality: the
      * estimator is unbiased. */
-    uint32_t shift[2] = {pcg32_next(rng), pcg32_next(rng)};
+    uint32_t shift_first = pcg32_next(rng), shift_second = pcg32_next(rng);
+    uint32_t shift[2] = {shift_first, shift_second};
     uint32_t v[2][32], x[2] = {0u, 0u};
     for (int d = 0; d < dimension; d++)
         sobol_directions(d, v[d]);

@@ -9,7 +9,8 @@
  *
  * Usage (a diffuse bounce in a path tracer, chapter 09):
  *   vec3 t, b;  vec3_basis(n, &t, &b);
- *   vec3 local = sample_cosine_hemisphere(vec2_make(pcg32_float(&rng), pcg32_float(&rng)));
+ *   float u1 = pcg32_float(&rng), u2 = pcg32_float(&rng);  (two statements' worth: in this order)
+ *   vec3 local = sample_cosine_hemisphere(vec2_make(u1, u2));
  *   vec3 wi = vec3_add(vec3_add(vec3_scale(t, local.x), vec3_scale(b, local.y)), vec3_scale(n, local.z));
  *   float pdf = cosine_hemisphere_pdf(local.z);
  *

@@ -223,10 +223,11 @@ static void end_sample(lane *l, row_job *job)
 /* The eight lanes' vertices, structure of arrays: what light_math reads
  * (the hit point p, geometric normal ng, shading normal n and albedo, from
  * the hit records; direction back wo and throughput, from the lanes; the
- * point on the light, its normal, radiance and pdf per unit area) and writes (each lane's contribution, times its
- * throughput, and its shadow ray); what bounce_math reads (p, ng, n, wo,
- * albedo, throughput again; the hemisphere's two numbers, 1 / P_RR) and
- * writes (the next ray and the throughput after the bounce). */
+ * point on the light, its normal, radiance and pdf per unit area) and
+ * writes (each lane's contribution, times its throughput, and its shadow
+ * ray); what bounce_math reads (p, ng, n, wo, albedo, throughput again;
+ * the hemisphere's two numbers, 1 / P_RR) and writes (the next ray and the
+ * throughput after the bounce). */
 typedef struct {
     _Alignas(32) float p[3][LANES], ng[3][LANES], n[3][LANES], wo[3][LANES], albedo[3][LANES], throughput[3][LANES];
     _Alignas(32) float x_light[3][LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];

@@ -20,6 +20,7 @@
 #include "09-path-tracing/path_tracer.h"
 #include "09-path-tracing/path_tracer_wide.h"
 #include "09-path-tracing/spawn_avx.h"
+#include "06-bvh/flat.h"
 #include "08-monte-carlo/sampling.h"
 #include "effects.h"
 #include "render.h"
@@ -975,6 +976,142 @@ static void test_wall_test_is_never_fooled_by_rounding(void **state)
     pt_scene_free(&sc);
 }
 
+/* ---- eight rays past the boxes of flat.c's groups ---------------------------------- */
+
+/* Is point p inside triangle `index`'s box, grown by a thousandth of the
+ * scene's size? */
+static bool inside_triangle_box(const triangle_set *set, int index, vec3 p)
+{
+    aabb box = set->boxes[index];
+    float grow = 1e-3f * vec3_max_component(aabb_extent(set->bounds));
+    const float at[3] = {p.x, p.y, p.z}, lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
+    for (int axis = 0; axis < 3; axis++)
+        if (!(at[axis] >= lo[axis] - grow && at[axis] <= hi[axis] + grow))
+            return false;
+    return true;
+}
+
+/* Packets whose rays run along the Cornell box's triangles, where a box
+ * test and the triangle test are likeliest to disagree: each ray passes
+ * through a random point of a triangle, in the triangle's plane or tilted
+ * out of it by 10^-7 to 10^-2 radians, starting on the triangle or up to
+ * two room sizes back along its line, its origin on the plane or 2^-16 off
+ * it. Each lane is compared with the ray alone (flat.c, "Groups").
+ *
+ * A ray in a triangle's plane, within rounding, is where Moller-Trumbore
+ * means nothing: its determinant is rounding noise, and it may report a
+ * "hit" hundreds of units from the triangle. A packet whose rays all miss
+ * that triangle's box skips it and gives the true nearest hit instead. So
+ * a lane may differ from the ray alone only there: where the lone ray's
+ * hit point o + t d lies outside its triangle's box. Returns
+ * the lanes that differ otherwise (*differ counts all that differ); counts
+ * the hits and the triangles the packets tested. */
+static long wall_packets_mismatched(const pt_scene *sc, uint64_t seed, long *differ, long *hits, uint64_t *tested,
+                                    long *lanes)
+{
+    static const float tilts[] = {0.0f, 1e-7f, 1e-6f, 1e-5f, 1e-4f, 1e-3f, 1e-2f};
+    static const float backs[] = {0.0f, 1.0f, 10.0f, 100.0f, 1000.0f};
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    const triangle_set *set = &sc->triangles;
+    long wrong = 0;
+    for (int packet = 0; packet < 4000; packet++) {
+        ray rays[FLAT_LANES];
+        for (int k = 0; k < FLAT_LANES; k++) {
+            const triangle *tri = &set->triangles[pcg32_bounded(&rng, (uint32_t)set->count)];
+            float a = pcg32_float(&rng), b = pcg32_float(&rng);
+            if (a + b > 1.0f) {
+                a = 1.0f - a;
+                b = 1.0f - b;
+            }
+            vec3 e1 = vec3_sub(tri->p1, tri->p0), e2 = vec3_sub(tri->p2, tri->p0);
+            vec3 point = vec3_add(tri->p0, vec3_add(vec3_scale(e1, a), vec3_scale(e2, b)));
+            vec3 normal = triangle_unit_normal(tri);
+            float angle = 6.2831853f * pcg32_float(&rng);
+            vec3 along = vec3_normalize(vec3_add(vec3_scale(vec3_normalize(e1), cosf(angle)),
+                                                 vec3_scale(vec3_normalize(vec3_cross(normal, e1)), sinf(angle))));
+            float tilt = tilts[pcg32_bounded(&rng, 7)] * (pcg32_next(&rng) & 1 ? 1.0f : -1.0f);
+            vec3 direction = vec3_normalize(vec3_add(along, vec3_scale(normal, tilt)));
+            vec3 origin = vec3_sub(point, vec3_scale(direction, backs[pcg32_bounded(&rng, 5)]));
+            uint32_t off = pcg32_bounded(&rng, 3);
+            if (off > 0)
+                origin = vec3_add(origin, vec3_scale(normal, off == 1 ? 0x1.0p-16f : -0x1.0p-16f));
+            rays[k] = ray_make(origin, direction);
+        }
+        int active = packet % 4 == 0 ? (int)(pcg32_next(&rng) & 0xFF) : 0xFF;
+        hit_record got[FLAT_LANES];
+        bool found[FLAT_LANES], any[FLAT_LANES];
+        memset(got, 0, sizeof got);
+        ray_counters c = {0};
+        flat_closest_hit8(sc->bvh, rays, active, got, found, &c);
+        flat_any_hit8(sc->bvh, rays, active, any, &c);
+        *tested += c.primitive_tests;
+        for (int k = 0; k < FLAT_LANES; k++) {
+            if (!((active >> k) & 1))
+                continue;
+            hit_record want;
+            memset(&want, 0, sizeof want);
+            ray_counters alone = {0};
+            bool want_hit = accel_closest_hit(sc->bvh, rays[k], &want, &alone);
+            bool want_any = accel_any_hit(sc->bvh, rays[k], &alone);
+            bool same = found[k] == want_hit && any[k] == want_any;
+            if (same && want_hit)
+                same = memcmp(&got[k], &want, sizeof want) == 0;
+            *differ += !same;
+            *hits += want_hit;
+            (*lanes)++;
+            /* differing is allowed only where the lone ray's hit is outside its box */
+            if (!same && !(want_hit && !inside_triangle_box(set, want.shape_id, ray_at(rays[k], want.t))))
+                wrong++;
+        }
+    }
+    return wrong;
+}
+
+/* The packets skip the groups none of their rays meet, and still give each
+ * ray its own answer wherever that answer is a point of its triangle's box.
+ * They test fewer than all 32 triangles per ray (the boxes do skip). The
+ * twin: boxes shrunk by twice their padding, so that they no longer hold
+ * their triangles, lose true hits. */
+static void test_packets_along_the_walls_match_single_rays(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    assert_true(flat_is(sc.bvh));
+    flat *f = (flat *)sc.bvh;
+    if (!flat_kernel_runs(FLAT_KERNEL_AVX)) {
+        pt_scene_free(&sc);
+        skip(); /* the packets are rays one at a time: nothing to compare */
+    }
+    long hits = 0, lanes = 0, differ = 0;
+    uint64_t tested = 0;
+    long wrong = wall_packets_mismatched(&sc, test_seed(94), &differ, &hits, &tested, &lanes);
+    /* closest and any hit per lane: 2 * 32 triangles per lane if nothing were skipped */
+    double share = (double)tested / (2.0 * (double)lanes * (double)sc.triangles.count);
+    print_message("packets along the walls: %ld lanes, %ld hits; %ld differ from one ray alone, %ld of them where "
+                  "the lone ray's hit is inside its box; %d groups, %.0f %% of the triangles tested\n",
+                  lanes, hits, differ, wrong, f->group_count, 100.0 * share);
+    assert_int_equal(wrong, 0);
+    assert_true(differ < lanes / 1000);
+    assert_true(hits > lanes / 2);
+    assert_true(f->group_count > 1 && share < 0.9);
+
+    /* the twin: each box shrunk by twice GROUP_PAD of the scene's size */
+    aabb s = sc.triangles.bounds;
+    vec3 extent = aabb_extent(s), far = vec3_max(vec3_abs(s.lo), vec3_abs(s.hi));
+    float shrink = 0x1.0p-9f * (vec3_max_component(extent) + vec3_max_component(far));
+    for (int g = 0; g < f->group_count; g++)
+        for (int axis = 0; axis < 3; axis++) {
+            f->groups[g].lo[axis] += shrink;
+            f->groups[g].hi[axis] -= shrink;
+        }
+    long twin_differ = 0, twin = wall_packets_mismatched(&sc, test_seed(94), &twin_differ, &hits, &tested, &lanes);
+    print_message("boxes shrunk inside their triangles: %ld lanes differ where the lone ray's hit is inside its box\n",
+                  twin);
+    assert_true(twin > 100);
+    pt_scene_free(&sc);
+}
+
 /* ---- eight paths at a time (path_tracer_wide.c) ----------------------------------- */
 
 /* The same paths summed in another order (from the camera out instead of
@@ -1211,6 +1348,7 @@ int main(void)
         cmocka_unit_test(test_walls_skipped_only_where_they_cannot_block),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_wall_test_is_never_fooled_by_rounding),
+        cmocka_unit_test(test_packets_along_the_walls_match_single_rays),
         cmocka_unit_test(test_wide_renders_the_lecture_rungs_paths),
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
     };

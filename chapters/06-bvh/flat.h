@@ -46,6 +46,15 @@ typedef struct {
     int32_t index[FLAT_LANES];
 } flat_block;
 
+/* A run of consecutive triangles and their box, for the eight-ray kernels
+ * (flat_closest_hit8, flat_any_hit8): a packet whose rays all miss the box
+ * skips the run. The box is padded (flat.c, "Groups") so that a hit the
+ * triangle test finds is inside it. */
+typedef struct {
+    float lo[3], hi[3];
+    int first, count;
+} flat_group;
+
 /* AVX512: the AVX code with AVX-512's 32 registers (still 8 lanes). */
 typedef enum { FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR } flat_kernel;
 
@@ -53,6 +62,8 @@ typedef struct {
     accel base;
     flat_block *blocks;
     int block_count;
+    flat_group *groups; /* in triangle order, covering every triangle once */
+    int group_count;
     flat_kernel kernel;
 } flat;
 
@@ -74,8 +85,13 @@ bool flat_is(const accel *a);
  * chapter 09's path_tracer_wide.c). Lane k, if bit k of `active` is set,
  * gets what accel_closest_hit() gives rays[k] alone, bit for bit (found[k],
  * hits[k]); other lanes are left as they were. With the AVX kernel, eight
- * rays per instruction; else each ray alone. primitive_tests counts every
- * triangle for every active ray. */
+ * rays per instruction, and a group (flat_group) whose box none of the
+ * eight meets is skipped; else each ray alone. The one exception: a ray
+ * lying in a triangle's plane, within rounding, for which the triangle
+ * test reports a "hit" outside the triangle's box; the packet may have
+ * skipped that box and give the true nearest hit (flat.c, "Groups").
+ * primitive_tests counts the triangles tested for every active ray,
+ * box_tests the group boxes. */
 void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, hit_record hits[FLAT_LANES],
                        bool found[FLAT_LANES], ray_counters *counters);
 /* The same, stopped before the hit records are made: lane k's nearest t,

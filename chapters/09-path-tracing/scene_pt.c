@@ -100,7 +100,9 @@ static accel *build_accel(const triangle_set *set)
      * triangles) a closest hit took 64 ns through the 4-wide BVH: the path
      * tracer is 14 % faster with the same image, bit for bit (README,
      * "Speed"). A flat test costs about 0.9 ns per triangle, the 4-wide
-     * BVH 50-70 ns a ray on small meshes: they cross near 64. */
+     * BVH 50-70 ns a ray on small meshes: they cross near 64. (Eight rays
+     * at a time, for --wide, skip the runs of triangles whose box none of
+     * them meets: one level of boxes, flat.c's "Groups".) */
     if (set->count <= FLAT_TRIANGLES_MAX)
         return flat_build(set);
     /* Chapter 06's 4-wide BVH: four boxes per node tested at once. Inside a

@@ -392,12 +392,13 @@ static void test_russian_roulette_on_and_off_agree_in_mean(void **state)
         path_tracer off = tracer(&sc, rungs[i], RR_OFF);
         off.max_depth = 40; /* 0.73^40: nothing left to cut */
         render_result a = render(&off, 8, 8, 128, 61, 2);
-        const pt_russian_roulette modes[2] = {RR_FIXED, RR_THROUGHPUT};
-        for (int m = 0; m < 2; m++) {
+        const pt_russian_roulette modes[3] = {RR_FIXED, RR_THROUGHPUT, RR_ALBEDO};
+        const char *mode_names[3] = {"fixed", "throughput", "albedo"};
+        for (int m = 0; m < 3; m++) {
             path_tracer on = tracer(&sc, rungs[i], modes[m]);
             render_result b = render(&on, 8, 8, 128, 62, 2);
             print_message("%s, %s roulette: %d of 64 pixels disagree; indirect rays %llu (none: %llu)\n",
-                          pt_integrator_name(rungs[i]), modes[m] == RR_FIXED ? "fixed" : "throughput",
+                          pt_integrator_name(rungs[i]), mode_names[m],
                           count_disagreements(&a, &b), (unsigned long long)b.stats.counters.indirect_rays,
                           (unsigned long long)a.stats.counters.indirect_rays);
             assert_int_equal(count_disagreements(&a, &b), 0);
@@ -1143,9 +1144,10 @@ static long pixels_apart(const image *a, const image *b, float tolerance)
  * but for the rounding of the sums along each path (added from the camera
  * out, not from the last bounce back): within 1e-4 relative, and the same
  * count of camera, shadow and indirect rays. Checked for the lecture's
- * roulette and for the two deeper ones the speed table compares with
- * smallpt and RTROWL (roulette on throughput after 5 bounces; none, 50
- * bounces). Also at 1 and 2 threads the same, bit for bit. The twin is the
+ * roulette and for the three deeper ones the speed table compares with
+ * pbrt, smallpt and RTROWL (roulette on throughput from bounce 5, on
+ * albedo from bounce 6; none, 50 bounces). Also at 1 and 2 threads the
+ * same, bit for bit. The twin is the
  * cosine rung: the same image in distribution, but not the same paths. */
 static estimate_image wide_as_the_lecture_rung(const path_tracer *pt, const camera *cam, const char *roulette)
 {
@@ -1177,11 +1179,15 @@ static void test_wide_renders_the_lecture_rungs_paths(void **state)
     camera cam = pt_scene_camera(&sc, 24, 24);
     path_tracer deeper = tracer(&sc, PT_LECTURE, RR_THROUGHPUT);
     deeper.rr_start_depth = 5;
-    estimate_image check = wide_as_the_lecture_rung(&deeper, &cam, "roulette on throughput after 5");
+    estimate_image check = wide_as_the_lecture_rung(&deeper, &cam, "roulette on throughput from bounce 5");
     estimate_image_free(&check);
     deeper = tracer(&sc, PT_LECTURE, RR_OFF);
     deeper.max_depth = 50;
     check = wide_as_the_lecture_rung(&deeper, &cam, "no roulette, depth 50");
+    estimate_image_free(&check);
+    deeper = tracer(&sc, PT_LECTURE, RR_ALBEDO);
+    deeper.rr_start_depth = 6;
+    check = wide_as_the_lecture_rung(&deeper, &cam, "roulette on albedo from bounce 6");
     estimate_image_free(&check);
 
     path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);

@@ -392,10 +392,11 @@ typedef struct {
 /* Every case counts at most SPEED_MAX_DEPTH bounces, Ray Tracing: The Rest of
  * Your Life's max_depth for its Cornell box. The second is the first with
  * every shadow ray tested against the walls too (scene_pt.c, "walls cast no
- * shadows"): what they save. The last four are the comparisons at the
- * references' depths, the issue's target: Russian roulette only after 5
- * bounces, on the throughput (smallpt continues with probability
- * max(albedo) after depth 5), and no roulette at all, the full 50 bounces
+ * shadows"): what they save. The last six are the comparisons at the
+ * references' depths, the issue's target: Russian roulette on the
+ * throughput from bounce 5 on (pbrt-v3's rule), on the surface's albedo
+ * from bounce 6 on (smallpt's: `if (++depth > 5)` continue with
+ * probability max(f)), and no roulette at all, the full 50 bounces
  * (RTROWL), each by MIS one path at a time and by the lecture rung eight
  * paths at a time. */
 enum { SPEED_MAX_DEPTH = 50 };
@@ -405,8 +406,10 @@ static const speed_case speed_cases[] = {
     {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, 8 paths at a time", false, true},
     {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8", false, false},
     {PT_MIS, RR_FIXED, 0, "mis, P_RR 0.8", false, false},
-    {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput after 5 (smallpt)", false, false},
-    {PT_LECTURE, RR_THROUGHPUT, 5, "lecture, smallpt's depth, 8 paths at a time", false, true},
+    {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput from 5 (pbrt)", false, false},
+    {PT_LECTURE, RR_THROUGHPUT, 5, "lecture, pbrt's roulette, 8 paths at a time", false, true},
+    {PT_MIS, RR_ALBEDO, 6, "mis, RR on albedo from 6 (smallpt)", false, false},
+    {PT_LECTURE, RR_ALBEDO, 6, "lecture, smallpt's roulette, 8 paths at a time", false, true},
     {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)", false, false},
     {PT_LECTURE, RR_OFF, 0, "lecture, RTROWL's depth, 8 paths at a time", false, true},
 };

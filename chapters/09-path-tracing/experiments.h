@@ -83,7 +83,7 @@ bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char
  * with), headed "LABEL SIZExSIZE, ...". Fills rows[0 .. returned count - 1]
  * (if rows is not NULL; room for EXPERIMENT_SPEED_CASES): seconds per
  * million camera samples, index 0 for 1 thread and 1 for 2 threads. */
-enum { EXPERIMENT_SPEED_CASES = 9 };
+enum { EXPERIMENT_SPEED_CASES = 11 };
 typedef struct {
     const char *label;
     double wall[2], cpu[2]; /* seconds per million camera samples */

@@ -48,10 +48,12 @@ int main(int argc, char **argv)
     int max_depth = -1, rr_start = 3, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
     const cli_flag extras[] = {
         {"--integrator", CLI_STRING, &integrator, "NAME", "lecture (default), cosine or mis: the rung of the ladder", 0, 0},
-        {"--rr", CLI_STRING, &rr, "MODE", "Russian roulette: fixed (default, P_RR), throughput, or off", 0, 0},
+        {"--rr", CLI_STRING, &rr, "MODE",
+         "Russian roulette: fixed (default, P_RR), throughput (pbrt's), albedo (smallpt's), or off", 0, 0},
         {"--rr-probability", CLI_FLOAT, &rr_probability, "P", "P_RR for --rr fixed (default 0.8)", 0.01, 1.0},
         {"--rr-start", CLI_INT, &rr_start, "N",
-         "--rr throughput: bounces before the roulette starts (default 3; smallpt's depth is 5)", 0, 1000},
+         "--rr throughput or albedo: the first bounce the roulette may end (default 3; pbrt-v3's is 5, smallpt's 6)",
+         0, 1000},
         {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
         {"--builtin", CLI_STRING, &scene_name, "NAME",
          "cornell (default), materials (glossy metal, glass), veach (glossy plates, lights of 4 sizes), furnace, "
@@ -129,10 +131,12 @@ int main(int argc, char **argv)
         rr_mode = RR_FIXED;
     else if (strcmp(rr, "throughput") == 0)
         rr_mode = RR_THROUGHPUT;
+    else if (strcmp(rr, "albedo") == 0)
+        rr_mode = RR_ALBEDO;
     else if (strcmp(rr, "off") == 0)
         rr_mode = RR_OFF;
     else {
-        fprintf(stderr, "09-path-tracing: --rr: unknown '%s' (fixed, throughput, off)\n", rr);
+        fprintf(stderr, "09-path-tracing: --rr: unknown '%s' (fixed, throughput, albedo, off)\n", rr);
         scene_desc_free(&desc);
         return 2;
     }

@@ -201,7 +201,8 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
 static void explain_roulette(const path_tracer *pt, int indent, float u_rr, float q)
 {
     bool fixed = pt->russian_roulette == RR_FIXED;
-    explain_line(indent, "Russian roulette%s: u = %.4f %s %s = %.3g: %s", fixed ? "" : " on throughput", (double)u_rr,
+    const char *on = fixed ? "" : pt->russian_roulette == RR_ALBEDO ? " on albedo" : " on throughput";
+    explain_line(indent, "Russian roulette%s: u = %.4f %s %s = %.3g: %s", on, (double)u_rr,
                  u_rr >= q ? ">=" : "<", fixed ? "P_RR" : "q", (double)q,
                  u_rr >= q ? "the path ends" : fixed ? "continue, dividing by P_RR" : "continue, dividing by q");
 }
@@ -265,7 +266,7 @@ static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int dep
      * continued path brings by P_RR, so the expectation is unchanged. (With
      * --rr throughput the probability is q, from the path's throughput.) */
     float p_rr = 1.0f;
-    if (path_tracer_roulette(pt, depth, throughput, &p_rr)) {
+    if (path_tracer_roulette(pt, depth, throughput, m->albedo, &p_rr)) {
         float u_rr = pt_random_float(rng);
         explain_roulette(pt, indent, u_rr, p_rr);
         if (u_rr >= p_rr)
@@ -453,7 +454,7 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_co
 
         /* Russian roulette */
         float q;
-        if (path_tracer_roulette(pt, depth, throughput, &q)) {
+        if (path_tracer_roulette(pt, depth, throughput, m->albedo, &q)) {
             float u_rr = pt_random_float(rng);
             explain_roulette(pt, indent, u_rr, q);
             if (u_rr >= q)

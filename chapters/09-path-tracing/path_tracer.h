@@ -8,8 +8,9 @@
  *   PT_MIS      directions drawn from the BSDF, and light sampling and BSDF
  *               sampling combined by multiple importance sampling (power
  *               heuristic): glossy surfaces and small lights both work
- * and, separately, Russian roulette with a fixed probability or on the path
- * throughput.
+ * and, separately, Russian roulette: with a fixed probability (the
+ * lecture), on the surface's albedo (smallpt) or on the path's throughput
+ * (pbrt).
  *
  * Usage:
  *   path_tracer pt = path_tracer_defaults(&scene);
@@ -27,7 +28,8 @@ typedef enum { PT_LECTURE, PT_COSINE, PT_MIS } pt_integrator;
 typedef enum {
     RR_OFF,        /* no Russian roulette: paths end at max_depth */
     RR_FIXED,      /* continue with probability P_RR at every bounce (the lecture) */
-    RR_THROUGHPUT, /* continue with probability min(1, max throughput) after rr_start_depth bounces */
+    RR_THROUGHPUT, /* continue with probability min(1, max throughput), from bounce rr_start_depth on (pbrt) */
+    RR_ALBEDO,     /* continue with probability min(1, max albedo), from bounce rr_start_depth on (smallpt) */
 } pt_russian_roulette;
 
 typedef struct {
@@ -35,7 +37,9 @@ typedef struct {
     pt_integrator integrator;
     pt_russian_roulette russian_roulette;
     float rr_probability; /* P_RR of RR_FIXED */
-    int rr_start_depth;   /* RR_THROUGHPUT: bounces before it starts */
+    /* RR_THROUGHPUT and RR_ALBEDO: the first bounce the roulette may end
+     * (pbrt-v3 plays it from bounce 5 on, smallpt from bounce 6 on) */
+    int rr_start_depth;
     /* Light that bounced more than max_depth times is not counted. With
      * Russian roulette this is only a guard (0.8^64 = 6e-7 of the paths get
      * that far); without it, it is the truncation. */
@@ -53,10 +57,11 @@ path_tracer path_tracer_defaults(const pt_scene *scene);
 
 /* Russian roulette before bounce depth + 1 (depth bounces already made),
  * with `throughput` the path's product of f cos / pdf (and earlier 1/q) up
- * to that point: false if no roulette is played there; else true, and the
- * probability q that the path goes on in *q. Every rung asks this one
- * question, so RR_FIXED and RR_THROUGHPUT mean the same in each. */
-static inline bool path_tracer_roulette(const path_tracer *pt, int depth, vec3 throughput, float *q)
+ * to that point and `albedo` the surface's (pt_material's): false if no
+ * roulette is played there; else true, and the probability q that the path
+ * goes on in *q. Every rung asks this one question, so each mode means the
+ * same in each. */
+static inline bool path_tracer_roulette(const path_tracer *pt, int depth, vec3 throughput, vec3 albedo, float *q)
 {
     switch (pt->russian_roulette) {
     case RR_FIXED:
@@ -68,6 +73,14 @@ static inline bool path_tracer_roulette(const path_tracer *pt, int depth, vec3 t
         if (depth + 1 < pt->rr_start_depth)
             return false;
         *q = fminf(1.0f, vec3_max_component(throughput));
+        return true;
+    case RR_ALBEDO:
+        /* continue in proportion to what this surface reflects, whatever
+         * the path carried here: smallpt's rule. Longer paths than on the
+         * throughput, which after five bounces is a fraction of one. */
+        if (depth + 1 < pt->rr_start_depth)
+            return false;
+        *q = fminf(1.0f, vec3_max_component(albedo));
         return true;
     case RR_OFF:
         break;

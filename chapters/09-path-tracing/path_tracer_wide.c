@@ -349,7 +349,8 @@ static int roll_bounce(lane *l, const path_tracer *pt, vertex_lanes *L, int k)
     if (l->depth + 2 > pt->max_depth || !(pt->effects & EFFECT_INDIRECT))
         return 0;
     float p_rr = 1.0f;
-    if (path_tracer_roulette(pt, l->depth, l->throughput, &p_rr) && pcg32_float(&l->rng) >= p_rr)
+    vec3 albedo = vec3_make(L->albedo[0][k], L->albedo[1][k], L->albedo[2][k]);
+    if (path_tracer_roulette(pt, l->depth, l->throughput, albedo, &p_rr) && pcg32_float(&l->rng) >= p_rr)
         return 0;
     L->u_y[k] = pcg32_float(&l->rng); /* shade()'s order */
     L->u_x[k] = pcg32_float(&l->rng);

@@ -407,9 +407,9 @@ static const speed_case speed_cases[] = {
     {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8", false, false},
     {PT_MIS, RR_FIXED, 0, "mis, P_RR 0.8", false, false},
     {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput from 5 (pbrt)", false, false},
-    {PT_LECTURE, RR_THROUGHPUT, 5, "lecture, pbrt's roulette, 8 paths at a time", false, true},
+    {PT_LECTURE, RR_THROUGHPUT, 5, "lecture, pbrt's RR, 8 paths at a time", false, true},
     {PT_MIS, RR_ALBEDO, 6, "mis, RR on albedo from 6 (smallpt)", false, false},
-    {PT_LECTURE, RR_ALBEDO, 6, "lecture, smallpt's roulette, 8 paths at a time", false, true},
+    {PT_LECTURE, RR_ALBEDO, 6, "lecture, smallpt's RR, 8 paths at a time", false, true},
     {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)", false, false},
     {PT_LECTURE, RR_OFF, 0, "lecture, RTROWL's depth, 8 paths at a time", false, true},
 };

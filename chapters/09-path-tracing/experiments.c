@@ -308,7 +308,7 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
             experiment_error(&e.mean, reference, &rmse, &relmse);
             double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
             fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f,%.6f\n", k, pt_integrator_name(pt.integrator),
-                    pt.russian_roulette == RR_FIXED ? "fixed" : "throughput", spp, e.seconds, rmse, relmse, rays, cpu);
+                    pt_russian_roulette_name(pt.russian_roulette), spp, e.seconds, rmse, relmse, rays, cpu);
             printf("%-42s %6d %9.3f %9.3f %10.4f %10.5f\n", rungs[k].label, spp, e.seconds, cpu, rmse, relmse);
             seconds[n] = cpu;
             relmses[n] = relmse;
@@ -371,6 +371,71 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
                rays);
         estimate_image_free(&e);
     }
+    if (!experiment_csv_close(csv, path, err, err_size))
+        return false;
+    return experiment_roulettes(sc, cam, reference, spp, threads, dir, err, err_size);
+}
+
+/* The references' roulettes against the lecture's, on the lecture rung eight
+ * paths at a time (the renderer of the speed target), each counting at most
+ * SPEED_MAX_DEPTH bounces: what a deeper roulette buys in noise for what it
+ * costs in rays. */
+enum { SPEED_MAX_DEPTH = 50 };
+static const struct {
+    pt_russian_roulette rr;
+    int rr_start_depth;
+    const char *label;
+} roulettes[] = {
+    {RR_FIXED, 0, "P_RR 0.8 (the lecture)"},
+    {RR_THROUGHPUT, 5, "throughput from 5 (pbrt)"},
+    {RR_ALBEDO, 6, "albedo from 6 (smallpt)"},
+    {RR_OFF, 0, "none, 50 bounces (RTROWL)"},
+};
+
+bool experiment_roulettes(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp, int threads,
+                          const char *dir, char *err, size_t err_size)
+{
+    char path[4096];
+    FILE *csv = experiment_csv_open(dir, "ch09_roulettes.csv", path, sizeof path, err, err_size);
+    if (csv == NULL)
+        return false;
+    /* A render's MSE is itself noisy (a few bright paths decide it), so
+     * each roulette renders ROULETTE_RENDERS times with other seeds: the
+     * mean MSE and CPU time per render, and the lowest and highest MSE to
+     * show how far one render's can be trusted. */
+    enum { ROULETTE_RENDERS = 8 };
+    fprintf(csv, "roulette,label,cpu_seconds,mse,mse_low,mse_high,efficiency,rays_per_sample\n");
+    printf("\nThe references' roulettes (lecture rung, 8 paths at a time where it can, %d spp, at most %d bounces,\n"
+           "mean of %d renders):\n  %-28s %8s %11s %23s %11s %9s\n",
+           spp, SPEED_MAX_DEPTH, ROULETTE_RENDERS, "roulette", "CPU s", "MSE", "(lowest, highest)", "efficiency",
+           "rays/spl");
+    for (size_t i = 0; i < sizeof roulettes / sizeof roulettes[0]; i++) {
+        path_tracer pt = path_tracer_defaults(sc);
+        pt.russian_roulette = roulettes[i].rr;
+        pt.max_depth = SPEED_MAX_DEPTH;
+        if (roulettes[i].rr_start_depth > 0)
+            pt.rr_start_depth = roulettes[i].rr_start_depth;
+        double cpu = 0.0, mse = 0.0, low = INFINITY, high = 0.0, rays = 0.0;
+        for (int r = 0; r < ROULETTE_RENDERS; r++) {
+            double cpu_start = experiment_cpu_seconds();
+            estimate_image e;
+            if (!render_estimate_wide(&pt, cam, spp, 78 + (uint64_t)r, threads, &e))
+                e = render_estimate(&pt, cam, spp, 78 + (uint64_t)r, threads);
+            cpu += (experiment_cpu_seconds() - cpu_start) / ROULETTE_RENDERS;
+            double rmse, relmse;
+            experiment_error(&e.mean, reference, &rmse, &relmse);
+            mse += rmse * rmse / ROULETTE_RENDERS;
+            low = fmin(low, rmse * rmse);
+            high = fmax(high, rmse * rmse);
+            rays += (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height) /
+                    ROULETTE_RENDERS;
+            estimate_image_free(&e);
+        }
+        fprintf(csv, "%s,\"%s\",%.6f,%.6e,%.6e,%.6e,%.6e,%.3f\n", pt_russian_roulette_name(roulettes[i].rr),
+                roulettes[i].label, cpu, mse, low, high, 1.0 / (mse * cpu), rays);
+        printf("  %-28s %8.3f %11.4e (%10.4e, %10.4e) %11.4e %9.2f\n", roulettes[i].label, cpu, mse, low, high,
+               1.0 / (mse * cpu), rays);
+    }
     return experiment_csv_close(csv, path, err, err_size);
 }
 
@@ -399,7 +464,6 @@ typedef struct {
  * probability max(f)), and no roulette at all, the full 50 bounces
  * (RTROWL), each by MIS one path at a time and by the lecture rung eight
  * paths at a time. */
-enum { SPEED_MAX_DEPTH = 50 };
 static const speed_case speed_cases[] = {
     {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8", false, false},
     {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, walls off", true, false},

@@ -7,6 +7,8 @@
  *                            of seconds (CSV for plots/ch09_*.gp)
  *   experiment_russian_roulette()  variance, time and efficiency for a
  *                            range of P_RR
+ *   experiment_roulettes()   the same for the lecture's, pbrt's and
+ *                            smallpt's roulettes and none (RTROWL's)
  *   experiment_speed()       seconds per million camera samples, per rung,
  *                            on 1 and 2 threads
  *   render_progressive()     passes of doubling sample counts until a time
@@ -69,9 +71,15 @@ bool experiment_reference_save(const estimate_image *e, const char *path, char *
 bool experiment_convergence(const pt_scene *sc, const char *name, const camera *cam, const estimate_image *reference,
                             int max_spp, int threads, const char *dir, char *err, size_t err_size);
 
-/* Writes DIR/ch09_russian_roulette.csv. */
+/* Writes DIR/ch09_russian_roulette.csv (a fixed P_RR from 0.2 to 0.95),
+ * then experiment_roulettes(). */
 bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp,
                                  int threads, const char *dir, char *err, size_t err_size);
+/* Writes DIR/ch09_roulettes.csv: the lecture's, pbrt's and smallpt's
+ * roulettes and none (RTROWL's 50 bounces), CPU seconds, MSE, efficiency
+ * 1 / (MSE x time) and rays per camera sample of each. */
+bool experiment_roulettes(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp, int threads,
+                          const char *dir, char *err, size_t err_size);
 
 /* Prints seconds per million camera samples on the Cornell box (size x size,
  * spp samples, the best of `repeats` runs) for each rung on 1 and 2 threads,

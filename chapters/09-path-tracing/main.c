@@ -127,15 +127,7 @@ int main(int argc, char **argv)
         return 2;
     }
     pt_russian_roulette rr_mode;
-    if (strcmp(rr, "fixed") == 0)
-        rr_mode = RR_FIXED;
-    else if (strcmp(rr, "throughput") == 0)
-        rr_mode = RR_THROUGHPUT;
-    else if (strcmp(rr, "albedo") == 0)
-        rr_mode = RR_ALBEDO;
-    else if (strcmp(rr, "off") == 0)
-        rr_mode = RR_OFF;
-    else {
+    if (!pt_russian_roulette_parse(rr, &rr_mode)) {
         fprintf(stderr, "09-path-tracing: --rr: unknown '%s' (fixed, throughput, albedo, off)\n", rr);
         scene_desc_free(&desc);
         return 2;

@@ -28,6 +28,20 @@ path_tracer path_tracer_defaults(const pt_scene *scene)
 }
 
 static const char *const integrator_names[] = {"lecture", "cosine", "mis"};
+/* in the order of pt_russian_roulette */
+static const char *const roulette_names[] = {"off", "fixed", "throughput", "albedo"};
+
+const char *pt_russian_roulette_name(pt_russian_roulette r) { return roulette_names[r]; }
+
+bool pt_russian_roulette_parse(const char *name, pt_russian_roulette *out)
+{
+    for (int i = 0; i < (int)(sizeof roulette_names / sizeof roulette_names[0]); i++)
+        if (strcmp(name, roulette_names[i]) == 0) {
+            *out = (pt_russian_roulette)i;
+            return true;
+        }
+    return false;
+}
 
 const char *pt_integrator_name(pt_integrator i) { return integrator_names[i]; }
 

@@ -115,5 +115,8 @@ vec3 path_trace_radiance_from(const path_tracer *pt, ray r, pt_random *random, r
 
 const char *pt_integrator_name(pt_integrator i);
 bool pt_integrator_parse(const char *name, pt_integrator *out);
+/* "off", "fixed", "throughput", "albedo": --rr's words */
+const char *pt_russian_roulette_name(pt_russian_roulette r);
+bool pt_russian_roulette_parse(const char *name, pt_russian_roulette *out);
 
 #endif

@@ -1195,7 +1195,7 @@ static void test_wide_renders_the_lecture_rungs_paths(void **state)
     pt_scene_build_cornell_box(&sc);
     camera cam = pt_scene_camera(&sc, 24, 24);
     path_tracer deeper = tracer(&sc, PT_LECTURE, RR_THROUGHPUT);
-    deeper.rr_start_depth = 5;
+    deeper.rr_start_depth = RR_START_PBRT;
     estimate_image check = wide_as_the_lecture_rung(&deeper, &cam, "roulette on throughput from bounce 5");
     estimate_image_free(&check);
     deeper = tracer(&sc, PT_LECTURE, RR_OFF);
@@ -1203,7 +1203,7 @@ static void test_wide_renders_the_lecture_rungs_paths(void **state)
     check = wide_as_the_lecture_rung(&deeper, &cam, "no roulette, depth 50");
     estimate_image_free(&check);
     deeper = tracer(&sc, PT_LECTURE, RR_ALBEDO);
-    deeper.rr_start_depth = 6;
+    deeper.rr_start_depth = RR_START_SMALLPT;
     check = wide_as_the_lecture_rung(&deeper, &cam, "roulette on albedo from bounce 6");
     estimate_image_free(&check);
 

@@ -387,8 +387,8 @@ static const struct {
     const char *label;
 } roulettes[] = {
     {RR_FIXED, 0, "P_RR 0.8 (the lecture)"},
-    {RR_THROUGHPUT, 5, "throughput from 5 (pbrt)"},
-    {RR_ALBEDO, 6, "albedo from 6 (smallpt)"},
+    {RR_THROUGHPUT, RR_START_PBRT, "throughput from 5 (pbrt)"},
+    {RR_ALBEDO, RR_START_SMALLPT, "albedo from 6 (smallpt)"},
     {RR_OFF, 0, "none, 50 bounces (RTROWL)"},
 };
 
@@ -472,10 +472,10 @@ static const speed_case speed_cases[] = {
     {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, 8 paths at a time", false, true},
     {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8", false, false},
     {PT_MIS, RR_FIXED, 0, "mis, P_RR 0.8", false, false},
-    {PT_MIS, RR_THROUGHPUT, 5, "mis, RR on throughput from 5 (pbrt)", false, false},
-    {PT_LECTURE, RR_THROUGHPUT, 5, "lecture, pbrt's RR, 8 paths at a time", false, true},
-    {PT_MIS, RR_ALBEDO, 6, "mis, RR on albedo from 6 (smallpt)", false, false},
-    {PT_LECTURE, RR_ALBEDO, 6, "lecture, smallpt's RR, 8 paths at a time", false, true},
+    {PT_MIS, RR_THROUGHPUT, RR_START_PBRT, "mis, RR on throughput from 5 (pbrt)", false, false},
+    {PT_LECTURE, RR_THROUGHPUT, RR_START_PBRT, "lecture, pbrt's RR, 8 paths at a time", false, true},
+    {PT_MIS, RR_ALBEDO, RR_START_SMALLPT, "mis, RR on albedo from 6 (smallpt)", false, false},
+    {PT_LECTURE, RR_ALBEDO, RR_START_SMALLPT, "lecture, smallpt's RR, 8 paths at a time", false, true},
     {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)", false, false},
     {PT_LECTURE, RR_OFF, 0, "lecture, RTROWL's depth, 8 paths at a time", false, true},
 };

@@ -32,6 +32,11 @@ typedef enum {
     RR_ALBEDO,     /* continue with probability min(1, max albedo), from bounce rr_start_depth on (smallpt) */
 } pt_russian_roulette;
 
+/* The first bounce the references play their roulettes on: pbrt-v3's
+ * PathIntegrator from `bounces > 3` of its 0-based count (bounce 5), smallpt
+ * from `++depth > 5` (bounce 6). The speed table and its tests use them. */
+enum { RR_START_PBRT = 5, RR_START_SMALLPT = 6 };
+
 typedef struct {
     const pt_scene *scene;
     pt_integrator integrator;

@@ -278,7 +278,7 @@ typedef struct {
 #undef FLAT_NAME
 #endif
 
-int flat_closest_hit8_raw(const accel *a, const ray rays[FLAT_LANES], int active, flat_hits8 *hits,
+int flat_closest_hit8_raw(const accel *a, const flat_rays8 *rays, int active, flat_hits8 *hits,
                           ray_counters *counters)
 {
     const flat *f = (const flat *)a;
@@ -296,7 +296,7 @@ int flat_closest_hit8_raw(const accel *a, const ray rays[FLAT_LANES], int active
 #endif
     for (int k = 0; k < FLAT_LANES; k++) {
         hit_record record;
-        if (((active >> k) & 1) && accel_closest_hit(a, rays[k], &record, counters)) {
+        if (((active >> k) & 1) && accel_closest_hit(a, flat_rays8_get(rays, k), &record, counters)) {
             hits->t[k] = record.t;
             hits->index[k] = record.shape_id;
             hits->b1[k] = record.u;
@@ -307,12 +307,42 @@ int flat_closest_hit8_raw(const accel *a, const ray rays[FLAT_LANES], int active
     return hit;
 }
 
+int flat_any_hit8_raw(const accel *a, const flat_rays8 *rays, int active, ray_counters *counters)
+{
+    const flat *f = (const flat *)a;
+    int hit = 0;
+#if FLAT_HAVE_X86
+    if (f->kernel == FLAT_KERNEL_AVX || f->kernel == FLAT_KERNEL_AVX512) {
+        int tested;
+        hit = f->kernel == FLAT_KERNEL_AVX512 ? any_hit8_avx512(f, rays, active, &tested)
+                                              : any_hit8_avx(f, rays, active, &tested);
+        counters->primitive_tests += (uint64_t)__builtin_popcount((unsigned)active) * (uint64_t)tested;
+        return hit;
+    }
+#endif
+    for (int k = 0; k < FLAT_LANES; k++)
+        if ((active >> k) & 1)
+            hit |= accel_any_hit(a, flat_rays8_get(rays, k), counters) << k;
+    return hit;
+}
+
+/* The ray[] forms: the rays copied into lanes (the active ones; the
+ * kernels read no other lane). */
+static void rays8_copy(flat_rays8 *out, const ray rays[FLAT_LANES], int active)
+{
+    for (int k = 0; k < FLAT_LANES; k++)
+        if ((active >> k) & 1)
+            flat_rays8_set(out, k, rays[k]);
+}
+
 void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, hit_record hits[FLAT_LANES],
                        bool found[FLAT_LANES], ray_counters *counters)
 {
     const flat *f = (const flat *)a;
+    flat_rays8 lanes = {0};
+    rays8_copy(&lanes, rays, active);
     flat_hits8 h;
-    int hit = flat_closest_hit8_raw(a, rays, active, &h, counters);
+    int hit = flat_closest_hit8_raw(a, &lanes, active, &h, counters);
     for (int k = 0; k < FLAT_LANES; k++) {
         if (!((active >> k) & 1))
             continue;
@@ -325,23 +355,12 @@ void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, h
 void flat_any_hit8(const accel *a, const ray rays[FLAT_LANES], int active, bool found[FLAT_LANES],
                    ray_counters *counters)
 {
-    const flat *f = (const flat *)a;
-#if FLAT_HAVE_X86
-    if (f->kernel == FLAT_KERNEL_AVX || f->kernel == FLAT_KERNEL_AVX512) {
-        int tested;
-        int hit = f->kernel == FLAT_KERNEL_AVX512 ? any_hit8_avx512(f, rays, active, &tested)
-                                                  : any_hit8_avx(f, rays, active, &tested);
-        for (int k = 0; k < FLAT_LANES; k++)
-            if ((active >> k) & 1) {
-                counters->primitive_tests += (uint64_t)tested;
-                found[k] = (hit >> k) & 1;
-            }
-        return;
-    }
-#endif
+    flat_rays8 lanes = {0};
+    rays8_copy(&lanes, rays, active);
+    int hit = flat_any_hit8_raw(a, &lanes, active, counters);
     for (int k = 0; k < FLAT_LANES; k++)
         if ((active >> k) & 1)
-            found[k] = accel_any_hit(a, rays[k], counters);
+            found[k] = (hit >> k) & 1;
 }
 
 /* ---- build ------------------------------------------------------------------ */

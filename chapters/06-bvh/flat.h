@@ -94,21 +94,54 @@ bool flat_is(const accel *a);
  * box_tests the group boxes. */
 void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, hit_record hits[FLAT_LANES],
                        bool found[FLAT_LANES], ray_counters *counters);
-/* The same, stopped before the hit records are made: lane k's nearest t,
- * the index of its triangle in the set and the barycentrics b1, b2, what
- * triangle_set_fill_hit() makes lane k's record from; the bits of the
- * lanes that hit. For a caller that makes its own records, eight at a time
- * (path_tracer_wide.c). The other lanes' entries mean nothing. */
+/* The same for any hit: found[k] is accel_any_hit() of rays[k]. The eight
+ * stop together, once every active ray has found a hit. */
+void flat_any_hit8(const accel *a, const ray rays[FLAT_LANES], int active, bool found[FLAT_LANES],
+                   ray_counters *counters);
+
+/* The eight rays as the kernels hold them: by coordinate, then by lane
+ * (structure of arrays). A caller that keeps its rays this way hands them
+ * over as they are (path_tracer_wide.c); the two functions above copy
+ * theirs in. */
+typedef struct {
+    _Alignas(32) float origin[3][FLAT_LANES], direction[3][FLAT_LANES];
+    float t_min[FLAT_LANES], t_max[FLAT_LANES];
+} flat_rays8;
+
+static inline void flat_rays8_set(flat_rays8 *rays, int k, ray r)
+{
+    const float o[3] = {r.origin.x, r.origin.y, r.origin.z}, d[3] = {r.direction.x, r.direction.y, r.direction.z};
+    for (int c = 0; c < 3; c++) {
+        rays->origin[c][k] = o[c];
+        rays->direction[c][k] = d[c];
+    }
+    rays->t_min[k] = r.t_min;
+    rays->t_max[k] = r.t_max;
+}
+
+static inline ray flat_rays8_get(const flat_rays8 *rays, int k)
+{
+    ray r = ray_make(vec3_make(rays->origin[0][k], rays->origin[1][k], rays->origin[2][k]),
+                     vec3_make(rays->direction[0][k], rays->direction[1][k], rays->direction[2][k]));
+    r.t_min = rays->t_min[k];
+    r.t_max = rays->t_max[k];
+    return r;
+}
+
+/* flat_closest_hit8() stopped before the hit records are made: lane k's
+ * nearest t, the index of its triangle in the set and the barycentrics
+ * b1, b2, what triangle_set_fill_hit() makes lane k's record from; the
+ * bits of the lanes that hit. For a caller that makes its own records,
+ * eight at a time (path_tracer_wide.c). The other lanes' entries mean
+ * nothing. */
 typedef struct {
     _Alignas(32) float t[FLAT_LANES];
     int32_t index[FLAT_LANES];
     float b1[FLAT_LANES], b2[FLAT_LANES];
 } flat_hits8;
-int flat_closest_hit8_raw(const accel *a, const ray rays[FLAT_LANES], int active, flat_hits8 *hits,
+int flat_closest_hit8_raw(const accel *a, const flat_rays8 *rays, int active, flat_hits8 *hits,
                           ray_counters *counters);
-/* The same for any hit: found[k] is accel_any_hit() of rays[k]. The eight
- * stop together, once every active ray has found a hit. */
-void flat_any_hit8(const accel *a, const ray rays[FLAT_LANES], int active, bool found[FLAT_LANES],
-                   ray_counters *counters);
+/* flat_any_hit8() as bits: bit k set if rays lane k is blocked. */
+int flat_any_hit8_raw(const accel *a, const flat_rays8 *rays, int active, ray_counters *counters);
 
 #endif

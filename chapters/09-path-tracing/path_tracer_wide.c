@@ -48,18 +48,36 @@ bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_siz
     return reason == NULL;
 }
 
+/* The eight lanes' paths and vertices, structure of arrays, so that the
+ * AVX code reads and writes eight lanes per instruction, and nothing is
+ * copied between steps. What each path carries from vertex to vertex: the
+ * ray to trace next, the direction back along it (wo) and the throughput
+ * before the vertex it will hit. What light_math reads at a vertex (the
+ * hit point p, geometric normal ng, shading normal n and albedo, from the
+ * hit records; wo and throughput; the point on the light, its normal,
+ * radiance and pdf per unit area) and writes (each lane's contribution,
+ * times its throughput, and its shadow ray); what bounce_math reads (p,
+ * ng, n, wo, albedo, throughput again; the hemisphere's two numbers,
+ * 1 / P_RR) and writes (the next ray, its wo, and the throughput after the
+ * bounce, in place). */
+typedef struct vertex_lanes {
+    flat_rays8 ray;
+    _Alignas(32) float wo[3][LANES], throughput[3][LANES];
+    _Alignas(32) float p[3][LANES], ng[3][LANES], n[3][LANES], albedo[3][LANES];
+    _Alignas(32) float x_light[3][LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];
+    _Alignas(32) float contribution[3][LANES], shadow_origin[3][LANES], shadow_direction[3][LANES];
+    _Alignas(32) float u_x[LANES], u_y[LANES], rr_scale[LANES];
+} vertex_lanes;
+
 /* One lane: a pixel, the path of its current sample, and what that path has
  * gathered. */
 typedef struct {
     int x, y, samples_left; /* x < 0: idle */
     pcg32 rng;
     welford channel[3];
-    ray r;             /* the ray to trace next */
-    bool camera;       /* r is the camera ray */
-    int depth;         /* bounces before the vertex r will hit */
-    vec3 wo;           /* the direction back along r, for that vertex */
+    bool camera;       /* the ray to trace next (vertex_lanes ray) is the camera ray */
+    int depth;         /* bounces before the vertex that ray will hit */
     vec3 radiance;     /* gathered so far */
-    vec3 throughput;   /* the product of f cos / pdf / P_RR before that vertex */
     /* Shadow rays wait in the row's queue until there are eight (below):
      * how many of this sample's do, and the sample before it, ended but
      * still waiting for some (at most one: it is settled before the next
@@ -70,12 +88,14 @@ typedef struct {
     vec3 waiting_radiance;
 } lane;
 
-/* A shadow ray waiting in the queue, and what it brings if it gets through. */
+/* Shadow rays waiting to be traced, eight by eight, and what each brings
+ * if it gets through: entry q is lane q % 8 of rays[q / 8]. Fewer than 8
+ * wait between steps, and a step adds at most 8. */
 typedef struct {
-    ray r;
-    vec3 contribution;
-    int lane, sample_id;
-} queued_shadow;
+    flat_rays8 rays[2];
+    vec3 contribution[2 * LANES];
+    int lane[2 * LANES], sample_id[2 * LANES];
+} shadow_queue;
 
 typedef struct {
     const path_tracer *pt;
@@ -86,7 +106,8 @@ typedef struct {
     int y, next_x; /* the row, and its next pixel not yet given to a lane */
     ray_counters *counters;
     lane *lanes;
-    queued_shadow queue[2 * FLAT_LANES];
+    struct vertex_lanes *vertex;
+    shadow_queue queue;
     int queued;
     bool avx; /* light_math_avx and bounce_math_avx, where the processor has AVX2 */
     /* pt_scene_emitter_pdf_area() of each material, worked out once: a
@@ -100,12 +121,14 @@ typedef struct {
 static void start_sample(lane *l, const row_job *job)
 {
     float px = (float)l->x + pcg32_float(&l->rng), py = (float)l->y + pcg32_float(&l->rng);
-    l->r = camera_ray(job->cam, px, py);
+    int k = (int)(l - job->lanes);
+    flat_rays8_set(&job->vertex->ray, k, camera_ray(job->cam, px, py));
     job->counters->camera_rays++;
     l->camera = true;
     l->depth = 0;
     l->radiance = vec3_splat(0.0f);
-    l->throughput = vec3_splat(1.0f);
+    for (int c = 0; c < 3; c++)
+        job->vertex->throughput[c][k] = 1.0f;
 }
 
 /* The lane's next pixel of the row, or idle. */
@@ -139,38 +162,41 @@ static void settle(lane *l, vec3 s, row_job *job)
     }
 }
 
-/* Trace the first n queued shadow rays (n <= 8) as one packet, and give
+/* Trace the first n queued shadow rays (8, or all if fewer) as one packet, and give
  * each that gets through its contribution, to the sample it belongs to:
  * the lane's current one, or the one before, which is settled once its
  * last shadow ray is traced. */
 static void trace_queued(row_job *job, int n)
 {
     const pt_scene *sc = job->pt->scene;
-    ray rays[FLAT_LANES];
-    bool blocked[FLAT_LANES];
+    shadow_queue *queue = &job->queue;
     if (n <= 0)
         return;
-    for (int k = 0; k < n; k++)
-        rays[k] = job->queue[k].r;
-    flat_any_hit8(sc->bvh, rays, (1 << n) - 1, blocked, job->counters);
-    for (int k = 0; k < n; k++) {
-        const queued_shadow *q = &job->queue[k];
-        lane *l = &job->lanes[q->lane];
-        if (q->sample_id == l->sample_id) {
-            if (!blocked[k])
-                l->radiance = vec3_add(l->radiance, q->contribution);
+    int blocked = flat_any_hit8_raw(sc->bvh, &queue->rays[0], (1 << n) - 1, job->counters);
+    for (int q = 0; q < n; q++) {
+        lane *l = &job->lanes[queue->lane[q]];
+        bool through = !((blocked >> q) & 1);
+        if (queue->sample_id[q] == l->sample_id) {
+            if (through)
+                l->radiance = vec3_add(l->radiance, queue->contribution[q]);
             l->unsettled--;
             continue;
         }
-        if (!blocked[k])
-            l->waiting_radiance = vec3_add(l->waiting_radiance, q->contribution);
+        if (through)
+            l->waiting_radiance = vec3_add(l->waiting_radiance, queue->contribution[q]);
         if (--l->waiting_unsettled == 0) {
             settle(l, l->waiting_radiance, job);
             l->waiting = false;
         }
     }
+    /* n is 8, or all of the queue */
     job->queued -= n;
-    memmove(job->queue, job->queue + n, (size_t)job->queued * sizeof job->queue[0]);
+    if (job->queued > 0) {
+        queue->rays[0] = queue->rays[1];
+        memmove(queue->contribution, queue->contribution + n, (size_t)job->queued * sizeof queue->contribution[0]);
+        memmove(queue->lane, queue->lane + n, (size_t)job->queued * sizeof queue->lane[0]);
+        memmove(queue->sample_id, queue->sample_id + n, (size_t)job->queued * sizeof queue->sample_id[0]);
+    }
 }
 
 /* Settle the lane's waiting sample: its shadow rays were queued before
@@ -220,21 +246,6 @@ static void end_sample(lane *l, row_job *job)
  * numbers of its next direction (roll_bounce); the bounce's arithmetic runs
  * for all eight at once (bounce_math). */
 
-/* The eight lanes' vertices, structure of arrays: what light_math reads
- * (the hit point p, geometric normal ng, shading normal n and albedo, from
- * the hit records; direction back wo and throughput, from the lanes; the
- * point on the light, its normal, radiance and pdf per unit area) and
- * writes (each lane's contribution, times its throughput, and its shadow
- * ray); what bounce_math reads (p, ng, n, wo, albedo, throughput again;
- * the hemisphere's two numbers, 1 / P_RR) and writes (the next ray and the
- * throughput after the bounce). */
-typedef struct {
-    _Alignas(32) float p[3][LANES], ng[3][LANES], n[3][LANES], wo[3][LANES], albedo[3][LANES], throughput[3][LANES];
-    _Alignas(32) float x_light[3][LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];
-    _Alignas(32) float contribution[3][LANES], shadow_origin[3][LANES], shadow_direction[3][LANES];
-    _Alignas(32) float u_x[LANES], u_y[LANES], rr_scale[LANES];
-    _Alignas(32) float wi[3][LANES], next_origin[3][LANES], throughput_next[3][LANES];
-} vertex_lanes;
 
 static void lanes_set(float v[3][LANES], int k, vec3 x)
 {
@@ -350,7 +361,8 @@ static int roll_bounce(lane *l, const path_tracer *pt, vertex_lanes *L, int k)
         return 0;
     float p_rr = 1.0f;
     vec3 albedo = vec3_make(L->albedo[0][k], L->albedo[1][k], L->albedo[2][k]);
-    if (path_tracer_roulette(pt, l->depth, l->throughput, albedo, &p_rr) && pcg32_float(&l->rng) >= p_rr)
+    vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
+    if (path_tracer_roulette(pt, l->depth, throughput, albedo, &p_rr) && pcg32_float(&l->rng) >= p_rr)
         return 0;
     L->u_y[k] = pcg32_float(&l->rng); /* shade()'s order */
     L->u_x[k] = pcg32_float(&l->rng);
@@ -371,9 +383,10 @@ static int bounce_math_lane(vertex_lanes *L, int k)
     vec3 weight = vec3_scale(f, local.z / uniform_hemisphere_pdf());
     if (vec3_is_black(weight))
         return 0;
-    lanes_set(L->wi, k, wi);
-    lanes_set(L->next_origin, k, ray_spawn(AT(p), AT(ng), wi).origin);
-    lanes_set(L->throughput_next, k, vec3_scale(vec3_mul(AT(throughput), weight), L->rr_scale[k]));
+    lanes_set(L->ray.origin, k, ray_spawn(AT(p), AT(ng), wi).origin);
+    lanes_set(L->ray.direction, k, wi);
+    lanes_set(L->throughput, k, vec3_scale(vec3_mul(AT(throughput), weight), L->rr_scale[k]));
+    lanes_set(L->wo, k, vec3_neg(wi));
     return 1 << k;
 #undef AT
 }
@@ -432,20 +445,22 @@ SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
     __m256 black = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(weight_x, zero, _CMP_EQ_OQ),
                                                _mm256_cmp_ps(weight_y, zero, _CMP_EQ_OQ)),
                                  _mm256_cmp_ps(weight_z, zero, _CMP_EQ_OQ));
-    _mm256_store_ps(L->wi[0], wx);
-    _mm256_store_ps(L->wi[1], wy);
-    _mm256_store_ps(L->wi[2], wz);
     /* the next ray's origin: ray_spawn() */
     const __m256 point[3] = {LOAD3(p, 0), LOAD3(p, 1), LOAD3(p, 2)}, ng[3] = {LOAD3(ng, 0), LOAD3(ng, 1), LOAD3(ng, 2)};
     const __m256 wi[3] = {wx, wy, wz};
     __m256 origin[3];
     ray_spawn8(point, ng, wi, origin);
-    for (int c = 0; c < 3; c++)
-        _mm256_store_ps(L->next_origin[c], origin[c]);
+    for (int c = 0; c < 3; c++) {
+        _mm256_store_ps(L->ray.origin[c], origin[c]);
+        _mm256_store_ps(L->ray.direction[c], wi[c]);
+    }
     __m256 rr_scale = _mm256_load_ps(L->rr_scale);
-    _mm256_store_ps(L->throughput_next[0], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 0), weight_x), rr_scale));
-    _mm256_store_ps(L->throughput_next[1], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 1), weight_y), rr_scale));
-    _mm256_store_ps(L->throughput_next[2], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 2), weight_z), rr_scale));
+    _mm256_store_ps(L->throughput[0], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 0), weight_x), rr_scale));
+    _mm256_store_ps(L->throughput[1], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 1), weight_y), rr_scale));
+    _mm256_store_ps(L->throughput[2], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 2), weight_z), rr_scale));
+    _mm256_store_ps(L->wo[0], _mm256_xor_ps(wx, sign_bit));
+    _mm256_store_ps(L->wo[1], _mm256_xor_ps(wy, sign_bit));
+    _mm256_store_ps(L->wo[2], _mm256_xor_ps(wz, sign_bit));
     int mask = ~_mm256_movemask_ps(black) & lanes;
     _mm256_zeroupper();
     return mask;
@@ -459,11 +474,12 @@ SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
  * needs it: the point (from the barycentrics), the geometric normal facing
  * the ray, the shading normal, the material and its albedo, and whether
  * the front was hit; written straight into the lanes' arrays. */
-static int hit_record_lane(const pt_scene *sc, const ray rays[LANES], const flat_hits8 *hits, int k, vertex_lanes *L,
+static int hit_record_lane(const pt_scene *sc, const flat_hits8 *hits, int k, vertex_lanes *L,
                            int material[LANES])
 {
     hit_record hit;
-    triangle_set_fill_hit(&sc->triangles, hits->index[k], rays[k], hits->t[k], hits->b1[k], hits->b2[k], &hit);
+    triangle_set_fill_hit(&sc->triangles, hits->index[k], flat_rays8_get(&L->ray, k), hits->t[k], hits->b1[k],
+                          hits->b2[k], &hit);
     lanes_set(L->p, k, hit.point);
     lanes_set(L->ng, k, hit.normal_geometric);
     lanes_set(L->n, k, hit.normal_shading);
@@ -477,13 +493,12 @@ static int hit_record_lane(const pt_scene *sc, const ray rays[LANES], const flat
  * corners, normals and materials gathered by index (AVX2). Only where the
  * triangles have no vertex normals: then the shading normal is the
  * geometric one. */
-SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const ray rays[LANES], const flat_hits8 *hits, int lanes,
+SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const flat_hits8 *hits, int lanes,
                                         vertex_lanes *L, int material[LANES])
 {
     const triangle_set *set = &sc->triangles;
     _Static_assert(sizeof(triangle) == 9 * sizeof(float), "a triangle is its nine coordinates");
     _Static_assert(sizeof(triangle_surface) == 4 * sizeof(float), "a surface is a normal and a material");
-    _Static_assert(sizeof(ray) == 8 * sizeof(float), "a ray is eight floats");
     _Static_assert(sizeof(pt_material) % sizeof(float) == 0, "materials are a whole number of floats");
     const __m256i lane_bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
     __m256i hit_mask = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(lanes), lane_bits), lane_bits);
@@ -501,10 +516,9 @@ SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const ray rays[LANES
     }
     const float *s0 = &set->surfaces[0].normal.x;
     __m256 normal[3], direction[3];
-    const __m256i ray_index = _mm256_setr_epi32(0, 8, 16, 24, 32, 40, 48, 56);
     for (int c = 0; c < 3; c++) {
         normal[c] = _mm256_i32gather_ps(s0 + c, surface, 4);
-        direction[c] = _mm256_i32gather_ps(&rays[0].direction.x + c, ray_index, 4);
+        direction[c] = _mm256_load_ps(L->ray.direction[c]);
     }
     __m256i materials = _mm256_i32gather_epi32(&set->surfaces[0].material, surface, 4);
     /* hit_set_normal: the front if the ray comes against the outward normal */
@@ -533,46 +547,43 @@ static void render_row(row_job *job)
     const path_tracer *pt = job->pt;
     const pt_scene *sc = pt->scene;
     lane lanes[LANES];
+    vertex_lanes L;
     job->lanes = lanes;
+    job->vertex = &L;
     job->queued = 0;
     for (int k = 0; k < LANES; k++)
         start_pixel(&lanes[k], job);
     for (;;) {
         int active = 0;
-        ray rays[LANES];
-        for (int k = 0; k < LANES; k++) {
-            rays[k] = lanes[k].r;
+        for (int k = 0; k < LANES; k++)
             active |= (lanes[k].x >= 0) << k;
-        }
         if (active == 0)
             return; /* every pixel written, so no shadow ray waits */
         flat_hits8 hits;
-        int hit_lanes = flat_closest_hit8_raw(sc->bvh, rays, active, &hits, job->counters);
-        vertex_lanes L;
+        int hit_lanes = flat_closest_hit8_raw(sc->bvh, &L.ray, active, &hits, job->counters);
         int material[LANES], front = 0, picked = 0;
 #if WIDE_HAVE_AVX
         if (hit_lanes != 0 && job->avx && !sc->triangles.vertex_normals)
-            front = hit_records_avx(sc, rays, &hits, hit_lanes, &L, material);
+            front = hit_records_avx(sc, &hits, hit_lanes, &L, material);
         else
 #endif
             for (int k = 0; k < LANES; k++)
                 if ((hit_lanes >> k) & 1)
-                    front |= hit_record_lane(sc, rays, &hits, k, &L, material);
+                    front |= hit_record_lane(sc, &hits, k, &L, material);
         for (int k = 0; k < LANES; k++) {
             lane *l = &lanes[k];
             if (!((active >> k) & 1))
                 continue;
             if (!((hit_lanes >> k) & 1)) { /* left the scene: the environment */
-                l->radiance = vec3_add(l->radiance, vec3_mul(l->throughput, sc->environment));
+                l->radiance = vec3_add(l->radiance, vec3_mul(vec3_make(L.throughput[0][k], L.throughput[1][k], L.throughput[2][k]), sc->environment));
                 continue;
             }
             if (l->camera) { /* what the eye sees directly: the emission at the first hit */
                 l->radiance = (front >> k) & 1 ? sc->materials[material[k]].emission : vec3_splat(0.0f);
-                l->wo = vec3_normalize(vec3_neg(l->r.direction));
+                vec3 direction = vec3_make(L.ray.direction[0][k], L.ray.direction[1][k], L.ray.direction[2][k]);
+                lanes_set(L.wo, k, vec3_normalize(vec3_neg(direction)));
                 l->camera = false;
             }
-            lanes_set(L.wo, k, l->wo);
-            lanes_set(L.throughput, k, l->throughput);
             if (l->depth + 1 <= pt->max_depth && pick_light(l, sc, job->pdf_area, &L, k))
                 picked |= 1 << k;
         }
@@ -592,12 +603,18 @@ static void render_row(row_job *job)
             if ((lit >> k) & 1) {
                 vec3 contribution = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
                 if (pt->effects & EFFECT_SHADOWS) {
-                    ray shadow = ray_make(vec3_make(L.shadow_origin[0][k], L.shadow_origin[1][k], L.shadow_origin[2][k]),
-                                          vec3_make(L.shadow_direction[0][k], L.shadow_direction[1][k],
-                                                    L.shadow_direction[2][k]));
-                    shadow.t_max = 1.0f; /* ray_spawn_to's */
+                    int q = job->queued++;
+                    flat_rays8 *shadow = &job->queue.rays[q / LANES];
+                    for (int c = 0; c < 3; c++) {
+                        shadow->origin[c][q % LANES] = L.shadow_origin[c][k];
+                        shadow->direction[c][q % LANES] = L.shadow_direction[c][k];
+                    }
+                    shadow->t_min[q % LANES] = 0.0f;
+                    shadow->t_max[q % LANES] = 1.0f; /* ray_spawn_to's */
+                    job->queue.contribution[q] = contribution;
+                    job->queue.lane[q] = k;
+                    job->queue.sample_id[q] = l->sample_id;
                     job->counters->shadow_rays++;
-                    job->queue[job->queued++] = (queued_shadow){shadow, contribution, k, l->sample_id};
                     l->unsettled++;
                 } else {
                     l->radiance = vec3_add(l->radiance, contribution);
@@ -626,12 +643,8 @@ static void render_row(row_job *job)
             lane *l = &lanes[k];
             if (!((active >> k) & 1))
                 continue;
-            if ((bounce >> k) & 1) { /* the next ray, from this vertex */
-                vec3 wi = vec3_make(L.wi[0][k], L.wi[1][k], L.wi[2][k]);
+            if ((bounce >> k) & 1) { /* the next ray, from this vertex (bounce_math wrote it) */
                 job->counters->indirect_rays++;
-                l->r = ray_make(vec3_make(L.next_origin[0][k], L.next_origin[1][k], L.next_origin[2][k]), wi);
-                l->wo = vec3_neg(wi);
-                l->throughput = vec3_make(L.throughput_next[0][k], L.throughput_next[1][k], L.throughput_next[2][k]);
                 l->depth++;
             } else {
                 end_sample(l, job);

@@ -75,7 +75,6 @@ typedef struct {
     int x, y, samples_left; /* x < 0: idle */
     pcg32 rng;
     welford channel[3];
-    bool camera;       /* the ray to trace next (vertex_lanes ray) is the camera ray */
     int depth;         /* bounces before the vertex that ray will hit */
     vec3 radiance;     /* gathered so far */
     /* Shadow rays wait in the row's queue until there are eight (below):
@@ -109,6 +108,7 @@ typedef struct {
     struct vertex_lanes *vertex;
     shadow_queue queue;
     int queued;
+    int camera; /* the lanes whose next ray (vertex_lanes ray) is a camera ray */
     bool avx; /* light_math_avx and bounce_math_avx, where the processor has AVX2 */
     /* pt_scene_emitter_pdf_area() of each material, worked out once: a
      * division in double at every light sample was 5 % of the time */
@@ -118,13 +118,13 @@ typedef struct {
 
 /* A lane's next camera sample, drawn as render_pixel() draws it (jitter
  * within the pixel: two numbers). */
-static void start_sample(lane *l, const row_job *job)
+static void start_sample(lane *l, row_job *job)
 {
     float px = (float)l->x + pcg32_float(&l->rng), py = (float)l->y + pcg32_float(&l->rng);
     int k = (int)(l - job->lanes);
     flat_rays8_set(&job->vertex->ray, k, camera_ray(job->cam, px, py));
     job->counters->camera_rays++;
-    l->camera = true;
+    job->camera |= 1 << k;
     l->depth = 0;
     l->radiance = vec3_splat(0.0f);
     for (int c = 0; c < 3; c++)
@@ -570,21 +570,24 @@ static void render_row(row_job *job)
             for (int k = 0; k < LANES; k++)
                 if ((hit_lanes >> k) & 1)
                     front |= hit_record_lane(sc, &hits, k, &L, material);
-        for (int k = 0; k < LANES; k++) {
-            lane *l = &lanes[k];
-            if (!((active >> k) & 1))
-                continue;
-            if (!((hit_lanes >> k) & 1)) { /* left the scene: the environment */
-                l->radiance = vec3_add(l->radiance, vec3_mul(vec3_make(L.throughput[0][k], L.throughput[1][k], L.throughput[2][k]), sc->environment));
-                continue;
-            }
-            if (l->camera) { /* what the eye sees directly: the emission at the first hit */
-                l->radiance = (front >> k) & 1 ? sc->materials[material[k]].emission : vec3_splat(0.0f);
-                vec3 direction = vec3_make(L.ray.direction[0][k], L.ray.direction[1][k], L.ray.direction[2][k]);
-                lanes_set(L.wo, k, vec3_normalize(vec3_neg(direction)));
-                l->camera = false;
-            }
-            if (l->depth + 1 <= pt->max_depth && pick_light(l, sc, job->pdf_area, &L, k))
+        /* Lane by lane, lowest first, only the lanes each part concerns:
+         * looping over all eight and asking each would branch on random
+         * answers. */
+        for (int left = active & ~hit_lanes; left != 0; left &= left - 1) {
+            int k = __builtin_ctz((unsigned)left); /* left the scene: the environment */
+            vec3 throughput = vec3_make(L.throughput[0][k], L.throughput[1][k], L.throughput[2][k]);
+            lanes[k].radiance = vec3_add(lanes[k].radiance, vec3_mul(throughput, sc->environment));
+        }
+        for (int left = job->camera & hit_lanes; left != 0; left &= left - 1) {
+            int k = __builtin_ctz((unsigned)left); /* what the eye sees directly: the emission at the first hit */
+            lanes[k].radiance = (front >> k) & 1 ? sc->materials[material[k]].emission : vec3_splat(0.0f);
+            vec3 direction = vec3_make(L.ray.direction[0][k], L.ray.direction[1][k], L.ray.direction[2][k]);
+            lanes_set(L.wo, k, vec3_normalize(vec3_neg(direction)));
+        }
+        job->camera &= ~active;
+        for (int left = hit_lanes; left != 0; left &= left - 1) {
+            int k = __builtin_ctz((unsigned)left);
+            if (lanes[k].depth + 1 <= pt->max_depth && pick_light(&lanes[k], sc, job->pdf_area, &L, k))
                 picked |= 1 << k;
         }
         int lit = 0, bounce = 0;
@@ -596,31 +599,32 @@ static void render_row(row_job *job)
             for (int k = 0; k < LANES; k++)
                 if ((picked >> k) & 1)
                     lit |= light_math_lane(&L, k);
-        for (int k = 0; k < LANES; k++) {
-            lane *l = &lanes[k];
-            if (!((hit_lanes >> k) & 1))
-                continue;
-            if ((lit >> k) & 1) {
-                vec3 contribution = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
-                if (pt->effects & EFFECT_SHADOWS) {
-                    int q = job->queued++;
-                    flat_rays8 *shadow = &job->queue.rays[q / LANES];
-                    for (int c = 0; c < 3; c++) {
-                        shadow->origin[c][q % LANES] = L.shadow_origin[c][k];
-                        shadow->direction[c][q % LANES] = L.shadow_direction[c][k];
-                    }
-                    shadow->t_min[q % LANES] = 0.0f;
-                    shadow->t_max[q % LANES] = 1.0f; /* ray_spawn_to's */
-                    job->queue.contribution[q] = contribution;
-                    job->queue.lane[q] = k;
-                    job->queue.sample_id[q] = l->sample_id;
-                    job->counters->shadow_rays++;
-                    l->unsettled++;
-                } else {
-                    l->radiance = vec3_add(l->radiance, contribution);
-                }
+        /* Each lit lane's shadow ray joins the queue. Every hit lane writes
+         * its entry at the end of the queue, and only a lit one moves the
+         * end on (fewer than 8 wait, so 16 entries hold them all): no
+         * branch on whether the light sample counted. */
+        const int shadows = pt->effects & EFFECT_SHADOWS ? lit : 0;
+        for (int left = hit_lanes; left != 0; left &= left - 1) {
+            int k = __builtin_ctz((unsigned)left), q = job->queued, is_lit = (shadows >> k) & 1;
+            flat_rays8 *shadow = &job->queue.rays[q / LANES];
+            for (int c = 0; c < 3; c++) {
+                shadow->origin[c][q % LANES] = L.shadow_origin[c][k];
+                shadow->direction[c][q % LANES] = L.shadow_direction[c][k];
             }
-            bounce |= roll_bounce(l, pt, &L, k);
+            shadow->t_min[q % LANES] = 0.0f;
+            shadow->t_max[q % LANES] = 1.0f; /* ray_spawn_to's */
+            job->queue.contribution[q] = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
+            job->queue.lane[q] = k;
+            job->queue.sample_id[q] = lanes[k].sample_id;
+            job->queued += is_lit;
+            lanes[k].unsettled += is_lit;
+            bounce |= roll_bounce(&lanes[k], pt, &L, k);
+        }
+        job->counters->shadow_rays += (uint64_t)__builtin_popcount((unsigned)shadows);
+        for (int left = lit & ~shadows; left != 0; left &= left - 1) { /* no shadows: every light sample counts */
+            int k = __builtin_ctz((unsigned)left);
+            vec3 contribution = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
+            lanes[k].radiance = vec3_add(lanes[k].radiance, contribution);
         }
 #if WIDE_HAVE_AVX
         if (bounce != 0 && job->avx)
@@ -639,17 +643,12 @@ static void render_row(row_job *job)
          * over half, and cost as much as a full one. */
         while (job->queued >= LANES)
             trace_queued(job, LANES);
-        for (int k = 0; k < LANES; k++) {
-            lane *l = &lanes[k];
-            if (!((active >> k) & 1))
-                continue;
-            if ((bounce >> k) & 1) { /* the next ray, from this vertex (bounce_math wrote it) */
-                job->counters->indirect_rays++;
-                l->depth++;
-            } else {
-                end_sample(l, job);
-            }
-        }
+        /* the next ray, from this vertex (bounce_math wrote it), or the path ends */
+        job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)bounce);
+        for (int k = 0; k < LANES; k++)
+            lanes[k].depth += (bounce >> k) & 1;
+        for (int left = active & ~bounce; left != 0; left &= left - 1)
+            end_sample(&lanes[__builtin_ctz((unsigned)left)], job);
     }
 }
 

@@ -977,6 +977,82 @@ static void test_wall_test_is_never_fooled_by_rounding(void **state)
     pt_scene_free(&sc);
 }
 
+/* A point on a random wall of the Cornell box, moved along its normal by
+ * +-2^-k of the room's size, k from 6 to 40: where the wall test's answer
+ * turns on its rounding. */
+static vec3 point_near_a_wall(const pt_scene *sc, pcg32 *rng)
+{
+    const triangle *wall = &sc->triangles.triangles[pcg32_bounded(rng, 10)];
+    float step = ldexpf(560.0f, -6 - (int)pcg32_bounded(rng, 35)) * (pcg32_float(rng) < 0.5f ? -1.0f : 1.0f);
+    return vec3_add(point_on_triangle(wall, rng), vec3_scale(triangle_normal(wall), step));
+}
+
+/* Lanes of eight-ray packets whose answer from
+ * pt_scene_segments8_inside_walls() is not pt_scene_segment_inside_walls()
+ * of `truth` for the same ray alone: segments between two points near the
+ * walls (as a shadow ray runs), some of them infinite or starting past
+ * their origin, in packets with random lanes on. Counts the lanes found
+ * inside. */
+static long wall_lanes_misjudged(const pt_scene *sc, const pt_scene *truth, uint64_t seed, long *inside)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    long wrong = 0;
+    *inside = 0;
+    for (int packet = 0; packet < 20000; packet++) {
+        flat_rays8 rays;
+        ray alone[FLAT_LANES];
+        for (int k = 0; k < FLAT_LANES; k++) {
+            vec3 from = point_near_a_wall(sc, &rng), to = point_near_a_wall(sc, &rng);
+            alone[k] = ray_make(from, vec3_sub(to, from));
+            alone[k].t_max = 1.0f;
+            uint32_t kind = pcg32_bounded(&rng, 8);
+            if (kind == 0)
+                alone[k].t_max = INFINITY;
+            else if (kind == 1)
+                alone[k].t_min = pcg32_float(&rng);
+            flat_rays8_set(&rays, k, alone[k]);
+        }
+        int active = (int)pcg32_bounded(&rng, 256);
+        int got = pt_scene_segments8_inside_walls(sc, &rays, active);
+        for (int k = 0; k < FLAT_LANES; k++) {
+            bool expected = ((active >> k) & 1) && pt_scene_segment_inside_walls(truth, &alone[k]);
+            wrong += ((got >> k) & 1) != expected;
+            *inside += expected;
+        }
+    }
+    return wrong;
+}
+
+/* Eight rays' wall test (the wide renderer's shadow packets) gives each
+ * lane the answer of the one-ray test, bit for bit: the same operations
+ * in the same order. Its twin, the eight-ray test without the slack that
+ * bounds the rounding, differs on these segments. */
+static void test_eight_rays_wall_test_is_the_one_ray_test(void **state)
+{
+    (void)state;
+    pt_scene sc, sloppy;
+    pt_scene_build_cornell_box(&sc);
+    pt_scene_build_cornell_box(&sloppy);
+    long inside = 0;
+    long wrong = wall_lanes_misjudged(&sc, &sc, test_seed(93), &inside);
+    print_message("eight rays' wall test: %ld of %d lanes differ from the one-ray test, %ld inside\n", wrong,
+                  20000 * FLAT_LANES, inside);
+    assert_int_equal(wrong, 0);
+    /* both answers are common: each end is in front of all walls about
+     * half the time, a lane is on half the time (5 946 inside seen) */
+    assert_true(inside > 2000);
+    assert_true(inside < 20000 * FLAT_LANES / 4);
+    for (int g = 0; g < sloppy.wall_group_count; g++) {
+        memset(sloppy.wall_planes[g].slack, 0, sizeof sloppy.wall_planes[g].slack);
+        memset(sloppy.wall_planes[g].slack_constant, 0, sizeof sloppy.wall_planes[g].slack_constant);
+    }
+    long twin = wall_lanes_misjudged(&sloppy, &sc, test_seed(93), &inside);
+    print_message("twin, without the slack: %ld lanes differ\n", twin);
+    assert_true(twin > 0);
+    pt_scene_free(&sc);
+    pt_scene_free(&sloppy);
+}
+
 /* ---- eight rays past the boxes of flat.c's groups ---------------------------------- */
 
 /* How far outside its triangle's box a hit point o + t d may lie and still
@@ -1371,6 +1447,7 @@ int main(void)
         cmocka_unit_test(test_walls_skipped_only_where_they_cannot_block),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_wall_test_is_never_fooled_by_rounding),
+        cmocka_unit_test(test_eight_rays_wall_test_is_the_one_ray_test),
         cmocka_unit_test(test_packets_along_the_walls_match_single_rays),
         cmocka_unit_test(test_wide_renders_the_lecture_rungs_paths),
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),

@@ -109,6 +109,7 @@ typedef struct {
     shadow_queue queue;
     int queued;
     int camera; /* the lanes whose next ray (vertex_lanes ray) is a camera ray */
+    bool occluders_flat; /* the scene has walls, and its occluders are a flat set */
     bool avx; /* light_math_avx and bounce_math_avx, where the processor has AVX2 */
     /* pt_scene_emitter_pdf_area() of each material, worked out once: a
      * division in double at every light sample was 5 % of the time */
@@ -172,7 +173,18 @@ static void trace_queued(row_job *job, int n)
     shadow_queue *queue = &job->queue;
     if (n <= 0)
         return;
-    int blocked = flat_any_hit8_raw(sc->bvh, &queue->rays[0], (1 << n) - 1, job->counters);
+    /* Walls cast no shadows (scene_pt.c): a packet whose every ray lies
+     * inside the walls is tested against the occluders alone. */
+    const int active = (1 << n) - 1;
+    int blocked;
+    if (job->occluders_flat && pt_scene_segments8_inside_walls(sc, &queue->rays[0], active) == active) {
+        job->counters->shadow_rays_inside_walls += (uint64_t)n;
+        blocked = sc->occluder_triangles.count > 0 ? flat_any_hit8_raw(sc->occluders, &queue->rays[0], active,
+                                                                       job->counters)
+                                                   : 0;
+    } else {
+        blocked = flat_any_hit8_raw(sc->bvh, &queue->rays[0], active, job->counters);
+    }
     for (int q = 0; q < n; q++) {
         lane *l = &job->lanes[queue->lane[q]];
         bool through = !((blocked >> q) & 1);
@@ -673,6 +685,9 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
                                       sizeof(float));
     for (int k = 0; k < pt->scene->material_count; k++)
         pdf_area[k] = pt_scene_emitter_pdf_area(pt->scene, k);
+    const pt_scene *sc = pt->scene;
+    const bool occluders_flat = sc->wall_group_count > 0 &&
+                                (sc->occluder_triangles.count == 0 || (sc->occluders != NULL && flat_is(sc->occluders)));
     double start = timer_seconds();
 #pragma omp parallel num_threads(threads)
     {
@@ -680,7 +695,8 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
 #pragma omp for schedule(dynamic, 1)
         for (int y = 0; y < cam->height; y++) {
             row_job job = {.pt = pt, .cam = cam, .spp = spp, .seed = seed, .mean = &e.mean,
-                           .standard_error = &e.standard_error, .y = y, .counters = &mine, .avx = avx, .pdf_area = pdf_area};
+                           .standard_error = &e.standard_error, .y = y, .counters = &mine, .occluders_flat = occluders_flat, .avx = avx,
+                           .pdf_area = pdf_area};
             render_row(&job);
         }
 #pragma omp critical(render_wide_counters)

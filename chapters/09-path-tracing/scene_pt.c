@@ -349,6 +349,66 @@ static inline bool segment_inside_walls(const pt_scene *sc, const ray *r)
 
 bool pt_scene_segment_inside_walls(const pt_scene *sc, const ray *r) { return segment_inside_walls(sc, r); }
 
+#if defined(__x86_64__) && defined(__GNUC__)
+/* segment_inside_walls() for eight rays, one per lane: the same float
+ * operations in the same order as its SSE version, so each lane gets the
+ * very answer a ray alone gets. */
+__attribute__((target("avx"))) static int segments8_inside_walls_avx(const pt_scene *sc, const flat_rays8 *rays)
+{
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    const __m256 t_min = _mm256_load_ps(rays->t_min), t_max = _mm256_load_ps(rays->t_max);
+    __m256 p[2][3], size[2][3];
+    for (int c = 0; c < 3; c++) {
+        __m256 o = _mm256_load_ps(rays->origin[c]), d = _mm256_load_ps(rays->direction[c]);
+        __m256 step_start = _mm256_mul_ps(d, t_min), step_end = _mm256_mul_ps(d, t_max);
+        p[0][c] = _mm256_add_ps(o, step_start);
+        p[1][c] = _mm256_add_ps(o, step_end);
+        size[0][c] = _mm256_add_ps(_mm256_and_ps(o, abs_mask), _mm256_and_ps(step_start, abs_mask));
+        size[1][c] = _mm256_add_ps(_mm256_and_ps(o, abs_mask), _mm256_and_ps(step_end, abs_mask));
+    }
+    __m256 outside = _mm256_cmp_ps(t_max, _mm256_set1_ps(INFINITY), _CMP_NLT_UQ); /* an infinite ray is not inside */
+    for (int k = 0; k < sc->wall_plane_count; k++) { /* the unused lanes of the last group pass anyway */
+        const pt_wall_planes *w = &sc->wall_planes[k / 4];
+        const int j = k % 4;
+        const __m256 normal[3] = {_mm256_broadcast_ss(&w->normal[0][j]), _mm256_broadcast_ss(&w->normal[1][j]),
+                                  _mm256_broadcast_ss(&w->normal[2][j])};
+        const __m256 slack[3] = {_mm256_broadcast_ss(&w->slack[0][j]), _mm256_broadcast_ss(&w->slack[1][j]),
+                                 _mm256_broadcast_ss(&w->slack[2][j])};
+        for (int e = 0; e < 2; e++) {
+            __m256 distance = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(normal[0], p[e][0]),
+                                                          _mm256_mul_ps(normal[1], p[e][1])),
+                                            _mm256_mul_ps(normal[2], p[e][2]));
+            distance = _mm256_sub_ps(distance, _mm256_broadcast_ss(&w->offset[j]));
+            __m256 margin = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(slack[0], size[e][0]),
+                                                        _mm256_mul_ps(slack[1], size[e][1])),
+                                          _mm256_mul_ps(slack[2], size[e][2]));
+            margin = _mm256_add_ps(margin, _mm256_broadcast_ss(&w->slack_constant[j]));
+            outside = _mm256_or_ps(outside, _mm256_cmp_ps(distance, margin, _CMP_NGT_UQ));
+        }
+    }
+    int inside = ~_mm256_movemask_ps(outside) & 0xff;
+    _mm256_zeroupper();
+    return inside;
+}
+#endif
+
+int pt_scene_segments8_inside_walls(const pt_scene *sc, const flat_rays8 *rays, int active)
+{
+    if (sc->wall_group_count == 0 || sc->walls_off)
+        return 0;
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (__builtin_cpu_supports("avx"))
+        return segments8_inside_walls_avx(sc, rays) & active;
+#endif
+    int inside = 0;
+    for (int k = 0; k < FLAT_LANES; k++)
+        if ((active >> k) & 1) {
+            ray r = flat_rays8_get(rays, k);
+            inside |= segment_inside_walls(sc, &r) << k;
+        }
+    return inside;
+}
+
 void pt_scene_use_walls(pt_scene *sc, bool on) { sc->walls_off = !on; }
 
 /* How bright an emitter is, for choosing which light to sample: the mean of

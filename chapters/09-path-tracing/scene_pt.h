@@ -21,6 +21,7 @@
 
 #include "01-ray-casting/shapes.h"
 #include "03-aabb-slabs/accel.h"
+#include "06-bvh/flat.h"
 #include "camera.h"
 #include "counters.h"
 #include "mesh.h"
@@ -133,6 +134,10 @@ bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *ta
  * plane, by more than the rounding of the test? False for an infinite
  * t_max, and when the scene has no walls. */
 bool pt_scene_segment_inside_walls(const pt_scene *sc, const ray *r);
+/* The same for the lanes of `active` of eight rays (flat.h's lanes): bit k
+ * is pt_scene_segment_inside_walls() of lane k, eight lanes per AVX
+ * instruction where the processor has AVX. */
+int pt_scene_segments8_inside_walls(const pt_scene *sc, const flat_rays8 *rays, int active);
 /* Use the walls (the default), or not: to see what they save (--walls
  * off, --bench). The images are the same either way. */
 void pt_scene_use_walls(pt_scene *sc, bool on);

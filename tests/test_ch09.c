@@ -366,7 +366,7 @@ static void test_lights_are_picked_by_power(void **state)
     int small_picks = 0;
     for (int i = 0; i < PICKS; i++) {
         vec3 point, normal;
-        int material;
+        int material = -1; /* set if a light is found, which the assert checks */
         assert_true(pt_scene_sample_emitter(&sc, pcg32_float(&rng), pcg32_float(&rng), pcg32_float(&rng), &point,
                                             &normal, &material));
         small_picks += material == 1;

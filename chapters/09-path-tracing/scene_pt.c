@@ -503,36 +503,6 @@ bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *ta
     return !occluded(sc, &shadow, counters);
 }
 
-bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u2, vec3 *point, vec3 *normal,
-                             int *material)
-{
-    if (sc->emitter_count == 0)
-        return false;
-    /* Pick a triangle with probability power / total power, then a uniform
-     * point on it. The pick is a binary search in the running sum for the
-     * first entry above u_pick x power (the last, if rounding leaves none),
-     * written without a branch on the comparison (GCC turns the obvious
-     * `? :` into one): the way it goes is random, so a branch would be
-     * guessed wrong half the time (the Cornell box's light is two
-     * triangles of equal power). */
-    double target = (double)u_pick * sc->emitter_power;
-    int lo = 0; /* the answer is in [lo, lo + n) */
-    for (int n = sc->emitter_count; n > 1;) {
-        int half = n / 2;
-        lo += half & -(int)(sc->emitter_cdf[lo + half - 1] <= target);
-        n -= half;
-    }
-    int index = sc->emitters[lo];
-    const triangle *t = &sc->triangles.triangles[index];
-    /* A uniform point on a triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1). */
-    float s = sqrtf(u1);
-    float b1 = (1.0f - u2) * s, b2 = u2 * s;
-    *point = vec3_add(vec3_add(vec3_scale(t->p0, 1.0f - b1 - b2), vec3_scale(t->p1, b1)), vec3_scale(t->p2, b2));
-    *normal = sc->emitter_normals[lo];
-    *material = sc->geometry.faces[index].material;
-    return true;
-}
-
 float pt_scene_emitter_pdf_area(const pt_scene *sc, int material)
 {
     /* P(triangle) / its area = area x weight / power / area */

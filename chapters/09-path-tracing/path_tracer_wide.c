@@ -597,12 +597,19 @@ static void render_row(row_job *job)
             lanes_set(L.wo, k, vec3_normalize(vec3_neg(direction)));
         }
         job->camera &= ~active;
+        /* Each lane's random numbers, in shade()'s order: the point on the
+         * light, then the roulette and the next direction. The last do not
+         * depend on the light sample, so they are drawn before its
+         * arithmetic, and the light's and the bounce's arithmetic run back
+         * to back, where the processor overlaps their long chains of
+         * divisions and square roots. */
+        int lit = 0, bounce = 0;
         for (int left = hit_lanes; left != 0; left &= left - 1) {
             int k = __builtin_ctz((unsigned)left);
             if (lanes[k].depth + 1 <= pt->max_depth && pick_light(&lanes[k], sc, job->pdf_area, &L, k))
                 picked |= 1 << k;
+            bounce |= roll_bounce(&lanes[k], pt, &L, k);
         }
-        int lit = 0, bounce = 0;
 #if WIDE_HAVE_AVX
         if (picked != 0 && job->avx)
             lit = light_math_avx(&L, picked);
@@ -611,6 +618,20 @@ static void render_row(row_job *job)
             for (int k = 0; k < LANES; k++)
                 if ((picked >> k) & 1)
                     lit |= light_math_lane(&L, k);
+        /* (after the light's: it reads wo and throughput, which the bounce
+         * replaces with the next vertex's) */
+#if WIDE_HAVE_AVX
+        if (bounce != 0 && job->avx)
+            bounce = bounce_math_avx(&L, bounce);
+        else
+#endif
+        {
+            int lanes_on = 0;
+            for (int k = 0; k < LANES; k++)
+                if ((bounce >> k) & 1)
+                    lanes_on |= bounce_math_lane(&L, k);
+            bounce = lanes_on;
+        }
         /* Each lit lane's shadow ray joins the queue. Every hit lane writes
          * its entry at the end of the queue, and only a lit one moves the
          * end on (fewer than 8 wait, so 16 entries hold them all): no
@@ -630,25 +651,12 @@ static void render_row(row_job *job)
             job->queue.sample_id[q] = lanes[k].sample_id;
             job->queued += is_lit;
             lanes[k].unsettled += is_lit;
-            bounce |= roll_bounce(&lanes[k], pt, &L, k);
         }
         job->counters->shadow_rays += (uint64_t)__builtin_popcount((unsigned)shadows);
         for (int left = lit & ~shadows; left != 0; left &= left - 1) { /* no shadows: every light sample counts */
             int k = __builtin_ctz((unsigned)left);
             vec3 contribution = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
             lanes[k].radiance = vec3_add(lanes[k].radiance, contribution);
-        }
-#if WIDE_HAVE_AVX
-        if (bounce != 0 && job->avx)
-            bounce = bounce_math_avx(&L, bounce);
-        else
-#endif
-        {
-            int lanes_on = 0;
-            for (int k = 0; k < LANES; k++)
-                if ((bounce >> k) & 1)
-                    lanes_on |= bounce_math_lane(&L, k);
-            bounce = lanes_on;
         }
         /* The shadow rays wait until there are eight: a light sample that
          * faces away needs none, so one step's would fill a packet a little

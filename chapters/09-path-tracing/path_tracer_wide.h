@@ -4,8 +4,10 @@
  * processor has little to do while it waits. Eight paths -- eight pixels,
  * each with its own random numbers, its samples one after another -- are
  * eight chains side by side: their rays are traced together, eight per AVX
- * instruction (chapter 06's flat_closest_hit8 and flat_any_hit8, shadow
- * rays queued until there are eight), so are the light sample's and the
+ * instruction (chapter 06's flat_closest_hit8_raw and flat_any_hit8_raw,
+ * shadow rays queued until there are eight, and tested against the
+ * occluders alone when all eight lie inside the walls), so are the light
+ * sample's and the
  * bounce's arithmetic and the two rays' offsets (AVX2, where the processor
  * has it; lane by lane, with the same bits, where not), and the rest of the
  * shading, one path at a time, gives the processor eight independent things

@@ -59,8 +59,10 @@ bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_siz
  * times its throughput, and its shadow ray); what bounce_math reads (p,
  * ng, n, wo, albedo, throughput again; the hemisphere's two numbers,
  * 1 / P_RR) and writes (the next ray, its wo, and the throughput after the
- * bounce, in place). */
-typedef struct vertex_lanes {
+ * bounce, in place). bounce_math_avx writes all eight lanes; a lane whose
+ * path ends there is given its next camera ray (start_sample) before the
+ * next step reads it. */
+typedef struct {
     flat_rays8 ray;
     _Alignas(32) float wo[3][LANES], throughput[3][LANES];
     _Alignas(32) float p[3][LANES], ng[3][LANES], n[3][LANES], albedo[3][LANES];
@@ -75,7 +77,7 @@ typedef struct {
     int x, y, samples_left; /* x < 0: idle */
     pcg32 rng;
     welford channel[3];
-    int depth;         /* bounces before the vertex that ray will hit */
+    int depth;         /* bounces before the vertex its next ray (vertex_lanes) will hit */
     vec3 radiance;     /* gathered so far */
     /* Shadow rays wait in the row's queue until there are eight (below):
      * how many of this sample's do, and the sample before it, ended but
@@ -105,7 +107,7 @@ typedef struct {
     int y, next_x; /* the row, and its next pixel not yet given to a lane */
     ray_counters *counters;
     lane *lanes;
-    struct vertex_lanes *vertex;
+    vertex_lanes *vertex; /* render_row's */
     shadow_queue queue;
     int queued;
     int camera; /* the lanes whose next ray (vertex_lanes ray) is a camera ray */

@@ -696,8 +696,9 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
     for (int k = 0; k < pt->scene->material_count; k++)
         pdf_area[k] = pt_scene_emitter_pdf_area(pt->scene, k);
     const pt_scene *sc = pt->scene;
-    const bool occluders_flat = sc->wall_group_count > 0 &&
-                                (sc->occluder_triangles.count == 0 || (sc->occluders != NULL && flat_is(sc->occluders)));
+    const bool occluders_flat =
+        sc->wall_group_count > 0 &&
+        (sc->occluder_triangles.count == 0 || (sc->occluders != NULL && flat_is(sc->occluders)));
     double start = timer_seconds();
 #pragma omp parallel num_threads(threads)
     {
@@ -705,8 +706,8 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
 #pragma omp for schedule(dynamic, 1)
         for (int y = 0; y < cam->height; y++) {
             row_job job = {.pt = pt, .cam = cam, .spp = spp, .seed = seed, .mean = &e.mean,
-                           .standard_error = &e.standard_error, .y = y, .counters = &mine, .occluders_flat = occluders_flat, .avx = avx,
-                           .pdf_area = pdf_area};
+                           .standard_error = &e.standard_error, .y = y, .counters = &mine,
+                           .occluders_flat = occluders_flat, .avx = avx, .pdf_area = pdf_area};
             render_row(&job);
         }
 #pragma omp critical(render_wide_counters)

@@ -367,7 +367,8 @@ __attribute__((target("avx"))) static int segments8_inside_walls_avx(const pt_sc
         size[1][c] = _mm256_add_ps(_mm256_and_ps(o, abs_mask), _mm256_and_ps(step_end, abs_mask));
     }
     __m256 outside = _mm256_cmp_ps(t_max, _mm256_set1_ps(INFINITY), _CMP_NLT_UQ); /* an infinite ray is not inside */
-    for (int k = 0; k < sc->wall_plane_count; k++) { /* the unused lanes of the last group pass anyway */
+    /* the planes in use only (the SSE version also tests the unused lanes, which pass) */
+    for (int k = 0; k < sc->wall_plane_count; k++) {
         const pt_wall_planes *w = &sc->wall_planes[k / 4];
         const int j = k % 4;
         const __m256 normal[3] = {_mm256_broadcast_ss(&w->normal[0][j]), _mm256_broadcast_ss(&w->normal[1][j]),

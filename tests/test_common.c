@@ -17,6 +17,7 @@
 #include "cli.h"
 #include "counters.h"
 #include "image.h"
+#include "progressive.h"
 #include "ray.h"
 #include "render.h"
 #include "rng.h"
@@ -308,6 +309,29 @@ static void test_one_sample_goes_through_the_pixel_centre(void **state)
     vec3 expected = camera_ray(&cam, 3.5f, 4.5f).direction;
     assert_float_equal(d.x, expected.x, 0.0f);
     assert_float_equal(d.y, expected.y, 0.0f);
+}
+
+/* ---- estimates and progressive rendering --------------------------------- */
+
+static vec3 constant_radiance(const void *scene, ray r, pcg32 *rng, ray_counters *counters)
+{
+    (void)scene;
+    (void)r;
+    (void)rng;
+    (void)counters;
+    return vec3_splat(0.5f);
+}
+
+/* Without noise there is no error to wait for: one pass of one sample. */
+static void test_progressive_stops_at_once_without_noise(void **state)
+{
+    (void)state;
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 50.0f, 9, 7);
+    estimate_image e = progressive_render(constant_radiance, NULL, &cam, 1, 2, 0.0, 1e-3, NULL);
+    assert_int_equal(e.spp, 1);
+    assert_float_equal(estimate_relative_error(&e), 0.0, 0.0);
+    assert_float_equal(e.mean.rgb[0], 0.5f, 0.0f);
+    estimate_image_free(&e);
 }
 
 /* ---- command line --------------------------------------------------------- */
@@ -691,6 +715,7 @@ int main(void)
         cmocka_unit_test(test_render_counts_every_camera_ray),
         cmocka_unit_test(test_render_drops_and_counts_nan_samples),
         cmocka_unit_test(test_one_sample_goes_through_the_pixel_centre),
+        cmocka_unit_test(test_progressive_stops_at_once_without_noise),
         cmocka_unit_test(test_cli_reads_every_shared_flag),
         cmocka_unit_test(test_cli_rejects_bad_flags_with_a_clear_message),
         cmocka_unit_test(test_cli_rejects_an_unwritable_directory),

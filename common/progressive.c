@@ -65,11 +65,16 @@ estimate_image progressive_render(radiance_fn radiance, const void *scene, const
                                   int threads, double seconds, double target_error, FILE *log)
 {
     double start = timer_seconds();
-    estimate_image total = estimate_render(radiance, scene, cam, 1, seed, threads);
+    /* Two samples at least: one sample per pixel has no variance to
+     * estimate its error from (its standard error would read 0, and the
+     * target would seem reached at once). */
+    estimate_image total = estimate_render(radiance, scene, cam, 2, seed, threads);
     for (int pass = 1;; pass++) {
         double elapsed = timer_seconds() - start, error = estimate_relative_error(&total);
         if (log != NULL)
             fprintf(log, "pass %2d: %6ld spp, %8.2f s, estimated relative error %.4f\n", pass, total.spp, elapsed, error);
+        if (seconds <= 0.0 && target_error <= 0.0)
+            break; /* nothing to wait for */
         if (target_error > 0.0 && error <= target_error) {
             if (log != NULL)
                 fprintf(log, "reached the target error %.4f\n", target_error);

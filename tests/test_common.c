@@ -322,15 +322,34 @@ static vec3 constant_radiance(const void *scene, ray r, pcg32 *rng, ray_counters
     return vec3_splat(0.5f);
 }
 
-/* Without noise there is no error to wait for: one pass of one sample. */
+/* Without noise there is no error to wait for: one pass. */
 static void test_progressive_stops_at_once_without_noise(void **state)
 {
     (void)state;
     camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 50.0f, 9, 7);
     estimate_image e = progressive_render(constant_radiance, NULL, &cam, 1, 2, 0.0, 1e-3, NULL);
-    assert_int_equal(e.spp, 1);
+    assert_int_equal(e.spp, 2);
     assert_float_equal(estimate_relative_error(&e), 0.0, 0.0);
     assert_float_equal(e.mean.rgb[0], 0.5f, 0.0f);
+    estimate_image_free(&e);
+}
+
+/* Passes of 2, 2, 4, 8, ... samples until the error the variance predicts
+ * is below the target; every pass's samples are counted. A noisy first
+ * pass must not look converged (one sample per pixel has no variance). */
+static void test_progressive_reaches_the_target_error(void **state)
+{
+    (void)state;
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 50.0f, 9, 7);
+    estimate_image two = estimate_render(noisy_radiance, NULL, &cam, 2, 5, 2);
+    double start_error = estimate_relative_error(&two);
+    estimate_image_free(&two);
+    assert_true(start_error > 0.05);
+    double target = start_error / 4.0; /* about 16 times the samples */
+    estimate_image e = progressive_render(noisy_radiance, NULL, &cam, 5, 2, 0.0, target, NULL);
+    assert_true(estimate_relative_error(&e) <= target);
+    assert_true(e.spp >= 16 && (e.spp & (e.spp - 1)) == 0);
+    assert_int_equal(e.counters.camera_rays, (uint64_t)(9 * 7) * (uint64_t)e.spp);
     estimate_image_free(&e);
 }
 
@@ -716,6 +735,7 @@ int main(void)
         cmocka_unit_test(test_render_drops_and_counts_nan_samples),
         cmocka_unit_test(test_one_sample_goes_through_the_pixel_centre),
         cmocka_unit_test(test_progressive_stops_at_once_without_noise),
+        cmocka_unit_test(test_progressive_reaches_the_target_error),
         cmocka_unit_test(test_cli_reads_every_shared_flag),
         cmocka_unit_test(test_cli_rejects_bad_flags_with_a_clear_message),
         cmocka_unit_test(test_cli_rejects_an_unwritable_directory),

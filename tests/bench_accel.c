@@ -25,7 +25,7 @@
 #include <omp.h>
 #endif
 
-#include "03-aabb-slabs/accel.h"
+#include "03-aabb-slabs/accel_program.h"
 #include "04-uniform-grid/grid.h"
 #include "05-kd-tree/kdtree.h"
 #include "06-bvh/bvh.h"

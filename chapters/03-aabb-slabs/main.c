@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "03-aabb-slabs/accel.h"
+#include "03-aabb-slabs/accel_program.h"
 #include "cli.h"
 #include "explain.h"
 #include "memory.h"

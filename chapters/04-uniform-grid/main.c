@@ -9,6 +9,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "03-aabb-slabs/accel_program.h"
+#include "03-aabb-slabs/accel_view.h"
 #include "04-uniform-grid/grid.h"
 #include "cli.h"
 #include "program.h"

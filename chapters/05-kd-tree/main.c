@@ -8,6 +8,8 @@
  * also times the Embree harness's two ray sets on one thread. */
 #include <stdio.h>
 
+#include "03-aabb-slabs/accel_program.h"
+#include "03-aabb-slabs/accel_view.h"
 #include "05-kd-tree/kdtree.h"
 #include "cli.h"
 #include "program.h"

@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "03-aabb-slabs/accel_view.h"
 #include "06-bvh/bvh.h"
 #include "camera.h"
 #include "cli.h"

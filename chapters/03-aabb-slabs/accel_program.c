@@ -13,6 +13,8 @@
 #include "program.h"
 #include "timer.h"
 
+const char *const accel_mesh_names[] = {"tori", "stadium", "icosphere", NULL};
+
 int accel_input_load(accel_input *in, cli_options *opts, const char *program, const char *mesh_name,
                      const char *obj_path, int tori_triangles, int icosphere_subdivisions)
 {

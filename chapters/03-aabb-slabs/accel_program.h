@@ -66,6 +66,10 @@ typedef struct {
     bool stadium;     /* the teapot in a stadium: seen by a spectator */
 } accel_input;
 
+/* The procedural meshes by name, for a CLI_CHOICE --mesh flag:
+ * "tori", "stadium", "icosphere", then NULL. */
+extern const char *const accel_mesh_names[];
+
 int accel_input_load(accel_input *in, cli_options *opts, const char *program, const char *mesh_name,
                      const char *obj_path, int tori_triangles, int icosphere_subdivisions);
 /* The scene file's camera, a spectator's in the stadium, else the harness's

@@ -161,9 +161,9 @@ for program in "$bin"/[0-9][0-9]-*; do
         "--max-depth 100000:05-" "--heatmap-max -1:06-" "--rho 1:07-" "--rho -0.1:07-" "--bounces 0:07-" \
         "--bounces 1001:07-" "--runs 0:08-" "--runs 1:08-" "--max-log2n -1:08-" "--max-log2n 99:08-" \
         "--rr-probability 0:09-" "--rr-probability 1.5:09-" "--max-depth -1:09-" "--time-budget -1:09-" \
-        "--target-error -1:09-" "--experiment-size 0:09-" "--walls maybe:09-" \
-        "--reference-spp 0:09-" "--experiment-spp 0:09-" "--wide --time-budget 1:09-" \
-        "--wide --builtin veach:09-" "--wide --integrator mis:09-" "--wide --explain 1,1:09-"; do
+        "--target-error -1:09-" "--experiment-size 0:09-" "--accel octree:09-" \
+        "--reference-spp 0:09-" "--experiment-spp 0:09-" "--walls maybe:13-" "--rr sometimes:13-" \
+        "--bench-csv x.csv:13-" "--builtin nothing:13-"; do
         only=${bad##*:}; bad=${bad%:*}
         case $p in "$only"*) ;; *) continue ;; esac
         flag=${bad%% *}

@@ -10,7 +10,6 @@
 #include <string.h>
 
 #include "06-bvh/bvh.h"
-#include "06-bvh/bvh4.h"
 #include "cli.h"
 #include "program.h"
 
@@ -27,7 +26,7 @@ int main(int argc, char **argv)
     cli_options opts = cli_defaults("build/out/ch06.exr", 640, 480, 1);
     const char *split_name = "sah", *order_name = "sign", *mesh_name = "tori", *obj_path = NULL;
     int triangles = 102400;
-    bool heatmap = false, run_bench = false, wide = false;
+    bool heatmap = false, run_bench = false;
     float heatmap_max = 120.0f;
     const cli_flag extras[] = {
         {"--split", CLI_STRING, &split_name, "median|sah",
@@ -38,9 +37,6 @@ int main(int argc, char **argv)
         {"--triangles", CLI_INT, &triangles, "N", "tori field size: 1024, 10240, 102400 (default) or 1048576", 1,
          1048576},
         {"--obj", CLI_STRING, &obj_path, "FILE", "load a Wavefront OBJ file instead", 0, 0},
-        {"--wide", CLI_BOOL, &wide, NULL,
-         "the 4-wide BVH of the README's last section (what production kernels do): the binary tree\n"
-         "collapsed to nodes of 4 boxes tested at once with SSE, triangles tested 4 at once", 0, 0},
         {"--heatmap", CLI_BOOL, &heatmap, NULL, "show the cost of each ray: nodes visited + triangles tested", 0, 0},
         {"--heatmap-max", CLI_FLOAT, &heatmap_max, "COST", "the cost shown as white (default 120)", 1, 1e6},
         {"--bench", CLI_BOOL, &run_bench, NULL, "also time the Embree harness's ray sets on one thread", 0, 0},
@@ -50,8 +46,8 @@ int main(int argc, char **argv)
                      "recursively split the set of objects in two subsets, recompute their bounding boxes, stop\n"
                      "when a node contains few objects and store them in a leaf. --split median splits along\n"
                      "the longest axis at the median object; --split sah where the surface area heuristic says.\n"
-                     "Prints the tree's figures and the box and triangle tests per ray. --wide uses the 4-wide\n"
-                     "BVH instead (--order does not apply to it: it always visits the nearest child first).",
+                     "Prints the tree's figures and the box and triangle tests per ray. (Wider nodes, as\n"
+                     "production kernels use: chapter 13.)",
                      extras, (int)(sizeof extras / sizeof extras[0])};
     cli_parse_or_exit(argc, argv, &spec, &opts);
 
@@ -72,26 +68,10 @@ int main(int argc, char **argv)
         return load_status;
     triangle_set set;
     triangle_set_from_mesh(&set, &in.m);
-    accel *a;
-    if (wide) {
-        a = bvh4_build(&set, split);
-    } else {
-        a = bvh_build(&set, split);
-        bvh_set_order(a, order);
-    }
+    accel *a = bvh_build(&set, split);
+    bvh_set_order(a, order);
     const accel_stats *s = &a->stats;
-    if (!opts.quiet && wide) {
-        const bvh4 *b = (const bvh4 *)a;
-        double n = (double)set.count;
-        printf("%s over %d triangles: built in %.1f ms (binary build and collapse); %.1f bytes per triangle "
-               "(nodes %.1f, packets of 4 triangles with their indices %.1f)\n",
-               s->name, set.count, s->build_seconds * 1e3, (double)s->bytes / n,
-               (double)b->node_count * sizeof(bvh4_node) / n, (double)b->packet_count * sizeof(bvh4_packet) / n);
-        printf("%d nodes of %d (%.2f children each), %d leaves (%.2f triangles per leaf, %.0f %% of packet lanes "
-               "used), depth %d\n",
-               s->nodes, BVH4_WIDTH, (double)(s->nodes - 1 + s->leaves) / s->nodes, s->leaves, n / s->leaves,
-               100.0 * n / (4.0 * b->packet_count), s->max_depth);
-    } else if (!opts.quiet) {
+    if (!opts.quiet) {
         const bvh *b = (const bvh *)a;
         double n = (double)set.count;
         printf("%s over %d triangles: built in %.1f ms; %.1f bytes per triangle (nodes %.1f, index %.1f, "
@@ -114,11 +94,7 @@ int main(int argc, char **argv)
     int status = program_render(&opts, spec.program, accel_view_radiance, &view, &cam, &stats);
     if (status == 0 && !opts.quiet) {
         double rays = (double)stats.counters.camera_rays;
-        if (wide)
-            printf("%s: %.2f boxes tested (2 to 4 per node visited) and %.2f triangles tested per ray\n", s->name,
-                   (double)stats.counters.box_tests / rays, (double)stats.counters.primitive_tests / rays);
-        else
-            printf("%s, %s order: %.2f nodes visited and %.2f triangles tested per ray\n", s->name,
+        printf("%s, %s order: %.2f nodes visited and %.2f triangles tested per ray\n", s->name,
                    order == BVH_ORDER_DISTANCE ? "distance" : "axis-sign", (double)stats.counters.box_tests / rays,
                    (double)stats.counters.primitive_tests / rays);
     }

@@ -5,7 +5,6 @@
 #include <string.h>
 
 #include "09-path-tracing/experiments.h"
-#include "09-path-tracing/path_tracer_wide.h"
 #include "effects.h"
 #include "09-path-tracing/path_tracer.h"
 #include "cli.h"
@@ -42,8 +41,7 @@ int main(int argc, char **argv)
     cli_options opts = cli_defaults("build/out/ch09.exr", 512, 512, 16);
     /* integrator NULL and max_depth -1: not given, so the scene file's (or the default) */
     const char *integrator = NULL, *rr = "fixed", *scene_name = "cornell", *obj = NULL, *data = NULL;
-    const char *bench_csv = NULL, *walls = "on";
-    bool bench = false, wide = false;
+    const char *accel_name = "bvh";
     float rr_probability = 0.8f, time_budget = 0.0f, target_error = 0.0f;
     int max_depth = -1, rr_start = 3, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
     const cli_flag extras[] = {
@@ -60,9 +58,9 @@ int main(int argc, char **argv)
          "white-furnace, glass-furnace, point-in-sphere",
          0, 0},
         {"--obj", CLI_STRING, &obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
-        {"--walls", CLI_STRING, &walls, "on|off",
-         "on (default): shadow rays inside the room skip its walls, which cannot block them; off: every shadow "
-         "ray meets every triangle (the same image, slower)", 0, 0},
+        {"--accel", CLI_STRING, &accel_name, "NAME",
+         "the structure the rays are traced through: bvh (default, chapter 06), kdtree (05), grid (04) or "
+         "brute (03)", 0, 0},
         {"--time-budget", CLI_FLOAT, &time_budget, "SECONDS", "progressive: passes until this much time is spent", 0.0, 1e6},
         {"--target-error", CLI_FLOAT, &target_error, "E",
          "progressive: passes until the estimated relative error is below E", 0.0, 10.0},
@@ -70,13 +68,6 @@ int main(int argc, char **argv)
         {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 96)", 8, 1024},
         {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached reference (default 4096)", 16, 1 << 20},
         {"--experiment-spp", CLI_INT, &experiment_spp, "N", "largest spp of the experiments (default 256)", 1, 1 << 16},
-        {"--wide", CLI_BOOL, &wide, NULL,
-         "eight paths at a time, their rays traced eight per AVX instruction (the lecture rung, on a scene of "
-         "at most 64 triangles, diffuse, no spheres or point lights): the lecture rung's image, faster", 0, 0},
-        {"--bench", CLI_BOOL, &bench, NULL,
-         "print seconds per million camera samples on the Cornell box for every rung, 1 and 2 threads "
-         "taking turns (a square of --width pixels, --spp samples; best of 5)", 0, 0},
-        {"--bench-csv", CLI_STRING, &bench_csv, "FILE", "with --bench: also write the figures as CSV", 0, 0},
     };
     cli_spec spec = {"09-path-tracing",
                      "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"
@@ -87,16 +78,6 @@ int main(int argc, char **argv)
                      extras, sizeof extras / sizeof extras[0]};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
-    if (bench_csv != NULL && !bench) {
-        fprintf(stderr, "09-path-tracing: --bench-csv %s: only with --bench\ntry --help\n", bench_csv);
-        return 2;
-    }
-    if (wide && (bench || data != NULL || time_budget > 0.0f || target_error > 0.0f)) {
-        fprintf(stderr, "09-path-tracing: --wide renders one image: not with --bench (which has a row for it), "
-                        "--data, --time-budget or --target-error\ntry --help\n");
-        return 2;
-    }
-
     path_tracer pt;
     pt_scene sc;
     char err[1024];
@@ -121,8 +102,9 @@ int main(int argc, char **argv)
     }
     if (max_depth < 0)
         max_depth = from_file && desc.max_depth >= 0 ? desc.max_depth : 64;
-    if (strcmp(walls, "on") != 0 && strcmp(walls, "off") != 0) {
-        fprintf(stderr, "09-path-tracing: --walls: unknown '%s' (on, off)\ntry --help\n", walls);
+    pt_accel_builder accel_builder = pt_accel_builder_named(accel_name);
+    if (accel_builder == NULL) {
+        fprintf(stderr, "09-path-tracing: --accel: unknown '%s' (bvh, kdtree, grid, brute)\ntry --help\n", accel_name);
         scene_desc_free(&desc);
         return 2;
     }
@@ -154,7 +136,8 @@ int main(int argc, char **argv)
         effects_print(stdout, &e, spec.program);
     program_note_effects(&e);
     scene_desc_free(&desc);
-    pt_scene_use_walls(&sc, strcmp(walls, "on") == 0);
+    if (accel_builder != pt_accel_builder_named("bvh"))
+        pt_scene_use_accel(&sc, accel_builder, NULL);
     pt = path_tracer_defaults(&sc);
     pt.effects = effects;
     pt.integrator = chosen;
@@ -164,12 +147,7 @@ int main(int argc, char **argv)
     pt.max_depth = max_depth;
 
     int status = 0;
-    if (bench) {
-        if (!experiment_speed(opts.width, opts.spp, 5, bench_csv, err, sizeof err)) {
-            fprintf(stderr, "09-path-tracing: %s\n", err);
-            status = 1;
-        }
-    } else if (data != NULL) {
+    if (data != NULL) {
         /* The experiments, on the chosen scene: a cached reference, then
          * every rung at doubling sample counts, then (on the first scene)
          * the Russian roulette sweep. The Cornell box, all diffuse, is
@@ -227,37 +205,6 @@ int main(int argc, char **argv)
         if (status == 0 && !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
             fprintf(stderr, "09-path-tracing: %s\n", err);
             status = 1;
-        }
-        estimate_image_free(&e);
-    } else if (wide) {
-        /* Eight paths at a time (path_tracer_wide.h): no progress line and
-         * no --explain, which follow one path. */
-        camera cam = pt_scene_camera(&sc, opts.width, opts.height);
-        char why[128];
-        estimate_image e;
-        if (opts.explain) {
-            fprintf(stderr, "09-path-tracing: --explain follows one path, --wide eight at once: use one of them\n");
-            pt_scene_free(&sc);
-            return 2;
-        }
-        if (!path_tracer_wide_supported(&pt, why, sizeof why)) {
-            fprintf(stderr, "09-path-tracing: --wide: not for this render: %s\n", why);
-            pt_scene_free(&sc);
-            return 2;
-        }
-        render_estimate_wide(&pt, &cam, opts.spp, opts.seed, opts.threads, &e);
-        char counters_path[4096];
-        counters_path_for_image(opts.out, counters_path, sizeof counters_path);
-        if (!image_write(&e.mean, opts.out, opts.exposure, err, sizeof err) ||
-            !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
-            fprintf(stderr, "09-path-tracing: %s\n", err);
-            status = 1;
-        } else if (!opts.quiet) {
-            printf("09-path-tracing: %dx%d, %d spp, 8 paths at a time, %d threads, %.3f s -> %s\n", opts.width,
-                   opts.height, opts.spp, opts.threads, e.seconds, opts.out);
-            counters_print(stdout, &e.counters, e.seconds);
-            printf("lecture: %.3f s per million camera samples (%d threads, 8 paths at a time)\n",
-                   e.seconds / ((double)opts.width * opts.height * opts.spp) * 1e6, opts.threads);
         }
         estimate_image_free(&e);
     } else {

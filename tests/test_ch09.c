@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "06-bvh/bvh.h"
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/path_tracer.h"
 #include "08-monte-carlo/sampling.h"
@@ -788,9 +789,56 @@ static void test_visible_is_the_shadow_ray_it_builds(void **state)
 /* Signed distance of p from the plane of triangle t, in long double: the
  * edges are exact there (differences of floats) and their products carry
  * 64-bit rounding, far finer than the float test's. */
+/* Chapter 09 traces through chapter 06's BVH: a change there shows here.
+ * The default structure is chapter 06's SAH tree; the same Cornell box
+ * with leaves of one triangle visits more nodes and tests fewer triangles
+ * per ray, and --accel's other structures (chapters 03-05) count
+ * differently again. The hits are the same, so the camera, shadow and
+ * indirect rays are the same in number. */
+static accel *bvh_leaves_of_one(const triangle_set *set, const void *context)
+{
+    (void)context;
+    return bvh_build_max_leaf(set, 1);
+}
+
+static void test_chapter_06s_bvh_is_what_chapter_09_traces(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    assert_string_equal(sc.bvh->stats.name, "bvh sah");
+    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+    render_result def = render(&pt, 16, 16, 4, 21, 1);
+    pt_scene_use_accel(&sc, bvh_leaves_of_one, NULL);
+    assert_true(sc.bvh->stats.leaves > 16); /* 32 triangles, one per leaf; the default has fewer leaves */
+    render_result one = render(&pt, 16, 16, 4, 21, 1);
+    const ray_counters *a = &def.stats.counters, *b = &one.stats.counters;
+    print_message("box tests %llu -> %llu, triangle tests %llu -> %llu with leaves of one triangle\n",
+                  (unsigned long long)a->box_tests, (unsigned long long)b->box_tests,
+                  (unsigned long long)a->primitive_tests, (unsigned long long)b->primitive_tests);
+    assert_true(b->box_tests > a->box_tests);
+    assert_true(b->primitive_tests < a->primitive_tests);
+    assert_int_equal(a->shadow_rays, b->shadow_rays);
+    assert_int_equal(a->indirect_rays, b->indirect_rays);
+    render_result_free(&one);
+    /* the structures of chapters 03-05 through --accel's names */
+    static const char *const others[] = {"kdtree", "grid", "brute"};
+    for (int k = 0; k < 3; k++) {
+        pt_scene_use_accel(&sc, pt_accel_builder_named(others[k]), NULL);
+        render_result r = render(&pt, 16, 16, 4, 21, 1);
+        assert_true(r.stats.counters.box_tests != a->box_tests || r.stats.counters.primitive_tests != a->primitive_tests);
+        assert_int_equal(r.stats.counters.shadow_rays, a->shadow_rays);
+        render_result_free(&r);
+    }
+    assert_null(pt_accel_builder_named("octree"));
+    render_result_free(&def);
+    pt_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_chapter_06s_bvh_is_what_chapter_09_traces),
         cmocka_unit_test(test_furnace_every_pixel_is_one),
         cmocka_unit_test(test_scene_files_render_the_built_in_scenes),
         cmocka_unit_test(test_direct_light_only_equals_depth_one),

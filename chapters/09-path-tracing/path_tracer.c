@@ -135,6 +135,14 @@ static vec3 point_lights(const path_tracer *pt, const hit_record *p, vec3 wo, co
     return radiance;
 }
 
+/* A point x' on the lights (pt_scene_sample_light), from the path's next
+ * three numbers in a written order. */
+static bool sample_light(const pt_scene *sc, pt_random *rng, pt_light_sample *x)
+{
+    float u_pick = pt_random_float(rng), u1 = pt_random_float(rng), u2 = pt_random_float(rng);
+    return pt_scene_sample_light(sc, u_pick, u1, u2, x);
+}
+
 /* ---- direct light: sampling the light ---------------------------------------
  * The lecture's change of variables: instead of waiting for a hemisphere
  * sample to hit the light, pick a point x' on the light uniformly by area
@@ -150,8 +158,7 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
     vec3 n = hit->normal_shading;
     vec3 radiance = point_lights(pt, hit, wo, m, explain_depth, counters);
     pt_light_sample x;
-    float u_pick = pt_random_float(rng), u1 = pt_random_float(rng), u2 = pt_random_float(rng);
-    if (!pt_scene_sample_light(sc, u_pick, u1, u2, &x))
+    if (!sample_light(sc, rng, &x))
         return radiance;
     vec3 to_light = vec3_sub(x.point, hit->point);
     float distance2 = vec3_length_squared(to_light);
@@ -211,26 +218,27 @@ static bool light_visible(const path_tracer *pt, const hit_record *p, const pt_l
 
 /* Does the path go on from p (bounce depth + 1 to a vertex whose light
  * sample, bounce depth + 2, still counts; the effects ask for it; the
- * roulette lets it)? *p_rr receives the probability it went on with. */
-static bool path_goes_on(const path_tracer *pt, const pt_material *m, int depth, vec3 throughput, pt_random *rng,
-                         float *p_rr)
+ * roulette lets it)? The probability P_RR it went on with, or 0 if it
+ * ends here. */
+static float path_goes_on(const path_tracer *pt, const pt_material *m, int depth, vec3 throughput, pt_random *rng)
 {
     int indent = 2 * depth + 2; /* --explain: each bounce two steps deeper */
-    *p_rr = 1.0f;
+    float p_rr = 1.0f;
     if (depth + 2 > pt->max_depth) {
         explain_line(indent, "max depth %d: no further bounce", pt->max_depth);
-        return false;
+        return 0.0f;
     }
     if (!bsdf_is_delta(m) && !continues_from(pt, m)) {
         explain_line(indent, "no %s effect: the path ends here", m->kind == BSDF_GLOSSY ? "glossy" : "indirect");
-        return false;
+        return 0.0f;
     }
-    if (!path_tracer_roulette(pt, depth, throughput, m->albedo, p_rr))
-        return true;
+    if (!path_tracer_roulette(pt, depth, throughput, m->albedo, &p_rr))
+        return 1.0f;
     float u_rr = pt_random_float(rng);
-    explain_roulette(pt, indent, u_rr, *p_rr);
-    return u_rr < *p_rr;
+    explain_roulette(pt, indent, u_rr, p_rr);
+    return u_rr < p_rr ? p_rr : 0.0f;
 }
+
 
 /* --explain: what shade() found at p, and the ray it traced on. */
 static void explain_shade(const path_tracer *pt, int depth, const char *what, vec3 l, ray r, const hit_record *q,
@@ -260,9 +268,9 @@ static vec3 shade_delta(const path_tracer *pt, const hit_record *p, vec3 wo, int
 {
     const pt_scene *sc = pt->scene;
     const pt_material *m = &sc->materials[p->material_id];
-    float p_rr;
     bsdf_sample_result s;
-    if (!path_goes_on(pt, m, depth, throughput, rng, &p_rr))
+    float p_rr = path_goes_on(pt, m, depth, throughput, rng);
+    if (p_rr == 0.0f)
         return vec3_splat(0.0f);
     float u_y = pt_random_float(rng), u_x = pt_random_float(rng);
     if (!bsdf_sample(m, p->normal_shading, wo, vec2_make(u_x, u_y), pt_random_float(rng), p->front_face, &s) ||
@@ -308,27 +316,22 @@ static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth
     vec3 n = p->normal_shading;
     if (bsdf_is_delta(m)) /* a mirror or glass: not on the slide (above) */
         return shade_delta(pt, p, wo, depth, throughput, rng, counters);
-
     /* Contribution from the light source: x' uniformly on the light, pdf_light = 1 / A */
     vec3 l_dir = point_lights(pt, p, wo, m, 2 * depth + 2, counters); /* lights without area (above) */
     pt_light_sample x;
-    float u_pick = pt_random_float(rng), u1 = pt_random_float(rng), u2 = pt_random_float(rng);
-    if (pt_scene_sample_light(sc, u_pick, u1, u2, &x)) {
+    if (sample_light(sc, rng, &x)) {
         vec3 to_light = vec3_sub(x.point, p->point);
         float distance2 = vec3_length_squared(to_light); /* |x' - p|^2 */
         vec3 ws = vec3_scale(to_light, 1.0f / sqrtf(distance2));
         float cos_theta = vec3_dot(n, ws), cos_theta_x = -vec3_dot(x.normal, ws);
-        /* if the ray from p to x' is not blocked in the middle */
-        if (cos_theta > 0.0f && cos_theta_x > 0.0f && light_visible(pt, p, &x, counters)) {
-            vec3 f_r = bsdf_eval(m, n, wo, ws);
-            l_dir = vec3_add(l_dir, vec3_scale(vec3_mul(x.emission, f_r),
+        /* if the ray from p to x' is not blocked in the middle: L_i f_r cos(theta) cos(theta') / |x' - p|^2 / pdf */
+        if (cos_theta > 0.0f && cos_theta_x > 0.0f && light_visible(pt, p, &x, counters))
+            l_dir = vec3_add(l_dir, vec3_scale(vec3_mul(x.emission, bsdf_eval(m, n, wo, ws)),
                                                cos_theta * cos_theta_x / distance2 / x.pdf_light));
-        }
     }
-
     /* Contribution from other reflectors: Russian roulette with P_RR */
-    float p_rr;
-    if (!path_goes_on(pt, m, depth, throughput, rng, &p_rr))
+    float p_rr = path_goes_on(pt, m, depth, throughput, rng);
+    if (p_rr == 0.0f)
         return l_dir;
     /* wi uniformly on the hemisphere, pdf_hemi = 1 / (2 pi) */
     float u_y = pt_random_float(rng), u_x = pt_random_float(rng);

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "06-bvh/bvh.h"
+#include "06-bvh/bvh_internal.h" /* the tuned slab test, checked against chapter 03's */
 #include "06-bvh/bvh4.h"
 #include "06-bvh/flat.h"
 #include "render.h"

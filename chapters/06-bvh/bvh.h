@@ -87,6 +87,15 @@ accel *bvh_build(const triangle_set *set, bvh_split split);
  * the faster one on our measurements: README). */
 void bvh_set_order(accel *a, bvh_order order);
 
+/* The lecture's traversal (lecture 14's pseudocode, in bvh_traverse.c):
+ * recursive; if the ray misses a node's box, nothing; a leaf returns its
+ * closest hit; an interior node visits both children and returns the closer
+ * of their hits. Brute force's answer, bit for bit (at equal t, the lower
+ * triangle index, as brute force), found by visiting more nodes than
+ * accel_closest_hit() does, which skips boxes beyond the closest hit so far.
+ * Counts its box and triangle tests in counters, as every traversal does. */
+bool bvh_closest_hit_recursive(const bvh *b, ray r, hit_record *hit, ray_counters *counters);
+
 /* Wrap a tree built by hand (for tests and exercises): the nodes are
  * copied; triangle_index[i] says which triangle of the set is at leaf
  * position i. Returns NULL if the nodes do not describe a valid tree over

@@ -41,7 +41,9 @@ DEBIAN_PACKAGES := gcc make libcmocka-dev libopenexr-dev libstb-dev gnuplot-nox
 
 # ---------------------------------------------------------------- sources --
 COMMON_SRC := $(sort $(wildcard common/*.c))
-CHAPTERS := $(sort $(notdir $(wildcard chapters/[0-9][0-9]-*)))
+# A chapter is a directory chapters/NN-name with a program (main.c); one
+# that holds only headers so far (13-production) is not built on its own.
+CHAPTERS := $(sort $(patsubst chapters/%/main.c,%,$(wildcard chapters/[0-9][0-9]-*/main.c)))
 chapter_number = $(firstword $(subst -, ,$(1)))
 
 obj = $(patsubst %.c,$(BUILD)/obj/%.o,$(1))

@@ -216,6 +216,8 @@ static bvh_found closer(bvh_found hit1, bvh_found hit2)
     return hit1;
 }
 
+/* The slide's Intersect(ray, node): the closest hit in the subtree of
+ * nodes[node_index], or none (triangle -1). */
 static bvh_found intersect(const bvh *b, const ray *r, const slab_ray *sr, int node_index,
                            ray_counters *counters)
 {

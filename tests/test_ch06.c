@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "06-bvh/bvh.h"
+#include "06-bvh/bvh_internal.h" /* the tuned slab test, checked against chapter 03's */
 #include "render.h"
 #include "scene_file.h"
 #include "accel_check.h"
@@ -519,6 +520,197 @@ static void test_hand_built_tree_is_checked(void **state)
     mesh_free(&m);
 }
 
+/* ---- the lecture's recursive traversal ------------------------------------------ */
+
+typedef bool (*bvh_closest_fn)(const bvh *b, ray r, hit_record *hit, ray_counters *counters);
+
+/* The twin: the slide's recursion with its last line wrong, "return hit1 if
+ * there is one, else hit2": the first hit in tree order, not the closer. */
+typedef struct {
+    int triangle; /* in the set; -1: none */
+    float t, b1, b2;
+} twin_hit;
+
+static twin_hit first_hit_recursive(const bvh *b, const ray *r, const slab_ray *sr, int n)
+{
+    const bvh_node *node = &b->nodes[n];
+    twin_hit none = {-1, 0.0f, 0.0f, 0.0f};
+    float t_enter, t_exit;
+    if (!aabb_slab_test(&node->box, sr, r->t_min, r->t_max, &t_enter, &t_exit))
+        return none;
+    if (bvh_node_is_leaf(node)) {
+        twin_hit closest = none;
+        ray shorter = *r;
+        for (int i = node->first; i < node->first + bvh_node_triangles(node); i++) {
+            twin_hit h = {b->triangle_index[i], 0.0f, 0.0f, 0.0f};
+            if (triangle_intersect_barycentric(&b->base.set->triangles[h.triangle], &shorter, &h.t, &h.b1, &h.b2)) {
+                closest = h;
+                shorter.t_max = h.t;
+            }
+        }
+        return closest;
+    }
+    twin_hit hit1 = first_hit_recursive(b, r, sr, node->first);
+    if (hit1.triangle >= 0)
+        return hit1; /* the mistake: child2 may hold a closer hit */
+    return first_hit_recursive(b, r, sr, node->first + 1);
+}
+
+static bool first_hit_recursive_closest(const bvh *b, ray r, hit_record *hit, ray_counters *counters)
+{
+    (void)counters;
+    slab_ray sr = slab_ray_make(r);
+    twin_hit h = first_hit_recursive(b, &r, &sr, 0);
+    if (h.triangle < 0)
+        return false;
+    triangle_set_fill_hit(b->base.set, h.triangle, r, h.t, h.b1, h.b2, hit);
+    return true;
+}
+
+/* Over the differential test's meshes and rays (accel_check.h), on trees of
+ * both splits: how many rays get an answer other than brute force's (hit or
+ * miss, t bit for bit, the same triangle), and how many hit at all. */
+static long recursive_mismatches(bvh_closest_fn closest, int ray_count, long *hits)
+{
+    long mismatches = 0;
+    *hits = 0;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        accel *brute = brute_force_build(&set);
+        for (int split = 0; split < 2; split++) {
+            accel *a = bvh_build(&set, split ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN);
+            pcg32 rng = pcg32_for_pixel(20261123, (uint64_t)kind);
+            for (int i = 0; i < ray_count; i++) {
+                ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+                hit_record want, got;
+                ray_counters counters = {0};
+                bool want_hit = accel_closest_hit(brute, r, &want, &counters);
+                bool got_hit = closest((const bvh *)a, r, &got, &counters);
+                *hits += want_hit;
+                if (want_hit != got_hit || (want_hit && (got.t != want.t || got.shape_id != want.shape_id))) {
+                    if (mismatches < 3)
+                        print_message("%s, %s split, ray %d: brute %s t=%a tri %d, recursive %s t=%a tri %d\n",
+                                      accel_check_mesh_names[kind], split ? "sah" : "median", i,
+                                      want_hit ? "hit" : "miss", want_hit ? (double)want.t : 0.0,
+                                      want_hit ? want.shape_id : -1, got_hit ? "hit" : "miss",
+                                      got_hit ? (double)got.t : 0.0, got_hit ? got.shape_id : -1);
+                    mismatches++;
+                }
+            }
+            accel_destroy(a);
+        }
+        accel_destroy(brute);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    return mismatches;
+}
+
+enum { RECURSIVE_CHECK_RAYS = 2000 };
+
+/* The slide's recursion returns brute force's closest hit: the same t, bit
+ * for bit (the same Moller-Trumbore on the same triangle), and the same
+ * triangle (ties at equal t go to the lower index, as in brute force). It
+ * tests every leaf whose box the ray crosses, and brute force's triangle
+ * lies in one of them. */
+static void test_recursive_traversal_equals_brute_force(void **state)
+{
+    (void)state;
+    long hits;
+    long mismatches = recursive_mismatches(bvh_closest_hit_recursive, RECURSIVE_CHECK_RAYS, &hits);
+    print_message("recursive traversal: %ld of %d rays differ from brute force (%ld hits)\n", mismatches,
+                  2 * MESH_KIND_COUNT * RECURSIVE_CHECK_RAYS, hits);
+    assert_int_equal(mismatches, 0);
+    assert_true(hits > MESH_KIND_COUNT * RECURSIVE_CHECK_RAYS); /* more than a quarter of the rays hit */
+}
+
+/* Its twin returns the first hit in tree order and must fail the same check
+ * (on a closed mesh a ray through it crosses at least two triangles, and
+ * child1 holds the farther one about half the time). */
+static void test_recursive_twin_returning_the_first_hit_is_caught(void **state)
+{
+    (void)state;
+    long hits;
+    long mismatches = recursive_mismatches(first_hit_recursive_closest, RECURSIVE_CHECK_RAYS, &hits);
+    print_message("twin (first hit, not the closer): %ld of %d rays differ from brute force\n", mismatches,
+                  2 * MESH_KIND_COUNT * RECURSIVE_CHECK_RAYS);
+    assert_true(mismatches > hits / 10);
+}
+
+/* The iterative traversals test a node's box against [t_min, closest hit
+ * so far]; the recursion against the whole ray [t_min, t_max]. With
+ * t_max = inf, whatever box passes the first passes the second (the slab
+ * test is the same float arithmetic, and its answer only grows with t_max),
+ * so every node the iterative traversals reach, the recursion reaches too:
+ * per ray, at least as many box tests and triangle tests, in either order.
+ * And fewer is the point of the pruning: over all rays, strictly more,
+ * except on the flat mesh, where every box lies in the one plane z = 0.5
+ * and so begins where the hit is: nothing lies beyond it to skip. On the
+ * overlap scene with B found first, the recursion tests A as well (the
+ * worked example of test_far_child_beyond_the_closest_hit_is_skipped). */
+static void test_recursive_traversal_visits_at_least_as_many_nodes(void **state)
+{
+    (void)state;
+    mesh m;
+    triangle_set set;
+    make_overlap_scene(&m, &set);
+    accel *a = overlap_tree(&set, (int[2]){TRI_B, TRI_D}, TRI_A);
+    hit_record hit;
+    ray_counters counters = {0};
+    assert_true(bvh_closest_hit_recursive((const bvh *)a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
+    assert_int_equal(hit.shape_id, TRI_B);
+    assert_int_equal(counters.box_tests, 3);       /* the root and both children */
+    assert_int_equal(counters.primitive_tests, 3); /* B and D, then A: the iterative ones skip A */
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set_from_mesh(&set, &m);
+        a = bvh_build(&set, BVH_SPLIT_SAH);
+        const bvh *b = (const bvh *)a;
+        pcg32 rng = pcg32_for_pixel(20261123, (uint64_t)kind);
+        ray_counters total[3] = {{0}, {0}, {0}}; /* recursive, axis sign, distance */
+        for (int i = 0; i < 4 * RECURSIVE_CHECK_RAYS; i++) {
+            ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+            ray_counters c[3] = {{0}, {0}, {0}};
+            bvh_closest_hit_recursive(b, r, &hit, &c[0]);
+            bvh_set_order(a, BVH_ORDER_AXIS_SIGN);
+            accel_closest_hit(a, r, &hit, &c[1]);
+            bvh_set_order(a, BVH_ORDER_DISTANCE);
+            accel_closest_hit(a, r, &hit, &c[2]);
+            for (int k = 1; k < 3; k++)
+                if (c[0].box_tests < c[k].box_tests || c[0].primitive_tests < c[k].primitive_tests)
+                    fail_msg("%s, ray %d: recursive %llu boxes %llu triangles, %s order %llu boxes %llu triangles",
+                             accel_check_mesh_names[kind], i, (unsigned long long)c[0].box_tests,
+                             (unsigned long long)c[0].primitive_tests, k == 1 ? "axis-sign" : "distance",
+                             (unsigned long long)c[k].box_tests, (unsigned long long)c[k].primitive_tests);
+            for (int k = 0; k < 3; k++) {
+                total[k].box_tests += c[k].box_tests;
+                total[k].primitive_tests += c[k].primitive_tests;
+            }
+        }
+        print_message("%-17s boxes, triangles per ray: recursive %6.1f %6.1f, axis-sign %6.1f %6.1f, distance "
+                      "%6.1f %6.1f\n",
+                      accel_check_mesh_names[kind], (double)total[0].box_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[0].primitive_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[1].box_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[1].primitive_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[2].box_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[2].primitive_tests / (4 * RECURSIVE_CHECK_RAYS));
+        if (kind != MESH_FLAT)
+            assert_true(total[0].box_tests > total[1].box_tests &&
+                        total[0].primitive_tests > total[1].primitive_tests);
+        accel_destroy(a);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+}
+
 /* ---- a chain: triangles growing exponentially -------------------------------- */
 
 /* 65 triangles in the planes x = 17^i, i = -36 .. 28 (17^-36 is subnormal;
@@ -637,6 +829,7 @@ static void test_empty_set_builds_and_misses(void **state)
         ray_counters counters = {0};
         assert_false(accel_closest_hit(a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
         assert_false(accel_any_hit(a, ray_from(0, 0, 0, 0, 0, 1), &counters));
+        assert_false(bvh_closest_hit_recursive((const bvh *)a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
         accel_destroy(a);
     }
     triangle_set_free(&set);
@@ -751,6 +944,9 @@ int main(void)
         cmocka_unit_test(test_far_child_beyond_the_closest_hit_is_skipped),
         cmocka_unit_test(test_shared_vertex_near_tie_is_not_culled),
         cmocka_unit_test(test_hand_built_tree_is_checked),
+        cmocka_unit_test(test_recursive_traversal_equals_brute_force),
+        cmocka_unit_test(test_recursive_twin_returning_the_first_hit_is_caught),
+        cmocka_unit_test(test_recursive_traversal_visits_at_least_as_many_nodes),
         cmocka_unit_test(test_exponentially_spaced_triangles_make_a_chain),
         cmocka_unit_test(test_slab_test_matches_chapter_03),
         cmocka_unit_test(test_empty_set_builds_and_misses),

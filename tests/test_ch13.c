@@ -19,6 +19,7 @@
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "13-production/bvh4.h"
+#include "13-production/fast_sincos.h"
 #include "13-production/flat.h"
 #include "13-production/path_tracer_wide.h"
 #include "13-production/spawn_avx.h"
@@ -1452,6 +1453,65 @@ static void test_spawn_avx_is_ray_h_bit_for_bit(void **state)
 }
 
 
+/* ---- sin and cos of an angle in turns ----------------------------------------
+ * fast_sincos_turns(u) against sin and cos of 2 pi u in double: within
+ * FAST_SINCOS_TURNS_ULPS units in the last place (the fit's 2.1, measured
+ * over every float in [0, 1), plus rounding headroom), on every 101st float
+ * in [0, 1], and exactly 0 and +-1 at the quarter turns. The twin negates
+ * the cosine in the third quarter and must fail the same check. */
+enum { FAST_SINCOS_TURNS_ULPS = 3 };
+
+typedef void (*sincos_fn)(float u, float *s, float *c);
+
+static void sincos_quarter_two_wrong(float u, float *s, float *c)
+{
+    fast_sincos_turns(u, s, c);
+    if (u > 0.375f && u < 0.625f)
+        *c = -*c;
+}
+
+/* in units of the float spacing at the exact value */
+static double ulps_from(float got, double exact)
+{
+    double spacing = nextafterf(fabsf((float)exact), INFINITY) - fabsf((float)exact);
+    return fabs((double)got - exact) / spacing;
+}
+
+/* The largest error in ulps over the floats checked; 1e30 for a wrong
+ * quarter turn. */
+static double sincos_worst_ulps(sincos_fn f)
+{
+    double worst = 0.0;
+    for (uint32_t bits = 0; bits <= 0x3f800000u; bits += 101) {
+        float u;
+        memcpy(&u, &bits, sizeof u);
+        float s, c;
+        f(u, &s, &c);
+        double turns = 4.0 * u;
+        if (turns == floor(turns)) { /* a quarter turn: exact values */
+            int q = (int)turns;
+            float want_s = q == 1 ? 1.0f : q == 3 ? -1.0f : 0.0f;
+            float want_c = q == 0 || q == 4 ? 1.0f : q == 2 ? -1.0f : 0.0f;
+            if (s != want_s || c != want_c)
+                return 1e30;
+            continue;
+        }
+        worst = fmax(worst, fmax(ulps_from(s, sin(2.0 * PI * u)), ulps_from(c, cos(2.0 * PI * u))));
+    }
+    return worst;
+}
+
+static void test_fast_sincos_turns_is_within_a_few_ulps(void **state)
+{
+    (void)state;
+    double worst = sincos_worst_ulps(fast_sincos_turns);
+    print_message("fast_sincos_turns: at most %.2f ulp from sin and cos of 2 pi u\n", worst);
+    assert_true(worst <= FAST_SINCOS_TURNS_ULPS);
+    double twin = sincos_worst_ulps(sincos_quarter_two_wrong);
+    print_message("twin (cosine negated in the third quarter): %.3g ulp\n", twin);
+    assert_true(twin > FAST_SINCOS_TURNS_ULPS);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1477,6 +1537,7 @@ int main(void)
         cmocka_unit_test(test_eight_paths_agree_with_chapter_09),
         cmocka_unit_test(test_eight_paths_same_bits_for_threads_and_lanes),
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
+        cmocka_unit_test(test_fast_sincos_turns_is_within_a_few_ulps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "13-production/fast_sincos.h"
 #include "13-production/flat.h"
 #include "13-production/walls.h"
 #include "08-monte-carlo/sampling.h"
@@ -389,7 +390,10 @@ static int roll_bounce(lane *l, const path_tracer *pt, vertex_lanes *L, int k)
 static int bounce_math_lane(vertex_lanes *L, int k)
 {
 #define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
-    vec3 n = AT(n), local = sample_uniform_hemisphere(vec2_make(L->u_x[k], L->u_y[k]));
+    /* sample_uniform_hemisphere(), its azimuth by fast_sincos_turns() as the AVX code computes it */
+    float z = L->u_x[k], r = sqrtf(fmaxf(1.0f - z * z, 0.0f)), sin_phi, cos_phi;
+    fast_sincos_turns(L->u_y[k], &sin_phi, &cos_phi);
+    vec3 n = AT(n), local = vec3_make(r * cos_phi, r * sin_phi, z);
     vec3 wi = frame_to_world(n, local);
     /* bsdf_eval() of a diffuse surface */
     vec3 f = vec3_dot(n, wi) <= 0.0f || vec3_dot(n, AT(wo)) <= 0.0f ? vec3_splat(0.0f)
@@ -407,15 +411,15 @@ static int bounce_math_lane(vertex_lanes *L, int k)
 
 #if WIDE_HAVE_AVX
 /* The same for the lanes of `lanes`, eight per AVX instruction, operation
- * for operation: sample_uniform_hemisphere() with chapter 08's
- * sincos_turns(), frame_to_world() with vec3_basis(), bsdf_eval(). */
+ * for operation: sample_uniform_hemisphere() with fast_sincos_turns(),
+ * frame_to_world() with vec3_basis(), bsdf_eval(). */
 SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
 {
     const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), sign_bit = _mm256_set1_ps(-0.0f);
     /* sample_uniform_hemisphere: z = u_x, r = sqrt(max(0, 1 - z^2)) */
     __m256 z = _mm256_load_ps(L->u_x);
     __m256 r = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(one, _mm256_mul_ps(z, z)), zero));
-    /* sincos_turns(u_y) */
+    /* fast_sincos_turns(u_y) */
     __m256 u = _mm256_load_ps(L->u_y);
     __m256 q = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(4.0f), u),
                                                                      _mm256_set1_ps(0.5f))));

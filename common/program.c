@@ -23,6 +23,11 @@ void program_note_effects(const effects_report *e)
     snprintf(noted_effects + used, sizeof noted_effects - used, "]");
 }
 
+/* The structure the rays were traced through, for the report ("" until noted). */
+static char noted_accel[64];
+
+void program_note_accel(const char *name) { snprintf(noted_accel, sizeof noted_accel, "%s", name); }
+
 void program_warn(const char *label, const scene_desc *d, int line, int column, const char *format, ...)
 {
     char where[SCENE_PATH_SIZE + 32];
@@ -115,10 +120,12 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
         fprintf(stderr, "%s: %s\n", label, err);
         return 1;
     }
-    char counters_path[4096], extra[512];
+    char counters_path[4096], extra[640], accel_note[96] = "";
     counters_path_for_image(opts->out, counters_path, sizeof counters_path);
-    snprintf(extra, sizeof extra, "\"program\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n  \"spp\": %d%s%s", label,
-             cam->width, cam->height, opts->spp, noted_effects[0] ? ",\n  " : "", noted_effects);
+    if (noted_accel[0] != '\0')
+        snprintf(accel_note, sizeof accel_note, ",\n  \"accel\": \"%s\"", noted_accel);
+    snprintf(extra, sizeof extra, "\"program\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n  \"spp\": %d%s%s%s",
+             label, cam->width, cam->height, opts->spp, accel_note, noted_effects[0] ? ",\n  " : "", noted_effects);
     if (!counters_write_json(counters_path, &stats.counters, stats.seconds, extra, err, sizeof err)) {
         fprintf(stderr, "%s: %s\n", label, err);
         return 1;
@@ -127,6 +134,8 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
         printf("%s: %dx%d, %d spp, %d threads, %.3f s -> %s\n", label, cam->width, cam->height, opts->spp,
                opts->threads, stats.seconds, opts->out);
         counters_print(stdout, &stats.counters, stats.seconds);
+        if (noted_accel[0] != '\0')
+            printf("rays traced through: %s\n", noted_accel);
         printf("counters -> %s\n", counters_path);
     }
     if (stats_out != NULL)

@@ -138,6 +138,7 @@ int main(int argc, char **argv)
     scene_desc_free(&desc);
     if (accel_builder != pt_accel_builder_named("bvh"))
         pt_scene_use_accel(&sc, accel_builder, NULL);
+    program_note_accel(sc.bvh->stats.name);
     pt = path_tracer_defaults(&sc);
     pt.effects = effects;
     pt.integrator = chosen;

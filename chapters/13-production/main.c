@@ -63,6 +63,7 @@ static int render(cli_options *opts, const production_flags *f)
     scene_desc_free(&desc);
     bool walls = strcmp(f->walls, "on") == 0;
     pt_scene_use_accel(&sc, walls ? production_scene_accel : production_scene_accel_no_walls, &sc);
+    program_note_accel(sc.bvh->stats.name);
     path_tracer pt = path_tracer_defaults(&sc);
     pt.effects = effects_decide(&e, EFFECT_ALL);
     pt_russian_roulette_parse(f->rr, &pt.russian_roulette);

@@ -33,6 +33,7 @@ struct walls_accel {
     triangle_set occluder_triangles;
     accel *occluders; /* of every triangle that is not a wall; NULL when the scene has none */
     bool off;         /* walls_accel_build(..., false): every shadow ray meets every triangle */
+    char name[64];    /* "walls over <the structure's name>" */
 };
 
 /* At most this many triangles: no tree (production_accel_build). */
@@ -400,6 +401,8 @@ accel *walls_accel_build(const triangle_set *set, const pt_scene *scene, bool on
     w->base.stats = w->all->stats;
     w->off = !on;
     find_walls(w, scene);
+    snprintf(w->name, sizeof w->name, "%s%s", w->wall_group_count > 0 && on ? "walls over " : "", w->all->stats.name);
+    w->base.stats.name = w->name;
     return &w->base;
 }
 

@@ -34,6 +34,7 @@ struct walls_accel {
     accel *occluders; /* of every triangle that is not a wall; NULL when the scene has none */
     bool off;         /* walls_accel_build(..., false): every shadow ray meets every triangle */
     char name[64];    /* "walls over <the structure's name>" */
+    walls_inner_builder inner; /* what `all` and `occluders` are */
 };
 
 /* At most this many triangles: no tree (production_accel_build). */
@@ -233,7 +234,7 @@ static void find_walls(walls_accel *sc, const pt_scene *scene)
         sc->wall_count = sc->wall_plane_count = sc->wall_group_count = 0;
     } else {
         triangle_set_subset(&sc->occluder_triangles, sc->base.set, keep);
-        sc->occluders = production_accel_build(&sc->occluder_triangles);
+        sc->occluders = sc->inner(&sc->occluder_triangles);
     }
     free(keep);
 }
@@ -394,10 +395,20 @@ bool walls_is(const accel *a) { return a != NULL && a->ops == &walls_ops; }
 
 accel *walls_accel_build(const triangle_set *set, const pt_scene *scene, bool on)
 {
+    return walls_accel_build_over(set, scene, on, production_accel_build);
+}
+
+accel *walls_accel_build_over(const triangle_set *set, const pt_scene *scene, bool on, walls_inner_builder inner)
+{
     walls_accel *w = memory_allocate(1, sizeof *w);
     w->base.ops = &walls_ops;
     w->base.set = set;
-    w->all = production_accel_build(set);
+    w->inner = inner;
+    w->all = inner(set);
+    if (w->all == NULL) { /* an outside library's builder may fail */
+        free(w);
+        return NULL;
+    }
     w->base.stats = w->all->stats;
     w->off = !on;
     find_walls(w, scene);

@@ -41,6 +41,11 @@ typedef struct walls_accel walls_accel;
  * side) unless `on` is false. Closest hits go to the structure of all
  * triangles; any-hit queries skip the walls where they cannot block. */
 accel *walls_accel_build(const triangle_set *set, const pt_scene *scene, bool on);
+/* The same over another structure: `inner` builds both the structure of
+ * all triangles and that of the occluders (the Embree bench passes
+ * Embree's, to compare kernels with the walls in both). */
+typedef accel *(*walls_inner_builder)(const triangle_set *set);
+accel *walls_accel_build_over(const triangle_set *set, const pt_scene *scene, bool on, walls_inner_builder inner);
 /* chapter 09's pt_accel_builder form of it, walls on; context: the pt_scene. */
 accel *production_scene_accel(const triangle_set *set, const void *scene);
 /* ... and walls off: the production structure alone. */

@@ -126,29 +126,60 @@ static bool check_output_path(const char *path, char *err, size_t err_size)
     return check_directory("--out", path, dir, err, err_size);
 }
 
-static bool set_extra(const cli_flag *f, const char *value, char *err, size_t err_size)
+const char *cli_choice_name(const cli_choice *c)
+{
+    return c->index >= 0 ? c->names[c->index] : NULL;
+}
+
+/* "--flag: unknown 'x' (a, b, c)": the one message every choice flag gives. */
+static bool set_choice(const cli_flag *f, const char *value, char *err, size_t err_size)
+{
+    cli_choice *c = f->value;
+    for (int k = 0; c->names[k] != NULL; k++)
+        if (strcmp(value, c->names[k]) == 0) {
+            c->index = k;
+            return true;
+        }
+    int n = snprintf(err, err_size, "%s: unknown '%s' (", f->name, value);
+    for (int k = 0; c->names[k] != NULL && n >= 0 && (size_t)n < err_size; k++)
+        n += snprintf(err + n, err_size - (size_t)n, "%s%s", k > 0 ? ", " : "", c->names[k]);
+    if (n >= 0 && (size_t)n < err_size)
+        snprintf(err + n, err_size - (size_t)n, ")");
+    return false;
+}
+
+static bool set_int(const cli_flag *f, const char *value, char *err, size_t err_size)
 {
     bool ranged = !(f->min == 0 && f->max == 0);
+    if (parse_int(value, ranged ? (long)f->min : INT_MIN, ranged ? (long)f->max : INT_MAX, f->value))
+        return true;
+    if (ranged)
+        snprintf(err, err_size, "%s: expected a whole number from %.0f to %.0f, got '%s'", f->name, f->min, f->max,
+                 value);
+    else
+        snprintf(err, err_size, "%s: expected a whole number, got '%s'", f->name, value);
+    return false;
+}
+
+static bool set_float(const cli_flag *f, const char *value, char *err, size_t err_size)
+{
+    bool ranged = !(f->min == 0 && f->max == 0);
+    if (parse_float(value, ranged ? f->min : -HUGE_VAL, ranged ? f->max : HUGE_VAL, f->value))
+        return true;
+    if (ranged)
+        snprintf(err, err_size, "%s: expected a number from %g to %g, got '%s'", f->name, f->min, f->max, value);
+    else
+        snprintf(err, err_size, "%s: expected a finite number, got '%s'", f->name, value);
+    return false;
+}
+
+static bool set_extra(const cli_flag *f, const char *value, char *err, size_t err_size)
+{
     switch (f->kind) {
     case CLI_INT:
-        if (!parse_int(value, ranged ? (long)f->min : INT_MIN, ranged ? (long)f->max : INT_MAX, f->value)) {
-            if (ranged)
-                snprintf(err, err_size, "%s: expected a whole number from %.0f to %.0f, got '%s'", f->name, f->min, f->max,
-                         value);
-            else
-                snprintf(err, err_size, "%s: expected a whole number, got '%s'", f->name, value);
-            return false;
-        }
-        return true;
+        return set_int(f, value, err, err_size);
     case CLI_FLOAT:
-        if (!parse_float(value, ranged ? f->min : -HUGE_VAL, ranged ? f->max : HUGE_VAL, f->value)) {
-            if (ranged)
-                snprintf(err, err_size, "%s: expected a number from %g to %g, got '%s'", f->name, f->min, f->max, value);
-            else
-                snprintf(err, err_size, "%s: expected a finite number, got '%s'", f->name, value);
-            return false;
-        }
-        return true;
+        return set_float(f, value, err, err_size);
     case CLI_STRING:
         *(const char **)f->value = value;
         return true;
@@ -161,10 +192,108 @@ static bool set_extra(const cli_flag *f, const char *value, char *err, size_t er
             return false;
         *(const char **)f->value = value;
         return true;
+    case CLI_CHOICE:
+        return set_choice(f, value, err, err_size);
     case CLI_BOOL:
         break;
     }
     return false;
+}
+
+/* One of the flags every program has, given its value. */
+static bool set_core(cli_options *opts, const char *name, const char *value, char *err, size_t err_size)
+{
+    if (strcmp(name, "--width") == 0 || strcmp(name, "--height") == 0) {
+        bool width = name[2] == 'w';
+        *(width ? &opts->width_given : &opts->height_given) = true;
+        if (parse_int(value, 1, CLI_MAX_IMAGE_SIDE, width ? &opts->width : &opts->height))
+            return true;
+        snprintf(err, err_size, "%s: expected a whole number of pixels from 1 to %d, got '%s'", name,
+                 CLI_MAX_IMAGE_SIDE, value);
+    } else if (strcmp(name, "--spp") == 0) {
+        if (parse_int(value, 1, CLI_MAX_SPP, &opts->spp))
+            return opts->spp_given = true;
+        snprintf(err, err_size, "--spp: expected samples per pixel from 1 to %d, got '%s'", CLI_MAX_SPP, value);
+    } else if (strcmp(name, "--scene") == 0) {
+        if (value[0] != '\0') {
+            opts->scene = value;
+            return true;
+        }
+        snprintf(err, err_size, "--scene: expected a file name");
+    } else if (strcmp(name, "--explain") == 0) {
+        if (parse_pixel(value, &opts->explain_x, &opts->explain_y))
+            return opts->explain = true;
+        snprintf(err, err_size, "--explain: expected a pixel as X,Y (two whole numbers >= 0), got '%s'", value);
+    } else if (strcmp(name, "--threads") == 0) {
+        if (parse_int(value, 1, CLI_MAX_THREADS, &opts->threads))
+            return true;
+        snprintf(err, err_size, "--threads: expected a thread count from 1 to %d, got '%s'", CLI_MAX_THREADS, value);
+    } else if (strcmp(name, "--seed") == 0) {
+        if (parse_u64(value, &opts->seed))
+            return true;
+        snprintf(err, err_size, "--seed: expected a non-negative whole number, got '%s'", value);
+    } else if (strcmp(name, "--exposure") == 0) {
+        if (parse_float(value, -64.0, 64.0, &opts->exposure))
+            return true;
+        snprintf(err, err_size, "--exposure: expected stops from -64 to 64, got '%s'", value);
+    } else { /* --out */
+        opts->out = value;
+        return true;
+    }
+    return false;
+}
+
+static bool is_core_flag(const char *name)
+{
+    static const char *const core[] = {"--width", "--height", "--spp",   "--seed",    "--threads",
+                                       "--out",   "--exposure", "--scene", "--explain", NULL};
+    for (int k = 0; core[k] != NULL; k++)
+        if (strcmp(name, core[k]) == 0)
+            return true;
+    return false;
+}
+
+/* The chapter's flag called `name`: a switch (CLI_BOOL) or one that takes a value. */
+static const cli_flag *find_extra(const cli_spec *spec, const char *name, bool is_switch)
+{
+    for (int k = 0; k < spec->extra_count; k++)
+        if ((spec->extras[k].kind == CLI_BOOL) == is_switch && strcmp(name, spec->extras[k].name) == 0)
+            return &spec->extras[k];
+    return NULL;
+}
+
+/* One flag that takes a value, "--name value" or "--name=value", starting
+ * at argv[*i]; *i moves past its value. */
+static bool parse_valued(int argc, char **argv, int *i, const cli_spec *spec, cli_options *opts, char *err,
+                         size_t err_size)
+{
+    const char *arg = argv[*i];
+    if (strncmp(arg, "--", 2) != 0) {
+        snprintf(err, err_size, "unexpected argument '%s' (flags start with --)", arg);
+        return false;
+    }
+    char name[64];
+    const char *value = NULL;
+    const char *equals = strchr(arg, '=');
+    if (equals != NULL) {
+        snprintf(name, sizeof name, "%.*s", (int)(equals - arg), arg);
+        value = equals + 1;
+    } else {
+        snprintf(name, sizeof name, "%s", arg);
+    }
+    const cli_flag *extra = find_extra(spec, name, false);
+    if (extra == NULL && !is_core_flag(name)) {
+        snprintf(err, err_size, "unknown flag '%s'", name);
+        return false;
+    }
+    if (value == NULL) {
+        if (*i + 1 >= argc) {
+            snprintf(err, err_size, "%s needs a value", name);
+            return false;
+        }
+        value = argv[++*i];
+    }
+    return extra != NULL ? set_extra(extra, value, err, err_size) : set_core(opts, name, value, err, err_size);
 }
 
 cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *opts, char *err, size_t err_size)
@@ -177,114 +306,55 @@ cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *o
             opts->quiet = true;
             continue;
         }
-        bool handled = false;
-        for (int k = 0; k < spec->extra_count; k++) {
-            const cli_flag *f = &spec->extras[k];
-            if (f->kind == CLI_BOOL && strcmp(arg, f->name) == 0) {
-                *(bool *)f->value = true;
-                handled = true;
-            }
-        }
-        if (handled)
-            continue;
-
-        /* Every other flag takes a value: "--name value" or "--name=value". */
-        char name[64];
-        const char *value = NULL;
-        const char *equals = strchr(arg, '=');
-        if (strncmp(arg, "--", 2) != 0) {
-            snprintf(err, err_size, "unexpected argument '%s' (flags start with --)", arg);
+        const cli_flag *on_off = find_extra(spec, arg, true);
+        if (on_off != NULL)
+            *(bool *)on_off->value = true;
+        else if (!parse_valued(argc, argv, &i, spec, opts, err, err_size))
             return CLI_ERROR;
-        }
-        if (equals != NULL) {
-            snprintf(name, sizeof name, "%.*s", (int)(equals - arg), arg);
-            value = equals + 1;
-        } else {
-            snprintf(name, sizeof name, "%s", arg);
-        }
-
-        const cli_flag *extra = NULL;
-        for (int k = 0; k < spec->extra_count; k++)
-            if (spec->extras[k].kind != CLI_BOOL && strcmp(name, spec->extras[k].name) == 0)
-                extra = &spec->extras[k];
-        bool core = strcmp(name, "--width") == 0 || strcmp(name, "--height") == 0 || strcmp(name, "--spp") == 0 ||
-                    strcmp(name, "--seed") == 0 || strcmp(name, "--threads") == 0 || strcmp(name, "--out") == 0 ||
-                    strcmp(name, "--exposure") == 0 || strcmp(name, "--scene") == 0 ||
-                    strcmp(name, "--explain") == 0;
-        if (!core && extra == NULL) {
-            snprintf(err, err_size, "unknown flag '%s'", name);
-            return CLI_ERROR;
-        }
-        if (value == NULL) {
-            if (i + 1 >= argc) {
-                snprintf(err, err_size, "%s needs a value", name);
-                return CLI_ERROR;
-            }
-            value = argv[++i];
-        }
-
-        if (extra != NULL) {
-            if (!set_extra(extra, value, err, err_size))
-                return CLI_ERROR;
-        } else if (strcmp(name, "--width") == 0 || strcmp(name, "--height") == 0) {
-            int *dst = name[2] == 'w' ? &opts->width : &opts->height;
-            *(name[2] == 'w' ? &opts->width_given : &opts->height_given) = true;
-            if (!parse_int(value, 1, CLI_MAX_IMAGE_SIDE, dst)) {
-                snprintf(err, err_size, "%s: expected a whole number of pixels from 1 to %d, got '%s'", name,
-                         CLI_MAX_IMAGE_SIDE, value);
-                return CLI_ERROR;
-            }
-        } else if (strcmp(name, "--spp") == 0) {
-            if (!parse_int(value, 1, CLI_MAX_SPP, &opts->spp)) {
-                snprintf(err, err_size, "--spp: expected samples per pixel from 1 to %d, got '%s'", CLI_MAX_SPP, value);
-                return CLI_ERROR;
-            }
-            opts->spp_given = true;
-        } else if (strcmp(name, "--scene") == 0) {
-            if (value[0] == '\0') {
-                snprintf(err, err_size, "--scene: expected a file name");
-                return CLI_ERROR;
-            }
-            opts->scene = value;
-        } else if (strcmp(name, "--explain") == 0) {
-            if (!parse_pixel(value, &opts->explain_x, &opts->explain_y)) {
-                snprintf(err, err_size, "--explain: expected a pixel as X,Y (two whole numbers >= 0), got '%s'", value);
-                return CLI_ERROR;
-            }
-            opts->explain = true;
-        } else if (strcmp(name, "--threads") == 0) {
-            if (!parse_int(value, 1, CLI_MAX_THREADS, &opts->threads)) {
-                snprintf(err, err_size, "--threads: expected a thread count from 1 to %d, got '%s'", CLI_MAX_THREADS, value);
-                return CLI_ERROR;
-            }
-        } else if (strcmp(name, "--seed") == 0) {
-            if (!parse_u64(value, &opts->seed)) {
-                snprintf(err, err_size, "--seed: expected a non-negative whole number, got '%s'", value);
-                return CLI_ERROR;
-            }
-        } else if (strcmp(name, "--exposure") == 0) {
-            if (!parse_float(value, -64.0, 64.0, &opts->exposure)) {
-                snprintf(err, err_size, "--exposure: expected stops from -64 to 64, got '%s'", value);
-                return CLI_ERROR;
-            }
-        } else { /* --out */
-            opts->out = value;
-        }
     }
     if (!check_output_path(opts->out, err, err_size))
         return CLI_ERROR;
     return CLI_OK;
 }
 
-static const char *kind_metavar(const cli_flag *f)
+/* The left column of a chapter flag's help line: its name and what its value
+ * looks like; a choice without a metavar shows its names, "a|b|c". */
+static void flag_usage(const cli_flag *f, char *out, size_t size)
 {
-    if (f->metavar != NULL)
-        return f->metavar;
-    return f->kind == CLI_INT      ? "N"
-           : f->kind == CLI_FLOAT  ? "X"
-           : f->kind == CLI_STRING ? "TEXT"
-           : f->kind == CLI_DIR    ? "DIR"
-                                   : "";
+    int n = snprintf(out, size, "%s ", f->name);
+    if (f->kind == CLI_CHOICE && f->metavar == NULL) {
+        const cli_choice *c = f->value;
+        for (int k = 0; c->names[k] != NULL && n >= 0 && (size_t)n < size; k++)
+            n += snprintf(out + n, size - (size_t)n, "%s%s", k > 0 ? "|" : "", c->names[k]);
+        return;
+    }
+    const char *metavar = f->metavar != NULL ? f->metavar
+                          : f->kind == CLI_INT    ? "N"
+                          : f->kind == CLI_FLOAT  ? "X"
+                          : f->kind == CLI_STRING ? "TEXT"
+                          : f->kind == CLI_DIR    ? "DIR"
+                          : f->kind == CLI_CHOICE ? "NAME"
+                                                  : "";
+    snprintf(out + n, size - (size_t)n, "%s", metavar);
+}
+
+/* Under a choice flag's help line: each name with its note, or, when the
+ * usage column did not already show them, the names. */
+static void print_choices(const cli_flag *f)
+{
+    const cli_choice *c = f->value;
+    if (c->notes != NULL) {
+        int width = 0;
+        for (int k = 0; c->names[k] != NULL; k++)
+            width = (int)strlen(c->names[k]) > width ? (int)strlen(c->names[k]) : width;
+        for (int k = 0; c->names[k] != NULL; k++)
+            printf("                     %-*s  %s\n", width, c->names[k], c->notes[k]);
+    } else if (f->metavar != NULL) {
+        printf("                   one of:");
+        for (int k = 0; c->names[k] != NULL; k++)
+            printf("%s %s", k > 0 ? "," : "", c->names[k]);
+        printf("\n");
+    }
 }
 
 void cli_print_help(const cli_spec *spec, const cli_options *d)
@@ -305,14 +375,15 @@ void cli_print_help(const cli_spec *spec, const cli_options *d)
     printf("                   Russian roulette decision -- instead of rendering the image\n");
     printf("  --quiet          no progress line and no report\n");
     printf("  --help           this text\n");
-    if (spec->extra_count > 0) {
+    if (spec->extra_count > 0)
         printf("\nflags of %s:\n", spec->program);
-        for (int k = 0; k < spec->extra_count; k++) {
-            const cli_flag *f = &spec->extras[k];
-            char left[64];
-            snprintf(left, sizeof left, "%s %s", f->name, kind_metavar(f));
-            printf("  %-16s %s\n", left, f->help);
-        }
+    for (int k = 0; k < spec->extra_count; k++) {
+        const cli_flag *f = &spec->extras[k];
+        char left[256];
+        flag_usage(f, left, sizeof left);
+        printf("  %-16s %s\n", left, f->help);
+        if (f->kind == CLI_CHOICE)
+            print_choices(f);
     }
 }
 

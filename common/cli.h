@@ -12,6 +12,12 @@
  *   cli_spec spec = {"01-ray-casting", "Ray casting (lecture 13) ...", extras, 1};
  *   cli_parse_or_exit(argc, argv, &spec, &opts);
  *
+ * A flag whose value is one of a few names is a CLI_CHOICE:
+ *   static const char *const modes[] = {"fixed", "throughput", NULL};
+ *   cli_choice rr = {modes, NULL, 0};        (default: "fixed")
+ *   {"--rr", CLI_CHOICE, &rr, NULL, "Russian roulette", 0, 0}
+ *   ... rr.index is 0 or 1 after parsing; cli_choice_name(&rr) is the name.
+ *
  * A bad flag or value prints one line naming it and exits with status 2.
  */
 #ifndef CLI_H
@@ -45,14 +51,30 @@ typedef struct {
 
 /* CLI_DIR: a directory that must exist and be writable when the flags are
  * read (an output directory for data files), so a typo fails at once rather
- * than after the experiment it was to hold. */
-typedef enum { CLI_INT, CLI_FLOAT, CLI_STRING, CLI_BOOL, CLI_DIR } cli_kind;
+ * than after the experiment it was to hold.
+ * CLI_CHOICE: one of a list of names (a cli_choice). Anything else is
+ * refused with "--flag: unknown 'x' (a, b, c)", here, for every program. */
+typedef enum { CLI_INT, CLI_FLOAT, CLI_STRING, CLI_BOOL, CLI_DIR, CLI_CHOICE } cli_kind;
+
+/* What a CLI_CHOICE flag points to. The names are the only accepted
+ * values; index is the default before parsing (-1: none, for "not given")
+ * and the position of the name given after. notes, if not NULL, has one
+ * line per name, which --help prints under the flag. */
+typedef struct {
+    const char *const *names; /* NULL-terminated */
+    const char *const *notes; /* NULL, or as many as names */
+    int index;
+} cli_choice;
+
+/* names[index], or NULL when index is -1. */
+const char *cli_choice_name(const cli_choice *c);
 
 typedef struct {
     const char *name;   /* "--max-depth" */
     cli_kind kind;
-    void *value;        /* int *, float *, const char ** (STRING, DIR), bool * */
-    const char *metavar;/* "N" in the help text; NULL for CLI_BOOL */
+    void *value;        /* int *, float *, const char ** (STRING, DIR), bool *, cli_choice * */
+    const char *metavar;/* "N" in the help text; NULL for CLI_BOOL, and for
+                         * CLI_CHOICE to show the names as "a|b|c" */
     const char *help;
     double min, max;    /* accepted range for numbers (inclusive); both 0: any */
 } cli_flag;

@@ -1,10 +1,10 @@
 #include "counters.h"
 
-#include <errno.h>
+#include "atomic_file.h"
+
 #include <inttypes.h>
 #include <stdio.h>
 #include <string.h>
-#include <unistd.h>
 
 void counters_add(ray_counters *into, const ray_counters *from)
 {
@@ -55,17 +55,10 @@ void counters_path_for_image(const char *image_path, char *out, size_t out_size)
 bool counters_write_json(const char *path, const ray_counters *c, double seconds, const char *extra, char *err,
                          size_t err_size)
 {
-    char temp[4096];
-    if (snprintf(temp, sizeof temp, "%s.tmp.%ld", path, (long)getpid()) >= (int)sizeof temp) {
-        snprintf(err, err_size, "%s: path too long", path);
+    atomic_file out;
+    if (!atomic_file_open(&out, path, err, err_size))
         return false;
-    }
-    FILE *f = fopen(temp, "w");
-    if (f == NULL) {
-        snprintf(err, err_size, "cannot write '%s': %s", path, strerror(errno));
-        return false;
-    }
-    fprintf(f,
+    fprintf(out.stream,
             "{\n  \"camera_rays\": %" PRIu64 ",\n  \"shadow_rays\": %" PRIu64 ",\n  \"shadow_rays_inside_walls\": %" PRIu64
             ",\n  \"reflection_rays\": %" PRIu64
             ",\n  \"refraction_rays\": %" PRIu64 ",\n  \"indirect_rays\": %" PRIu64 ",\n  \"box_tests\": %" PRIu64
@@ -73,19 +66,5 @@ bool counters_write_json(const char *path, const ray_counters *c, double seconds
             ",\n  \"seconds\": %.6f%s%s\n}\n",
             c->camera_rays, c->shadow_rays, c->shadow_rays_inside_walls, c->reflection_rays, c->refraction_rays,
             c->indirect_rays, c->box_tests, c->primitive_tests, c->nonfinite_samples, seconds, extra != NULL ? ",\n  " : "", extra != NULL ? extra : "");
-    int failure = 0;
-    if (fflush(f) != 0 || ferror(f))
-        failure = errno ? errno : EIO;
-    if (failure == 0 && fsync(fileno(f)) != 0)
-        failure = errno;
-    if (fclose(f) != 0 && failure == 0)
-        failure = errno;
-    if (failure == 0 && rename(temp, path) != 0)
-        failure = errno;
-    if (failure != 0) {
-        unlink(temp);
-        snprintf(err, err_size, "cannot write '%s': %s", path, strerror(failure));
-        return false;
-    }
-    return true;
+    return atomic_file_commit(&out, err, err_size);
 }

@@ -2,10 +2,9 @@
  *
  * Structure:
  *   1. image_make / image_free.
- *   2. Safe output: every file is written to "<path>.tmp.<pid>.<n>" in the
- *      target's own directory (so rename(2) cannot cross a filesystem), then
- *      fsync'ed and renamed over the target. Any failure unlinks the
- *      temporary file, so a reader sees the old file or the new one, never a
+ *   2. Safe output: every file goes through atomic_file.h (a temporary file
+ *      beside the target, fsync'ed and renamed over it; any failure unlinks
+ *      it), so a reader sees the old file or the new one, never a
  *      half-written one.
  *   3. EXR (the data) through the OpenEXR Core C API. We do our own file I/O
  *      (custom read/write callbacks on a descriptor we opened) for two
@@ -19,11 +18,12 @@
  */
 #include "image.h"
 
+#include "atomic_file.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
-#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -93,80 +93,6 @@ static bool image_is_writable(const image *img)
 {
     return img != NULL && img->rgb != NULL && img->width > 0 && img->height > 0 &&
            img->width <= INT32_MAX / PIXEL_BYTES;
-}
-
-/* ---- write to a temporary name, rename into place ---------------------- */
-
-typedef struct {
-    const char *path; /* the final name */
-    char *temp_path;  /* where the bytes go until commit */
-    int fd;
-} pending_file;
-
-/* Makes temporary names unique between threads of this process; the pid
- * separates processes, O_EXCL catches anything else. */
-static atomic_uint temp_counter;
-
-/* Creates the temporary file beside path. We don't use mkstemp: it creates
- * the file with mode 0600, and the finished image should get the usual
- * 0666 & ~umask like any other file the program writes. */
-static bool pending_open(pending_file *f, const char *path, char *err, size_t err_size)
-{
-    size_t size = strlen(path) + 64;
-    f->path = path;
-    f->fd = -1;
-    f->temp_path = malloc(size);
-    if (f->temp_path == NULL) {
-        set_error(err, err_size, "cannot write '%s': %s", path, strerror(ENOMEM));
-        return false;
-    }
-    for (int attempt = 0; attempt < 100; attempt++) {
-        unsigned n = atomic_fetch_add(&temp_counter, 1u);
-        snprintf(f->temp_path, size, "%s.tmp.%ld.%u", path, (long)getpid(), n);
-        f->fd = open(f->temp_path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-        if (f->fd >= 0)
-            return true;
-        if (errno != EEXIST)
-            break;
-    }
-    set_error(err, err_size, "cannot write '%s': %s", path, strerror(errno));
-    free(f->temp_path);
-    f->temp_path = NULL;
-    return false;
-}
-
-/* Gives up: the temporary file disappears, the target is untouched. */
-static void pending_abandon(pending_file *f)
-{
-    if (f->fd >= 0)
-        close(f->fd);
-    f->fd = -1;
-    unlink(f->temp_path);
-    free(f->temp_path);
-    f->temp_path = NULL;
-}
-
-/* fsync before rename: otherwise a crash soon after could leave the new name
- * pointing at a file whose data never reached the disk. close() is checked
- * because some filesystems report write errors only there. */
-static bool pending_commit(pending_file *f, char *err, size_t err_size)
-{
-    int failure = 0;
-    if (fsync(f->fd) != 0)
-        failure = errno;
-    if (close(f->fd) != 0 && failure == 0)
-        failure = errno;
-    f->fd = -1;
-    if (failure == 0 && rename(f->temp_path, f->path) != 0)
-        failure = errno;
-    if (failure != 0) {
-        set_error(err, err_size, "cannot write '%s': %s", f->path, strerror(failure));
-        pending_abandon(f);
-        return false;
-    }
-    free(f->temp_path);
-    f->temp_path = NULL;
-    return true;
 }
 
 /* ---- OpenEXR: our stream and error handler ------------------------------ */
@@ -371,11 +297,11 @@ bool image_write_exr(const image *img, const char *path, char *err, size_t err_s
         set_error(err, err_size, "cannot write '%s': the image is empty or too wide", path);
         return false;
     }
-    pending_file out;
-    if (!pending_open(&out, path, err, err_size))
+    atomic_file out;
+    if (!atomic_file_open(&out, path, err, err_size))
         return false;
 
-    exr_stream stream = {.fd = out.fd, .message = ""};
+    exr_stream stream = {.fd = fileno(out.stream), .message = ""};
     exr_context_initializer_t init = exr_initializer(&stream);
     exr_context_t ctxt = NULL;
     /* With a custom write_fn the name is only used in messages and the mode
@@ -397,10 +323,10 @@ bool image_write_exr(const image *img, const char *path, char *err, size_t err_s
     exr_current_stream = NULL;
     if (rv != EXR_ERR_SUCCESS) {
         set_error(err, err_size, "cannot write '%s': %s", path, exr_stream_reason(&stream, rv));
-        pending_abandon(&out);
+        atomic_file_abandon(&out);
         return false;
     }
-    return pending_commit(&out, err, err_size);
+    return atomic_file_commit(&out, err, err_size);
 }
 
 /* ---- EXR reading ------------------------------------------------------- */
@@ -624,24 +550,24 @@ bool image_write_png(const image *img, const char *path, float exposure_stops, c
     for (size_t i = 0; i < count; i++)
         bytes[i] = preview_byte(img->rgb[i], scale);
 
-    pending_file out;
-    if (!pending_open(&out, path, err, err_size)) {
+    atomic_file out;
+    if (!atomic_file_open(&out, path, err, err_size)) {
         free(bytes);
         return false;
     }
     /* stbi_write_png_to_func rather than stbi_write_png(filename): it writes
      * into our temporary file, and we see write errors (stbi_write_png
      * ignores a failing fwrite or fclose, e.g. on a full disk). */
-    png_sink sink = {out.fd, 0};
+    png_sink sink = {fileno(out.stream), 0};
     int encoded = stbi_write_png_to_func(png_sink_write, &sink, img->width, img->height, 3, bytes, img->width * 3);
     free(bytes);
     if (!encoded || sink.error != 0) {
         set_error(err, err_size, "cannot write '%s': %s", path,
                   sink.error != 0 ? strerror(sink.error) : "PNG encoding failed");
-        pending_abandon(&out);
+        atomic_file_abandon(&out);
         return false;
     }
-    return pending_commit(&out, err, err_size);
+    return atomic_file_commit(&out, err, err_size);
 }
 
 /* ---- by file name ------------------------------------------------------ */

@@ -39,16 +39,15 @@
  */
 #include "mesh.h"
 
+#include "atomic_file.h"
+
 #include <errno.h>
-#include <fcntl.h>
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
-#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 enum {
     /* Longest number text we accept. Far beyond anything an exporter writes
@@ -734,10 +733,6 @@ bool mesh_load_obj(mesh *m, const char *path, char *err, size_t err_size)
 
 /* ---- writing ----------------------------------------------------------- */
 
-/* Makes temporary names unique between threads of this process; the pid
- * separates processes, O_EXCL catches anything else. */
-static atomic_uint temp_counter;
-
 bool mesh_write_obj(const mesh *m, const char *path, char *err, size_t err_size)
 {
     /* Refuse what could not be read back, before touching the disk: a NaN
@@ -757,37 +752,12 @@ bool mesh_write_obj(const mesh *m, const char *path, char *err, size_t err_size)
             }
         }
 
-    /* The temporary file sits beside the target, so rename(2) stays within
-     * one filesystem and replaces the target in one step: a reader sees the
-     * old file or the whole new one, never a half-written one. */
-    size_t temp_size = strlen(path) + 64;
-    char *temp_path = malloc(temp_size);
-    if (temp_path == NULL) {
-        set_error(err, err_size, "%s: %s", path, strerror(ENOMEM));
+    /* Through a temporary file renamed into place (atomic_file.h): a reader
+     * sees the old file or the whole new one, never a half-written one. */
+    atomic_file out;
+    if (!atomic_file_open(&out, path, err, err_size))
         return false;
-    }
-    int fd = -1;
-    for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
-        unsigned n = atomic_fetch_add(&temp_counter, 1u);
-        snprintf(temp_path, temp_size, "%s.tmp.%ld.%u", path, (long)getpid(), n);
-        fd = open(temp_path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-        if (fd < 0 && errno != EEXIST)
-            break;
-    }
-    if (fd < 0) {
-        set_error(err, err_size, "%s: %s", path, strerror(errno));
-        free(temp_path);
-        return false;
-    }
-    FILE *f = fdopen(fd, "w");
-    if (f == NULL) {
-        int failure = errno;
-        close(fd);
-        unlink(temp_path);
-        free(temp_path);
-        set_error(err, err_size, "%s: %s", path, strerror(failure));
-        return false;
-    }
+    FILE *f = out.stream;
 
     /* %.9g: nine significant digits are enough for every float to read back
      * as exactly the same float. */
@@ -804,21 +774,10 @@ bool mesh_write_obj(const mesh *m, const char *path, char *err, size_t err_size)
         if (fprintf(f, "f %d %d %d\n", p[0] + 1, p[1] + 1, p[2] + 1) < 0)
             failure = errno;
     }
-    /* fflush + fsync before rename: otherwise a crash soon after could leave
-     * the new name on a file whose data never reached the disk. fclose is
-     * checked because some filesystems report write errors only there. */
-    if (failure == 0 && fflush(f) != 0)
-        failure = errno;
-    if (failure == 0 && fsync(fileno(f)) != 0)
-        failure = errno;
-    if (fclose(f) != 0 && failure == 0)
-        failure = errno;
-    if (failure == 0 && rename(temp_path, path) != 0)
-        failure = errno;
     if (failure != 0) {
-        unlink(temp_path);
-        set_error(err, err_size, "%s: %s", path, strerror(failure));
+        set_error(err, err_size, "cannot write '%s': %s", path, strerror(failure));
+        atomic_file_abandon(&out);
+        return false;
     }
-    free(temp_path);
-    return failure == 0;
+    return atomic_file_commit(&out, err, err_size);
 }

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "camera.h"
@@ -441,6 +442,142 @@ static void test_cli_help_and_extras(void **state)
     assert_int_equal(parse(3, extra, &o, err), CLI_OK);
 }
 
+/* ---- choice flags ---------------------------------------------------------- */
+
+static const char *const RUNG_NAMES[] = {"lecture", "cosine", "mis", NULL};
+
+static cli_status parse_choice(int argc, char **argv, cli_choice *choice, char *err, size_t err_size)
+{
+    const cli_flag extras[] = {{"--integrator", CLI_CHOICE, choice, NULL, "the rung", 0, 0}};
+    cli_spec spec = {"test", "a test", extras, 1};
+    cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
+    return cli_parse(argc, argv, &spec, &o, err, err_size);
+}
+
+static void test_cli_choice_stores_the_index_of_the_name(void **state)
+{
+    (void)state;
+    char err[512] = "";
+    cli_choice rung = {RUNG_NAMES, NULL, 0};
+    char *none[] = {"p"};
+    assert_int_equal(parse_choice(1, none, &rung, err, sizeof err), CLI_OK);
+    assert_int_equal(rung.index, 0); /* the default stays when the flag is not given */
+    char *mis[] = {"p", "--integrator", "mis"};
+    assert_int_equal(parse_choice(3, mis, &rung, err, sizeof err), CLI_OK);
+    assert_int_equal(rung.index, 2);
+    assert_string_equal(cli_choice_name(&rung), "mis");
+    char *cosine[] = {"p", "--integrator=cosine"};
+    assert_int_equal(parse_choice(2, cosine, &rung, err, sizeof err), CLI_OK);
+    assert_int_equal(rung.index, 1);
+    cli_choice unset = {RUNG_NAMES, NULL, -1};
+    assert_null(cli_choice_name(&unset));
+}
+
+/* Every program's choice flags refuse a bad value with the same message,
+ * naming the flag, the value and what it could have been. */
+static void test_cli_choice_refuses_other_values_naming_the_choices(void **state)
+{
+    (void)state;
+    const char *bad[] = {"fast", "", "MIS", "mis ", "lecture,mis"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char err[512] = "", expected[512];
+        cli_choice rung = {RUNG_NAMES, NULL, 0};
+        char *argv[] = {"p", "--integrator", (char *)bad[i]};
+        assert_int_equal(parse_choice(3, argv, &rung, err, sizeof err), CLI_ERROR);
+        snprintf(expected, sizeof expected, "--integrator: unknown '%s' (lecture, cosine, mis)", bad[i]);
+        assert_string_equal(err, expected);
+        assert_int_equal(rung.index, 0);
+    }
+    /* A short err buffer gets a truncated message, never an overrun. */
+    char small[20];
+    cli_choice rung = {RUNG_NAMES, NULL, 0};
+    char *argv[] = {"p", "--integrator", "fast"};
+    assert_int_equal(parse_choice(3, argv, &rung, small, sizeof small), CLI_ERROR);
+    assert_int_equal(strlen(small), sizeof small - 1);
+}
+
+/* cli_parse_or_exit: the message on stderr and exit status 2, as for any
+ * bad flag. Run in a child, which exits. */
+static void test_cli_choice_bad_value_exits_with_status_2(void **state)
+{
+    (void)state;
+    int pipe_fds[2];
+    assert_int_equal(pipe(pipe_fds), 0);
+    fflush(stdout);
+    fflush(stderr);
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) {
+        dup2(pipe_fds[1], 2);
+        cli_choice rung = {RUNG_NAMES, NULL, 0};
+        const cli_flag extras[] = {{"--integrator", CLI_CHOICE, &rung, NULL, "the rung", 0, 0}};
+        cli_spec spec = {"prog", "a test", extras, 1};
+        cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
+        char *argv[] = {"prog", "--integrator", "fast", NULL};
+        cli_parse_or_exit(3, argv, &spec, &o);
+        _exit(0);
+    }
+    close(pipe_fds[1]);
+    char message[512] = "";
+    ssize_t n = read(pipe_fds[0], message, sizeof message - 1);
+    close(pipe_fds[0]);
+    message[n > 0 ? n : 0] = '\0';
+    int status = 0;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 2);
+    if (strstr(message, "prog: --integrator: unknown 'fast' (lecture, cosine, mis)\n") != message)
+        fail_msg("stderr was '%s'", message);
+}
+
+/* What cli_print_help writes, caught from stdout. */
+static void help_text(const cli_spec *spec, char *out, size_t size)
+{
+    cli_options d = cli_defaults("/tmp/out.exr", 64, 32, 1);
+    FILE *caught = tmpfile();
+    assert_non_null(caught);
+    fflush(stdout);
+    int saved = dup(1);
+    dup2(fileno(caught), 1);
+    cli_print_help(spec, &d);
+    fflush(stdout);
+    dup2(saved, 1);
+    close(saved);
+    rewind(caught);
+    size_t n = fread(out, 1, size - 1, caught);
+    out[n] = '\0';
+    fclose(caught);
+}
+
+static void expect_in_help(const char *help, const char *line)
+{
+    if (strstr(help, line) == NULL)
+        fail_msg("--help does not show '%s':\n%s", line, help);
+}
+
+/* --help lists the choices: as the value ("a|b|c"), with each name's note,
+ * or after the help line when the flag has a metavar of its own. */
+static void test_cli_choice_help_lists_the_choices(void **state)
+{
+    (void)state;
+    static const char *const notes[] = {"uniform hemisphere", "cosine-weighted", "BSDF sampling and MIS"};
+    cli_choice plain = {RUNG_NAMES, NULL, 0}, noted = {RUNG_NAMES, notes, 0}, named = {RUNG_NAMES, NULL, 0};
+    const cli_flag extras[] = {
+        {"--plain", CLI_CHOICE, &plain, NULL, "the rung", 0, 0},
+        {"--noted", CLI_CHOICE, &noted, NULL, "the rung, noted", 0, 0},
+        {"--named", CLI_CHOICE, &named, "RUNG", "the rung, named", 0, 0},
+    };
+    cli_spec spec = {"test", "a test", extras, 3};
+    char help[8192];
+    help_text(&spec, help, sizeof help);
+    expect_in_help(help, "\n  --plain lecture|cosine|mis the rung\n");
+    expect_in_help(help, "\n  --noted lecture|cosine|mis the rung, noted\n"
+                         "                     lecture  uniform hemisphere\n"
+                         "                     cosine   cosine-weighted\n"
+                         "                     mis      BSDF sampling and MIS\n");
+    expect_in_help(help, "\n  --named RUNG     the rung, named\n                   one of: lecture, cosine, mis\n");
+}
+
 /* ---- splat_film ---------------------------------------------------------- */
 
 enum { SPLAT_SIDE = 8, SPLAT_COUNT = 200000 };
@@ -560,6 +697,10 @@ int main(void)
         cmocka_unit_test(test_cli_help_and_extras),
         cmocka_unit_test(test_cli_rejects_nan_and_inf_for_an_unranged_float),
         cmocka_unit_test(test_cli_checks_a_directory_flag_at_once),
+        cmocka_unit_test(test_cli_choice_stores_the_index_of_the_name),
+        cmocka_unit_test(test_cli_choice_refuses_other_values_naming_the_choices),
+        cmocka_unit_test(test_cli_choice_bad_value_exits_with_status_2),
+        cmocka_unit_test(test_cli_choice_help_lists_the_choices),
         cmocka_unit_test(test_splat_film_is_the_same_for_any_order_and_thread_count),
         cmocka_unit_test(test_splat_float_sums_depend_on_order),
         cmocka_unit_test(test_splat_film_drops_nonfinite_and_ignores_points_outside),

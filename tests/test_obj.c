@@ -815,7 +815,7 @@ static void test_write_into_missing_directory_fails_cleanly(void **state)
     mesh_add_triangle(&m, 0, 1, 2, -1);
     assert_false(mesh_write_obj(&m, path, err, sizeof err));
     char expected[PATH_SIZE + 128];
-    snprintf(expected, sizeof expected, "%s: No such file or directory", path);
+    snprintf(expected, sizeof expected, "cannot write '%s': No such file or directory", path);
     assert_string_equal(err, expected);
     assert_false(file_exists(path));
     assert_false(file_exists(dir));
@@ -837,7 +837,7 @@ static void test_failed_rename_leaves_no_temporary_file(void **state)
     mesh_init(&m);
     mesh_add_position(&m, vec3_make(1, 2, 3));
     assert_false(mesh_write_obj(&m, path, err, sizeof err));
-    assert_starts_with(err, path);
+    assert_contains(err, path);
     assert_int_equal(count_temp_files(test_dir), 0);
     assert_true(file_exists(inside));
     mesh_free(&m);

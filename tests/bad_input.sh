@@ -163,7 +163,7 @@ for program in "$bin"/[0-9][0-9]-*; do
         "--rr-probability 0:09-" "--rr-probability 1.5:09-" "--max-depth -1:09-" "--time-budget -1:09-" \
         "--target-error -1:09-" "--experiment-size 0:09-" "--accel octree:09-" \
         "--reference-spp 0:09-" "--experiment-spp 0:09-" "--walls maybe:13-" "--rr sometimes:13-" \
-        "--bench-csv x.csv:13-" "--builtin nothing:13-"; do
+        "--bench-csv x.csv:13-" "--builtin nothing:13-" "--rr sometimes:09-"; do
         only=${bad##*:}; bad=${bad%:*}
         case $p in "$only"*) ;; *) continue ;; esac
         flag=${bad%% *}

@@ -27,15 +27,17 @@ path_tracer path_tracer_defaults(const pt_scene *scene)
     return pt;
 }
 
-static const char *const integrator_names[] = {"lecture", "cosine", "mis"};
+const char *const PT_INTEGRATOR_NAMES[] = {"lecture", "cosine", "mis", NULL};
+static const char *const *const integrator_names = PT_INTEGRATOR_NAMES;
 /* in the order of pt_russian_roulette */
-static const char *const roulette_names[] = {"off", "fixed", "throughput", "albedo"};
+const char *const PT_ROULETTE_NAMES[] = {"off", "fixed", "throughput", "albedo", NULL};
+static const char *const *const roulette_names = PT_ROULETTE_NAMES;
 
 const char *pt_russian_roulette_name(pt_russian_roulette r) { return roulette_names[r]; }
 
 bool pt_russian_roulette_parse(const char *name, pt_russian_roulette *out)
 {
-    for (int i = 0; i < (int)(sizeof roulette_names / sizeof roulette_names[0]); i++)
+    for (int i = 0; roulette_names[i] != NULL; i++)
         if (strcmp(name, roulette_names[i]) == 0) {
             *out = (pt_russian_roulette)i;
             return true;

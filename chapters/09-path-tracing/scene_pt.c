@@ -437,15 +437,28 @@ static void build_white_furnace(pt_scene *sc)
 static void build_glass_furnace(pt_scene *sc) { pt_scene_build_white_furnace(sc, pt_glass(1.5f), vec3_splat(1.0f)); }
 static void build_point_in_sphere(pt_scene *sc) { pt_scene_build_point_in_sphere(sc, 0.5f, (float)PI); }
 
+const char *const PT_BUILTIN_SCENE_NAMES[] = {"cornell",       "materials",     "veach", "furnace",
+                                              "white-furnace", "glass-furnace", "point-in-sphere", NULL};
+const char *const PT_BUILTIN_SCENE_NOTES[] = {
+    "the Cornell box (the default)",
+    "the box with a glossy metal block and a glass sphere",
+    "glossy plates and lights of four sizes (where MIS wins)",
+    "inside a closed sphere that emits and reflects 0.5: radiance 1 everywhere",
+    "a diffuse sphere of albedo 0.5 under a uniform sky of radiance 1",
+    "a glass sphere under a uniform sky of radiance 1",
+    "a point light inside a sphere of albedo 0.5",
+    NULL,
+};
+/* in the order of PT_BUILTIN_SCENE_NAMES */
 const pt_builtin_scene PT_BUILTIN_SCENES[] = {
-    {"cornell", pt_scene_build_cornell_box, "the Cornell box (the default)"},
-    {"materials", pt_scene_build_cornell_box_materials, "the box with a glossy metal block and a glass sphere"},
-    {"veach", pt_scene_build_veach, "glossy plates and lights of four sizes (where MIS wins)"},
-    {"furnace", build_furnace, "inside a closed sphere that emits and reflects 0.5: radiance 1 everywhere"},
-    {"white-furnace", build_white_furnace, "a diffuse sphere of albedo 0.5 under a uniform sky"},
-    {"glass-furnace", build_glass_furnace, "a glass sphere under a uniform sky"},
-    {"point-in-sphere", build_point_in_sphere, "a point light inside a sphere of albedo 0.5"},
-    {NULL, NULL, NULL},
+    {"cornell", pt_scene_build_cornell_box},
+    {"materials", pt_scene_build_cornell_box_materials},
+    {"veach", pt_scene_build_veach},
+    {"furnace", build_furnace},
+    {"white-furnace", build_white_furnace},
+    {"glass-furnace", build_glass_furnace},
+    {"point-in-sphere", build_point_in_sphere},
+    {NULL, NULL},
 };
 
 bool pt_scene_build_builtin(pt_scene *sc, const char *name)

@@ -218,9 +218,11 @@ void pt_scene_build_point_in_sphere(pt_scene *sc, float albedo, float intensity)
 typedef struct {
     const char *name;
     void (*build)(pt_scene *sc);
-    const char *description;
 } pt_builtin_scene;
 extern const pt_builtin_scene PT_BUILTIN_SCENES[];
+/* The same names, NULL-terminated, and a line on each (--builtin). */
+extern const char *const PT_BUILTIN_SCENE_NAMES[];
+extern const char *const PT_BUILTIN_SCENE_NOTES[];
 /* Builds the scene named `name`; false if there is none of that name. */
 bool pt_scene_build_builtin(pt_scene *sc, const char *name);
 

@@ -14,10 +14,13 @@
 #include "program.h"
 
 typedef struct {
-    const char *scene_name, *obj, *walls, *rr, *bench_csv;
+    cli_choice builtin, walls, rr;
+    const char *obj, *bench_csv;
     bool bench, one_path;
     int rr_start;
 } production_flags;
+
+static const char *const ON_OFF[] = {"on", "off", NULL};
 
 /* Eight paths at a time: the lecture rung's image, by another route. */
 static int render_eight_paths(const cli_options *opts, const path_tracer *pt, const camera *cam)
@@ -50,23 +53,21 @@ static int render(cli_options *opts, const production_flags *f)
     bool from_file = program_load_scene(opts, "13-production", &desc);
     if (from_file ? !pt_scene_from_desc(&sc, &desc, "13-production", err, sizeof err)
                   : f->obj != NULL ? !pt_scene_load_obj(&sc, f->obj, err, sizeof err)
-                                   : !pt_scene_build_builtin(&sc, f->scene_name)) {
-        if (!from_file && f->obj == NULL)
-            snprintf(err, sizeof err, "--builtin: unknown scene '%s'", f->scene_name);
+                                   : !pt_scene_build_builtin(&sc, cli_choice_name(&f->builtin))) {
         fprintf(stderr, "13-production: %s\n", err);
         scene_desc_free(&desc);
-        return from_file || f->obj != NULL ? 1 : 2;
+        return 1;
     }
     if (!from_file)
         pt_scene_describe(&sc, &desc);
     effects_report e = effects_analyse(&desc);
     scene_desc_free(&desc);
-    bool walls = strcmp(f->walls, "on") == 0;
+    bool walls = f->walls.index == 0;
     pt_scene_use_accel(&sc, walls ? production_scene_accel : production_scene_accel_no_walls, &sc);
     program_note_accel(sc.bvh->stats.name);
     path_tracer pt = path_tracer_defaults(&sc);
     pt.effects = effects_decide(&e, EFFECT_ALL);
-    pt_russian_roulette_parse(f->rr, &pt.russian_roulette);
+    pt.russian_roulette = (pt_russian_roulette)f->rr.index;
     pt.rr_start_depth = f->rr_start;
     camera cam = pt_scene_camera(&sc, opts->width, opts->height);
     char why[160];
@@ -85,12 +86,14 @@ static int render(cli_options *opts, const production_flags *f)
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch13.exr", 512, 512, 16);
-    production_flags f = {"cornell", NULL, "on", "fixed", NULL, false, false, 3};
+    production_flags f = {{PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {ON_OFF, NULL, 0},
+                          {PT_ROULETTE_NAMES, NULL, RR_FIXED}, NULL, NULL, false, false, 3};
     const cli_flag extras[] = {
-        {"--builtin", CLI_STRING, &f.scene_name, "NAME", "a scene of chapter 09 (cornell, materials, veach, ...)", 0, 0},
+        {"--builtin", CLI_CHOICE, &f.builtin, NULL, "a scene of chapter 09 (default cornell)", 0, 0},
         {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
-        {"--walls", CLI_STRING, &f.walls, "on|off", "on (default): shadow rays inside a room skip its walls", 0, 0},
-        {"--rr", CLI_STRING, &f.rr, "MODE", "Russian roulette: fixed (P_RR 0.8), throughput, albedo or off", 0, 0},
+        {"--walls", CLI_CHOICE, &f.walls, NULL, "on (default): shadow rays inside a room skip its walls", 0, 0},
+        {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed (P_RR 0.8, default), throughput, albedo or off", 0,
+         0},
         {"--rr-start", CLI_INT, &f.rr_start, "N", "--rr throughput or albedo: the first bounce it may end", 0, 1000},
         {"--one-path", CLI_BOOL, &f.one_path, NULL, "one path at a time even where eight at a time could run", 0, 0},
         {"--bench", CLI_BOOL, &f.bench, NULL, "the table of what each step buys, on the Cornell box (a square of "
@@ -104,16 +107,8 @@ int main(int argc, char **argv)
                      extras, sizeof extras / sizeof extras[0]};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.jitter = true;
-    pt_russian_roulette rr;
-    char bad[4200] = "";
-    if (strcmp(f.walls, "on") != 0 && strcmp(f.walls, "off") != 0)
-        snprintf(bad, sizeof bad, "--walls: unknown '%s' (on, off)", f.walls);
-    else if (!pt_russian_roulette_parse(f.rr, &rr))
-        snprintf(bad, sizeof bad, "--rr: unknown '%s' (fixed, throughput, albedo, off)", f.rr);
-    else if (f.bench_csv != NULL && !f.bench)
-        snprintf(bad, sizeof bad, "--bench-csv %s: only with --bench", f.bench_csv);
-    if (bad[0] != '\0') {
-        fprintf(stderr, "13-production: %s\ntry --help\n", bad);
+    if (f.bench_csv != NULL && !f.bench) {
+        fprintf(stderr, "13-production: --bench-csv %s: only with --bench\ntry --help\n", f.bench_csv);
         return 2;
     }
     if (!f.bench)

@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "06-bvh/bvh.h"
 #include "09-path-tracing/bsdf.h"
@@ -835,9 +836,73 @@ static void test_chapter_06s_bvh_is_what_chapter_09_traces(void **state)
     pt_scene_free(&sc);
 }
 
+/* An emitting mesh in a scene file is a light, and it casts shadows: a lamp
+ * (an OBJ quad whose MTL gives it Ke, facing down) above a floor, and a
+ * blocker between them whose umbra covers the floor's centre. The effects
+ * analysis must keep shadows (it does not read the mesh's MTL: a mesh with
+ * its own materials may emit); then, with direct light only (max depth 1),
+ * the floor point under the blocker gets exactly nothing and one outside it
+ * gets light. The twin: the same render with shadows dropped (what the
+ * analysis once decided for such a scene) lights the umbra. */
+static vec3 direct_light_at(const path_tracer *pt, vec3 eye, vec3 floor_point, int samples)
+{
+    vec3 sum = vec3_splat(0.0f);
+    pcg32 rng = pcg32_for_pixel(test_seed(95), 0);
+    ray_counters c = {0};
+    for (int i = 0; i < samples; i++)
+        sum = vec3_add(sum, path_trace_radiance(pt, ray_make(eye, vec3_sub(floor_point, eye)), &rng, &c));
+    return vec3_scale(sum, 1.0f / (float)samples);
+}
+
+static void test_an_emitting_mesh_casts_shadows(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/test_ch09_lamp.XXXXXX", path[256], text[1024];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/lamp.mtl", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f, "newmtl lamp\nKd 0 0 0\nKe 10 10 10\n");
+    fclose(f);
+    snprintf(path, sizeof path, "%s/lamp.obj", dir);
+    f = fopen(path, "w");
+    assert_non_null(f);
+    /* a 1 x 1 quad at height 2, counter-clockwise seen from below: it faces down */
+    fprintf(f, "mtllib lamp.mtl\nv -0.5 2 -0.5\nv 0.5 2 -0.5\nv 0.5 2 0.5\nv -0.5 2 0.5\nusemtl lamp\nf 1 2 3 4\n");
+    fclose(f);
+    snprintf(text, sizeof text,
+             "camera eye 0 0.5 4 target 0 0 0 up 0 1 0 fov 60\n"
+             "material white diffuse albedo 0.5 0.5 0.5\n"
+             "quad p0 -3 0 -3 p1 -3 0 3 p2 3 0 3 p3 3 0 -3 material white\n"       /* the floor, facing up */
+             "quad p0 -0.6 1 -0.6 p1 -0.6 1 0.6 p2 0.6 1 0.6 p3 0.6 1 -0.6 material white\n" /* the blocker */
+             "mesh path %s\n", path);
+    pt_scene sc;
+    unsigned effects;
+    load_scene_file(&sc, &effects, NULL, text);
+    assert_true(effects & EFFECT_SHADOWS);
+    assert_int_equal(sc.emitter_count, 2);
+    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+    pt.effects = effects;
+    pt.max_depth = 1;
+    vec3 eye = vec3_make(0, 0.5f, 4), umbra = vec3_make(0, 0, 0), lit = vec3_make(2, 0, 0);
+    vec3 in_umbra = direct_light_at(&pt, eye, umbra, 256), outside = direct_light_at(&pt, eye, lit, 256);
+    print_message("emitting mesh: floor under the blocker %.4f, beside it %.4f\n", (double)in_umbra.x,
+                  (double)outside.x);
+    assert_true(in_umbra.x == 0.0f);
+    assert_true(outside.x > 0.01f);
+    pt.effects &= ~EFFECT_SHADOWS; /* the twin */
+    assert_true(direct_light_at(&pt, eye, umbra, 256).x > 0.01f);
+    pt_scene_free(&sc);
+    remove(path);
+    snprintf(path, sizeof path, "%s/lamp.mtl", dir);
+    remove(path);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_an_emitting_mesh_casts_shadows),
         cmocka_unit_test(test_chapter_06s_bvh_is_what_chapter_09_traces),
         cmocka_unit_test(test_furnace_every_pixel_is_one),
         cmocka_unit_test(test_scene_files_render_the_built_in_scenes),

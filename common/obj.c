@@ -22,10 +22,12 @@
  *
  * and in an MTL file:
  *
- *   newmtl name            starts a material: Kd 0.8 grey, Ks 0, Ns 1, Ke 0, Ni 1
+ *   newmtl name            starts a material: Kd 0.8 grey, Ks 0, Ns 1, Ke 0, Ni 1, d 1
  *   Kd/Ks/Ke r g b         diffuse, specular, emitted colour (one number = grey)
  *   Ns s, Ni n             shininess, index of refraction
- *   Ka d Tr Tf illum map_* bump ...   ignored (common, and nothing here uses them)
+ *   d a, Tr t              dissolve (1 opaque), transparency (Tr = 1 - d), in [0, 1]
+ *   illum n                illumination model 0-10 (4, 6, 7, 9: transparent)
+ *   Ka Tf map_* bump ...   ignored (common, and nothing here uses them)
  *
  * Any other statement is an error rather than silently skipped: a typo such
  * as "vv 1 2 3" should not quietly lose geometry. Every error reads
@@ -280,16 +282,27 @@ static const mesh_material default_material = {
     .emission = {0.0f, 0.0f, 0.0f},
     .shininess = 1.0f,
     .ior = 1.0f,
+    .dissolve = 1.0f,
+    .illum = -1,
 };
+
+bool mesh_material_transparent(const mesh_material *m)
+{
+    return m->illum == 4 || m->illum == 6 || m->illum == 7 || m->illum == 9 || m->dissolve < 1.0f;
+}
+
+bool mesh_material_emits(const mesh_material *m)
+{
+    return m->emission.x > 0.0f || m->emission.y > 0.0f || m->emission.z > 0.0f;
+}
 
 /* Statements we know and deliberately skip: exporters write them all the
  * time (Blender, 3ds Max, Maya), and a renderer of colours has no use for
  * them. A name not here and not handled is an error, as in the OBJ reader. */
 static bool mtl_ignored(field keyword)
 {
-    static const char *const words[] = {"Ka",   "Tf",    "d",     "Tr",   "illum", "sharpness", "bump", "disp",
-                                        "decal", "refl", "norm",  "Pr",   "Pm",    "Ps",        "Pc",   "Pcr",
-                                        "aniso", "anisor"};
+    static const char *const words[] = {"Ka",   "Tf",   "sharpness", "bump", "disp", "decal", "refl", "norm",
+                                        "Pr",   "Pm",   "Ps",        "Pc",   "Pcr",  "aniso", "anisor"};
     for (size_t i = 0; i < sizeof words / sizeof words[0]; i++)
         if (field_is(keyword, words[i]))
             return true;
@@ -346,11 +359,13 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
         return true;
 
     bool colour = field_is(keyword, "Kd") || field_is(keyword, "Ks") || field_is(keyword, "Ke");
-    bool scalar = field_is(keyword, "Ns") || field_is(keyword, "Ni");
+    bool scalar = field_is(keyword, "Ns") || field_is(keyword, "Ni") || field_is(keyword, "Tr") ||
+                  field_is(keyword, "d") || field_is(keyword, "illum");
     if (!colour && !scalar)
         return fail_at(s, "unknown statement '%s'", quote(keyword.start, keyword.length, shown));
-    /* keyword is one of five two-letter words: safe to print as a string. */
-    char word[3] = {keyword.start[0], keyword.start[1], '\0'};
+    /* keyword is one of the eight words above: safe to print as a string. */
+    char word[6] = {0};
+    memcpy(word, keyword.start, keyword.length);
     if (mtl->current < 0)
         return fail_at(s, "'%s' before any 'newmtl'", word);
 
@@ -370,7 +385,18 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
         float value = 0.0f;
         if (!mtl_scalar(s, r, word, &value))
             return false;
-        if (word[1] == 's')
+        bool fraction = word[0] == 'd' || word[0] == 'T';
+        if (fraction && !(value >= 0.0f && value <= 1.0f))
+            return fail_at(s, "'%s %g': expected a number from 0 to 1", word, (double)value);
+        if (word[0] == 'i' && !(value >= 0.0f && value <= 10.0f && value == (float)(int)value))
+            return fail_at(s, "'illum %g': expected an illumination model, 0 to 10", (double)value);
+        if (word[0] == 'd')
+            material->dissolve = value;
+        else if (word[0] == 'T')
+            material->dissolve = 1.0f - value;
+        else if (word[0] == 'i')
+            material->illum = (int)value;
+        else if (word[1] == 's')
             material->shininess = value;
         else
             material->ior = value;

@@ -899,9 +899,68 @@ static void test_an_emitting_mesh_casts_shadows(void **state)
     rmdir(dir);
 }
 
+/* MTL materials as the format means them, in the shape Blender's exporter
+ * writes them (Ns, Ka, Kd, Ks, Ke, Ni 1.45, d, illum 2 on every material):
+ * an opaque Ni is not glass; Ke makes an emitter even with Kd 0; illum 4
+ * or d < 1 makes glass; Ks above Kd makes a GGX glossy. The twin is the
+ * old rule "Ni > 1 is glass", which turns Blender's default material into
+ * glass. */
+static const char BLENDER_MTL[] =
+    "# Blender 3.4.1 MTL File: 'None'\n# www.blender.org\n\n"
+    "newmtl Material\nNs 250.000000\nKa 1.000000 1.000000 1.000000\nKd 0.800000 0.800000 0.800000\n"
+    "Ks 0.500000 0.500000 0.500000\nKe 0.000000 0.000000 0.000000\nNi 1.450000\nd 1.000000\nillum 2\n\n"
+    "newmtl Lamp\nNs 250.000000\nKa 1.000000 1.000000 1.000000\nKd 0.000000 0.000000 0.000000\n"
+    "Ks 0.500000 0.500000 0.500000\nKe 10.000000 10.000000 10.000000\nNi 1.450000\nd 1.000000\nillum 2\n\n"
+    "newmtl Glass\nNs 900.000000\nKd 0.800000 0.800000 0.800000\nKs 0.500000 0.500000 0.500000\n"
+    "Ke 0.000000 0.000000 0.000000\nNi 1.500000\nd 1.000000\nillum 4\n\n"
+    "newmtl Clear\nKd 0.8 0.8 0.8\nNi 1.45\nd 0.2\nillum 2\n\n"
+    "newmtl Metal\nNs 900\nKd 0.1 0.1 0.1\nKs 0.9 0.8 0.7\nNi 1.45\nd 1\nillum 3\n";
+
+static void test_mtl_materials_as_the_format_means_them(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/test_ch09_mtl.XXXXXX", obj[256], mtl[256];
+    assert_non_null(mkdtemp(dir));
+    snprintf(mtl, sizeof mtl, "%s/blender.mtl", dir);
+    snprintf(obj, sizeof obj, "%s/blender.obj", dir);
+    FILE *f = fopen(mtl, "w");
+    assert_non_null(f);
+    fputs(BLENDER_MTL, f);
+    fclose(f);
+    f = fopen(obj, "w");
+    assert_non_null(f);
+    fputs("mtllib blender.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl Material\nf 1 2 3\n", f);
+    fclose(f);
+    mesh m;
+    mesh_init(&m);
+    char err[MESH_ERROR_SIZE];
+    assert_true(mesh_load_obj(&m, obj, err, sizeof err));
+    assert_int_equal(m.material_count, 5);
+    static const bsdf_kind expected[5] = {BSDF_DIFFUSE, BSDF_DIFFUSE, BSDF_GLASS, BSDF_GLASS, BSDF_GLOSSY};
+    for (int i = 0; i < 5; i++) {
+        char note[256];
+        pt_material p = pt_material_from_mtl(&m.materials[i], note, sizeof note);
+        print_message("%s: %s\n", m.materials[i].name, note);
+        assert_int_equal(p.kind, expected[i]);
+        assert_true((vec3_max_component(p.emission) > 0.0f) == (i == 1));
+    }
+    pt_material clear = pt_material_from_mtl(&m.materials[3], err, sizeof err);
+    assert_true(clear.ior == 1.45f);
+    pt_material metal = pt_material_from_mtl(&m.materials[4], err, sizeof err);
+    assert_true(fabsf(metal.roughness - sqrtf(2.0f / 902.0f)) < 1e-6f);
+    /* the twin: "Ni > 1 is glass" makes Blender's default material glass */
+    assert_true(m.materials[0].ior > 1.0f);
+    assert_false(mesh_material_transparent(&m.materials[0]));
+    mesh_free(&m);
+    remove(obj);
+    remove(mtl);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_mtl_materials_as_the_format_means_them),
         cmocka_unit_test(test_an_emitting_mesh_casts_shadows),
         cmocka_unit_test(test_chapter_06s_bvh_is_what_chapter_09_traces),
         cmocka_unit_test(test_furnace_every_pixel_is_one),

@@ -391,6 +391,63 @@ void pt_scene_build_point_in_sphere(pt_scene *sc, float albedo, float intensity)
 
 /* ---- OBJ scenes ---------------------------------------------------------------- */
 
+/* Where the loaders say what each MTL material became (NULL: nowhere). */
+static FILE *material_report;
+static bool material_report_set;
+
+void pt_scene_report_materials(FILE *out)
+{
+    material_report = out;
+    material_report_set = true;
+}
+
+/* The MTL's shininess Ns as GGX's alpha: a Blinn-Phong lobe of exponent p
+ * is close to a microfacet lobe of alpha = sqrt(2 / (p + 2)) (Walter et al.
+ * 2007), kept within what the glossy BSDF takes. */
+static float alpha_from_shininess(float ns)
+{
+    float alpha = sqrtf(2.0f / (fmaxf(ns, 0.0f) + 2.0f));
+    return fminf(1.0f, fmaxf(0.001f, alpha));
+}
+
+pt_material pt_material_from_mtl(const mesh_material *mm, char *note, size_t note_size)
+{
+    float kd = vec3_max_component(mm->diffuse), ks = vec3_max_component(mm->specular);
+    if (mesh_material_emits(mm)) {
+        snprintf(note, note_size, "emitter, Ke %g %g %g (Kd %g %g %g as its albedo)", (double)mm->emission.x,
+                 (double)mm->emission.y, (double)mm->emission.z, (double)mm->diffuse.x, (double)mm->diffuse.y,
+                 (double)mm->diffuse.z);
+        return pt_emitter(mm->diffuse, mm->emission);
+    }
+    if (mesh_material_transparent(mm)) {
+        float ior = mm->ior > 1.0f ? mm->ior : 1.5f;
+        snprintf(note, note_size, "glass, ior %g (%s)%s", (double)ior,
+                 mm->dissolve < 1.0f ? "d < 1" : "a transparent illum", mm->ior > 1.0f ? "" : "; no Ni > 1: 1.5");
+        return pt_glass(ior);
+    }
+    if (ks > kd) {
+        float alpha = alpha_from_shininess(mm->shininess);
+        snprintf(note, note_size, "glossy GGX, F0 = Ks %g %g %g, alpha %.3g from Ns %g", (double)mm->specular.x,
+                 (double)mm->specular.y, (double)mm->specular.z, (double)alpha, (double)mm->shininess);
+        return pt_glossy(mm->specular, alpha);
+    }
+    snprintf(note, note_size, "diffuse, Kd %g %g %g%s%s", (double)mm->diffuse.x, (double)mm->diffuse.y,
+             (double)mm->diffuse.z, ks > 0.0f ? "; Ks dropped (the diffuse part is larger: no layered material here)" : "",
+             mm->ior > 1.0f ? "; Ni ignored (opaque)" : "");
+    return pt_diffuse(mm->diffuse);
+}
+
+void pt_scene_add_mtl_materials(pt_scene *sc, const mesh *m, const char *source)
+{
+    FILE *out = material_report_set ? material_report : stdout;
+    for (int i = 0; i < m->material_count; i++) {
+        char note[256];
+        pt_scene_add_material(sc, pt_material_from_mtl(&m->materials[i], note, sizeof note));
+        if (out != NULL)
+            fprintf(out, "%s: material '%s': %s\n", source, m->materials[i].name, note);
+    }
+}
+
 bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_size)
 {
     pt_scene_init(sc);
@@ -398,14 +455,8 @@ bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_siz
         pt_scene_free(sc);
         return false;
     }
-    /* Materials from the MTL colours; faces without one get a grey diffuse. */
-    for (int i = 0; i < sc->geometry.material_count; i++) {
-        const mesh_material *mm = &sc->geometry.materials[i];
-        pt_material m = pt_emitter(mm->diffuse, mm->emission);
-        if (mm->ior > 1.0f)
-            m = pt_glass(mm->ior);
-        pt_scene_add_material(sc, m);
-    }
+    /* Materials from the MTL; faces without one get a grey diffuse. */
+    pt_scene_add_mtl_materials(sc, &sc->geometry, path);
     int grey = pt_scene_add_material(sc, pt_diffuse(vec3_splat(0.7f)));
     for (int i = 0; i < sc->geometry.face_count; i++)
         if (sc->geometry.faces[i].material < 0)

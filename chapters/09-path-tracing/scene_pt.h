@@ -18,6 +18,7 @@
 #define SCENE_PT_H
 
 #include <stdbool.h>
+#include <stdio.h>
 
 #include "01-ray-casting/shapes.h"
 #include "03-aabb-slabs/accel.h"
@@ -226,8 +227,20 @@ extern const char *const PT_BUILTIN_SCENE_NOTES[];
 /* Builds the scene named `name`; false if there is none of that name. */
 bool pt_scene_build_builtin(pt_scene *sc, const char *name);
 
-/* An OBJ file's triangles with its MTL colours (Kd albedo, Ke emission; Ni > 1
- * makes glass), and a camera from its bounds. False with err on failure. */
+/* An MTL material as the path tracer's, as the format means it: an
+ * emitter where Ke > 0; glass where the MTL says light passes through
+ * (illum 4, 6, 7, 9 or d < 1), with Ni (1.5 without one); GGX glossy with
+ * F0 = Ks where Ks outweighs Kd, its roughness from Ns; else diffuse Kd.
+ * An Ni alone makes nothing glass: exporters write one on every material.
+ * *note receives a line saying what it became and what was dropped. */
+pt_material pt_material_from_mtl(const mesh_material *mm, char *note, size_t note_size);
+/* Adds m's materials in order, printing "SOURCE: material 'NAME': what it
+ * became" for each (to stdout, or where pt_scene_report_materials() says). */
+void pt_scene_add_mtl_materials(pt_scene *sc, const mesh *m, const char *source);
+/* Where the lines go (NULL: nowhere, e.g. for --quiet and the tests). */
+void pt_scene_report_materials(FILE *out);
+/* An OBJ file's triangles with its MTL materials (pt_material_from_mtl),
+ * and a camera from its bounds. False with err on failure. */
 bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_size);
 
 /* The scene of a scene file (scene_file.h; scene_pt_file.c): diffuse,

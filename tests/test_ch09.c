@@ -957,9 +957,73 @@ static void test_mtl_materials_as_the_format_means_them(void **state)
     rmdir(dir);
 }
 
+/* The GAMES101 assignment 7 scene file reads the assignment's OBJ files
+ * from models/cornellbox/ next to itself. Stand-ins (the measured Cornell
+ * box's faces, split as the assignment splits them) in a folder with a copy
+ * of the file: it loads, with the assignment's camera and light, and the
+ * lamp seen from the camera shows the light's emission. */
+static void write_stand_in(const char *dir, const char *name, const vec3 *quads, int quad_count)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/models/cornellbox/%s", dir, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    for (int q = 0; q < quad_count; q++) {
+        for (int k = 0; k < 4; k++)
+            fprintf(f, "v %.9g %.9g %.9g\n", (double)quads[4 * q + k].x, (double)quads[4 * q + k].y,
+                    (double)quads[4 * q + k].z);
+        fprintf(f, "f %d %d %d %d\n", 4 * q + 1, 4 * q + 2, 4 * q + 3, 4 * q + 4);
+    }
+    fclose(f);
+}
+
+static void test_games101_assignment_7_scene_file(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/test_ch09_a7.XXXXXX", path[512], command[1024];
+    assert_non_null(mkdtemp(dir));
+    snprintf(command, sizeof command, "mkdir -p %s/models/cornellbox && cp chapters/09-path-tracing/scenes/"
+                                      "games101-a7.scene %s/", dir, dir);
+    assert_int_equal(system(command), 0);
+    pt_scene box;
+    pt_scene_build_cornell_box(&box);
+    const triangle *t = box.triangles.triangles; /* quads: triangles 2q and 2q + 1 share p0 */
+    vec3 quads[8][4];
+    for (int q = 0; q < 8 && q < box.triangles.count / 2; q++) {
+        quads[q][0] = t[2 * q].p0;
+        quads[q][1] = t[2 * q].p1;
+        quads[q][2] = t[2 * q].p2;
+        quads[q][3] = t[2 * q + 1].p2;
+    }
+    write_stand_in(dir, "floor.obj", quads[0], 3); /* floor, ceiling, back wall */
+    write_stand_in(dir, "right.obj", quads[3], 1);
+    write_stand_in(dir, "left.obj", quads[4], 1);
+    write_stand_in(dir, "light.obj", quads[5], 1);
+    write_stand_in(dir, "shortbox.obj", quads[6], 1);
+    write_stand_in(dir, "tallbox.obj", quads[7], 1);
+    pt_scene_free(&box);
+    snprintf(path, sizeof path, "%s/games101-a7.scene", dir);
+    pt_scene sc;
+    unsigned effects;
+    load_scene_file(&sc, &effects, path, NULL);
+    assert_int_equal(sc.triangles.count, 16);
+    assert_int_equal(sc.emitter_count, 2);
+    assert_true(sc.eye.z == -800.0f && sc.vertical_fov_degrees == 40.0f);
+    /* a camera ray straight up into the lamp sees its emission */
+    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+    pcg32 rng = pcg32_for_pixel(1, 0);
+    ray_counters c = {0};
+    vec3 lamp = path_trace_radiance(&pt, ray_make(vec3_make(278, 300, 280), vec3_make(0, 1, 0)), &rng, &c);
+    assert_true(lamp.x >= 47.8348f && lamp.y >= 38.5664f && lamp.z >= 31.0808f);
+    pt_scene_free(&sc);
+    snprintf(command, sizeof command, "rm -r %s", dir);
+    assert_int_equal(system(command), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_games101_assignment_7_scene_file),
         cmocka_unit_test(test_mtl_materials_as_the_format_means_them),
         cmocka_unit_test(test_an_emitting_mesh_casts_shadows),
         cmocka_unit_test(test_chapter_06s_bvh_is_what_chapter_09_traces),

@@ -6,6 +6,9 @@
 #include <string.h>
 
 #include "explain.h"
+#include "timer.h"
+
+#include <omp.h>
 
 /* The effects of the current render, for its counters file ("" until noted). */
 static char noted_effects[256];
@@ -90,6 +93,38 @@ static int program_explain(const cli_options *opts, const char *label, const ren
     return 0;
 }
 
+/* ---- a warning before a long render ---------------------------------------------
+ * A learner who asks for 4096 samples of a million-triangle mesh through a
+ * brute-force chapter should hear so before the minutes pass, not after.
+ * A pilot renders PILOT_PIXELS pixels spread over the image at the full
+ * spp, on one thread, and scales its time to the image and the threads.
+ * It costs PILOT_PIXELS / (width x height) of the render, and draws its
+ * numbers from its own counters and the pixels' own streams, so the image
+ * is untouched. Only renders of more than LONG_RENDER_PIXELS pixels are
+ * piloted: smaller ones end before a warning would help. */
+enum { PILOT_PIXELS = 64, LONG_RENDER_PIXELS = 16384 };
+static const double LONG_RENDER_SECONDS = 60.0;
+
+static void warn_if_long(const cli_options *opts, const char *label, const render_job *job)
+{
+    long pixels = (long)job->cam->width * job->cam->height;
+    if (opts->quiet || pixels < LONG_RENDER_PIXELS)
+        return;
+    ray_counters ignored;
+    memset(&ignored, 0, sizeof ignored);
+    double start = timer_seconds();
+    for (int k = 0; k < PILOT_PIXELS; k++) {
+        long i = (long)((double)k * (double)pixels / PILOT_PIXELS);
+        render_pixel(job, (int)(i % job->cam->width), (int)(i / job->cam->width), &ignored, NULL);
+    }
+    int threads = opts->threads > 0 ? opts->threads : omp_get_max_threads();
+    double estimate = (timer_seconds() - start) / PILOT_PIXELS * (double)pixels / threads;
+    if (estimate > LONG_RENDER_SECONDS)
+        fprintf(stderr, "%s: warning: this render will take about %.0f minutes on %d threads (from a pilot of %d "
+                "pixels): a smaller --width, --height or --spp first, or a chapter with an acceleration structure "
+                "(06, 09, 13) for a large mesh\n", label, estimate / 60.0, threads, PILOT_PIXELS);
+}
+
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
                    const camera *cam, render_stats *stats_out)
 {
@@ -105,6 +140,7 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
                       .stratify = opts->stratify};
     if (opts->explain)
         return program_explain(opts, label, &job, stats_out);
+    warn_if_long(opts, label, &job);
     image img = image_make(cam->width, cam->height);
     if (img.rgb == NULL) {
         fprintf(stderr, "%s: out of memory for a %dx%d image\n", label, cam->width, cam->height);

@@ -1020,9 +1020,34 @@ static void test_games101_assignment_7_scene_file(void **state)
     assert_int_equal(system(command), 0);
 }
 
+/* A scene with nothing that gives light is said to be black before it is
+ * rendered; the Cornell box, an environment alone, or a point light alone
+ * are not. */
+static void test_a_scene_without_light_is_reported(void **state)
+{
+    (void)state;
+    char why[256];
+    pt_scene sc;
+    load_scene_file(&sc, &(unsigned){0}, NULL,
+                    "camera eye 0 1 4 target 0 0 0\nmaterial w diffuse albedo 0.5 0.5 0.5\n"
+                    "quad p0 -1 0 -1 p1 -1 0 1 p2 1 0 1 p3 1 0 -1 material w\n");
+    assert_true(pt_scene_has_no_light(&sc, why, sizeof why));
+    print_message("%s\n", why);
+    sc.environment = vec3_splat(1.0f);
+    assert_false(pt_scene_has_no_light(&sc, why, sizeof why));
+    pt_scene_free(&sc);
+    pt_scene_build_cornell_box(&sc);
+    assert_false(pt_scene_has_no_light(&sc, why, sizeof why));
+    pt_scene_free(&sc);
+    pt_scene_build_point_in_sphere(&sc, 0.5f, 1.0f);
+    assert_false(pt_scene_has_no_light(&sc, why, sizeof why));
+    pt_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_a_scene_without_light_is_reported),
         cmocka_unit_test(test_games101_assignment_7_scene_file),
         cmocka_unit_test(test_mtl_materials_as_the_format_means_them),
         cmocka_unit_test(test_an_emitting_mesh_casts_shadows),

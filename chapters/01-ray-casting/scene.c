@@ -327,6 +327,32 @@ static bool add_mesh(scene *sc, const scene_desc *d, int index, char *err, size_
     return true;
 }
 
+/* Chapters 01-02 test every shape for every ray: beyond this many
+ * triangles a render takes minutes where chapter 06's BVH takes seconds. */
+enum { BRUTE_FORCE_TRIANGLES_WARN = 4096 };
+
+/* What would make the picture wrong or slow, said before it is rendered:
+ * no light at all (only the ambient term and the background remain), and
+ * a mesh too large to test triangle by triangle. */
+static void warn_before_rendering(const scene *sc, const scene_desc *d, const char *label)
+{
+    int triangles = 0, emissive_spheres = 0;
+    for (int i = 0; i < sc->shape_count; i++)
+        triangles += sc->shapes[i].kind == SHAPE_TRIANGLE;
+    for (int i = 0; i < d->shape_count; i++)
+        emissive_spheres += d->shapes[i].kind == SCENE_SHAPE_SPHERE && d->shapes[i].material >= 0 &&
+                            d->materials[d->shapes[i].material].kind == SCENE_MATERIAL_EMISSIVE;
+    if (sc->light_count == 0)
+        program_warn(label, d, 0, 0, "no light: the picture shows only the ambient term and the background%s",
+                     emissive_spheres > 0 ? " (emissive spheres do not light the scene here; chapter 09 samples them "
+                                            "by the rays that hit them)"
+                                          : "; add a point or area light, or an emissive quad");
+    if (triangles > BRUTE_FORCE_TRIANGLES_WARN)
+        program_warn(label, d, 0, 0, "%d triangles: this chapter tests every one for every ray (no acceleration "
+                     "structure yet), which takes minutes; chapter 06 (06-bvh --scene ...) and chapter 09 trace them "
+                     "through a BVH", triangles);
+}
+
 bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *err, size_t err_size)
 {
     scene_init(sc);
@@ -389,6 +415,7 @@ bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *er
             break;
         }
     }
+    warn_before_rendering(sc, d, label);
     if (d->integrator[0] != '\0' && strcmp(d->integrator, "ray_casting") != 0 && strcmp(d->integrator, "whitted") != 0)
         program_warn(label, d, d->integrator_line, d->integrator_column,
                      "integrator '%s' is not one of chapters 01-02 (ray_casting, whitted): ignored", d->integrator);

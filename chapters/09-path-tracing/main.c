@@ -29,6 +29,8 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     char err[SCENE_PATH_SIZE + 1024];
     scene_desc desc;
     bool from_file = program_load_scene(opts, PROGRAM, &desc);
+    if (opts->quiet)
+        pt_scene_report_materials(NULL);
     pt_integrator integrator = f->integrator.index < 0 ? PT_LECTURE : (pt_integrator)f->integrator.index;
     int status = 0;
     if (from_file && (f->obj != NULL || f->data != NULL)) {
@@ -50,6 +52,8 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     }
     if (!from_file && f->obj == NULL)
         pt_scene_build_builtin(sc, cli_choice_name(&f->builtin));
+    if (pt_scene_has_no_light(sc, err, sizeof err))
+        fprintf(stderr, PROGRAM ": warning: %s\n", err);
     if (!from_file)
         pt_scene_describe(sc, &desc);
     /* The path tracer can simulate every effect; it simulates those the

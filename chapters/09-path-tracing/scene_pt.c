@@ -521,3 +521,17 @@ bool pt_scene_build_builtin(pt_scene *sc, const char *name)
         }
     return false;
 }
+
+/* ---- a warning before a render that cannot be right --------------------- */
+
+bool pt_scene_has_no_light(const pt_scene *sc, char *why, size_t why_size)
+{
+    if (sc->emitter_count > 0 || sc->point_light_count > 0 || vec3_max_component(sc->environment) > 0.0f)
+        return false;
+    int emitting_spheres = 0;
+    for (int i = 0; i < sc->sphere_count; i++)
+        emitting_spheres += vec3_max_component(sc->materials[sc->spheres[i].material].emission) > 0.0f;
+    snprintf(why, why_size, "no light: no emitting triangle, point light or background%s: the image will be black",
+             emitting_spheres > 0 ? " (only emitting spheres, which light what happens to hit them)" : "");
+    return emitting_spheres == 0;
+}

@@ -252,6 +252,10 @@ bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_siz
  * tracer intersects triangles and spheres only). Runs pt_scene_finish. False
  * with err ("file:line:col: ...") on failure, sc then empty. */
 bool pt_scene_from_desc(pt_scene *sc, const scene_desc *d, const char *label, char *err, size_t err_size);
+/* Would the render be black for want of light (no emitting triangle, point
+ * light, emitting sphere or background)? Then true, and why says so. */
+bool pt_scene_has_no_light(const pt_scene *sc, char *why, size_t why_size);
+
 /* The reverse: a built-in scene as a description (every triangle a shape),
  * so that the effects analysis runs on it as on a file. */
 void pt_scene_describe(const pt_scene *sc, scene_desc *d);

@@ -51,6 +51,8 @@ static int render(cli_options *opts, const production_flags *f)
     char err[1024];
     scene_desc desc;
     bool from_file = program_load_scene(opts, "13-production", &desc);
+    if (opts->quiet)
+        pt_scene_report_materials(NULL);
     if (from_file ? !pt_scene_from_desc(&sc, &desc, "13-production", err, sizeof err)
                   : f->obj != NULL ? !pt_scene_load_obj(&sc, f->obj, err, sizeof err)
                                    : !pt_scene_build_builtin(&sc, cli_choice_name(&f->builtin))) {
@@ -60,6 +62,8 @@ static int render(cli_options *opts, const production_flags *f)
     }
     if (!from_file)
         pt_scene_describe(&sc, &desc);
+    if (pt_scene_has_no_light(&sc, err, sizeof err))
+        fprintf(stderr, "13-production: warning: %s\n", err);
     effects_report e = effects_analyse(&desc);
     scene_desc_free(&desc);
     bool walls = f->walls.index == 0;

@@ -1,6 +1,8 @@
 /* cli.c -- one parser for every chapter program's flags (see cli.h). */
 #include "cli.h"
 
+#include "input_file.h"
+
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -30,6 +32,7 @@ cli_options cli_defaults(const char *out, int width, int height, int spp)
     o.out = out;
     o.exposure = 0.0f;
     o.quiet = false;
+    o.max_input_mb = INPUT_DEFAULT_MESH_MB;
     return o;
 }
 
@@ -210,7 +213,7 @@ cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *o
         bool core = strcmp(name, "--width") == 0 || strcmp(name, "--height") == 0 || strcmp(name, "--spp") == 0 ||
                     strcmp(name, "--seed") == 0 || strcmp(name, "--threads") == 0 || strcmp(name, "--out") == 0 ||
                     strcmp(name, "--exposure") == 0 || strcmp(name, "--scene") == 0 ||
-                    strcmp(name, "--explain") == 0;
+                    strcmp(name, "--explain") == 0 || strcmp(name, INPUT_LIMIT_FLAG) == 0;
         if (!core && extra == NULL) {
             snprintf(err, err_size, "unknown flag '%s'", name);
             return CLI_ERROR;
@@ -252,6 +255,11 @@ cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *o
                 return CLI_ERROR;
             }
             opts->explain = true;
+        } else if (strcmp(name, INPUT_LIMIT_FLAG) == 0) {
+            if (!parse_int(value, 1, INPUT_MAX_MESH_MB, &opts->max_input_mb)) {
+                snprintf(err, err_size, "%s: expected megabytes from 1 to %d, got '%s'", name, INPUT_MAX_MESH_MB, value);
+                return CLI_ERROR;
+            }
         } else if (strcmp(name, "--threads") == 0) {
             if (!parse_int(value, 1, CLI_MAX_THREADS, &opts->threads)) {
                 snprintf(err, err_size, "--threads: expected a thread count from 1 to %d, got '%s'", CLI_MAX_THREADS, value);
@@ -303,6 +311,7 @@ void cli_print_help(const cli_spec *spec, const cli_options *d)
     printf("  --scene FILE     render a scene file instead of the built-in scene (docs/scene-format.md)\n");
     printf("  --explain X,Y    print the path tree of pixel (X, Y) -- every ray, hit, light sample and\n");
     printf("                   Russian roulette decision -- instead of rendering the image\n");
+    printf("  --max-input-mb N the largest OBJ or MTL file read, in MB of 2^20 bytes (default %d)\n", d->max_input_mb);
     printf("  --quiet          no progress line and no report\n");
     printf("  --help           this text\n");
     if (spec->extra_count > 0) {
@@ -330,6 +339,8 @@ void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options 
         fprintf(stderr, "%s: %s\n(try '%s --help')\n", spec->program, err, spec->program);
         exit(2);
     }
+    /* Inputs are bounded (input_file.h). */
+    input_file_set_mesh_limit((uint64_t)opts->max_input_mb << 20);
 #ifdef _OPENMP
     if (opts->threads == 0)
         opts->threads = omp_get_max_threads();

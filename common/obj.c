@@ -39,6 +39,8 @@
  */
 #include "mesh.h"
 
+#include "input_file.h"
+
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -381,49 +383,6 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
 
 /* ---- reading files ----------------------------------------------------- */
 
-/* The whole file in a malloc'ed buffer. On failure returns an errno value
- * (and *text is NULL); 0 on success. Reads until EOF rather than trusting a
- * size from stat, so pipes and files that change size are no special case. */
-static int read_file(const char *path, char **text, size_t *length)
-{
-    *text = NULL;
-    *length = 0;
-    FILE *f = fopen(path, "rb");
-    if (f == NULL)
-        return errno;
-    size_t capacity = 0, used = 0;
-    char *buffer = NULL;
-    int failure = 0;
-    for (;;) {
-        if (used == capacity) {
-            size_t grown = capacity == 0 ? 65536 : capacity * 2;
-            char *p = grown > capacity ? realloc(buffer, grown) : NULL;
-            if (p == NULL) {
-                failure = ENOMEM;
-                break;
-            }
-            buffer = p;
-            capacity = grown;
-        }
-        size_t n = fread(buffer + used, 1, capacity - used, f);
-        used += n;
-        if (n == 0) {
-            /* A directory opens fine on Linux; the read then fails with EISDIR. */
-            if (ferror(f))
-                failure = errno != 0 ? errno : EIO;
-            break;
-        }
-    }
-    fclose(f);
-    if (failure != 0) {
-        free(buffer);
-        return failure;
-    }
-    *text = buffer;
-    *length = used;
-    return 0;
-}
-
 /* base_dir/name, or name itself when it is absolute or base_dir is "" (the
  * current directory). malloc'ed; NULL when out of memory. */
 static char *join_path(const char *base_dir, const char *name, size_t name_length)
@@ -575,11 +534,10 @@ static bool obj_mtllib(obj_reader *obj, const source *s, line_reader *r)
         char *path = join_path(obj->base_dir, f.start, f.length);
         if (path == NULL)
             return fail_at(s, "%s", strerror(ENOMEM));
-        char *text;
+        char *text, why[INPUT_ERROR_SIZE];
         size_t length;
-        int failure = read_file(path, &text, &length);
-        if (failure != 0) {
-            fail_at(s, "cannot read material library '%s': %s", path, strerror(failure));
+        if (!input_file_read(path, "MTL", input_file_mesh_limit(), true, &text, &length, why, sizeof why)) {
+            fail_at(s, "cannot read material library '%s': %s", path, why);
             free(path);
             return false;
         }
@@ -706,11 +664,10 @@ bool mesh_parse_obj(mesh *m, const char *text, size_t length, const char *name, 
 
 bool mesh_load_obj(mesh *m, const char *path, char *err, size_t err_size)
 {
-    char *text;
+    char *text, why[INPUT_ERROR_SIZE];
     size_t length;
-    int failure = read_file(path, &text, &length);
-    if (failure != 0) {
-        set_error(err, err_size, "%s: %s", path, strerror(failure));
+    if (!input_file_read(path, "OBJ", input_file_mesh_limit(), true, &text, &length, why, sizeof why)) {
+        set_error(err, err_size, "%s: %s", path, why);
         return false;
     }
     /* MTL files are named relative to the OBJ file, not to the current

@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "input_file.h"
 #include "memory.h"
 
 /* Coordinates and colours beyond these are typos, not scenes (and float
@@ -746,23 +747,12 @@ bool scene_desc_parse(scene_desc *d, const char *text, size_t length, const char
 bool scene_desc_load(scene_desc *d, const char *path, char *err, size_t err_size)
 {
     scene_desc_init(d);
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        snprintf(err, err_size, "%s: cannot open: %s", path, strerror(errno));
-        return false;
-    }
-    char *text = malloc((size_t)SCENE_MAX_FILE_BYTES + 1);
-    if (text == NULL) {
-        fclose(f);
-        snprintf(err, err_size, "%s: out of memory", path);
-        return false;
-    }
-    size_t length = fread(text, 1, (size_t)SCENE_MAX_FILE_BYTES + 1, f);
-    bool read_error = ferror(f) != 0;
-    fclose(f);
-    if (read_error) {
-        free(text);
-        snprintf(err, err_size, "%s: read error", path);
+    /* Scene files are written by hand: their fixed limit is far above any
+     * of them, and geometry of any size belongs in an OBJ file. */
+    char *text, why[INPUT_ERROR_SIZE];
+    size_t length;
+    if (!input_file_read(path, "scene", (uint64_t)SCENE_MAX_FILE_BYTES, false, &text, &length, why, sizeof why)) {
+        snprintf(err, err_size, "%s: %s", path, why);
         return false;
     }
     /* Mesh paths are relative to the scene file's directory. */

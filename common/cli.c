@@ -1,6 +1,7 @@
 /* cli.c -- one parser for every chapter program's flags (see cli.h). */
 #include "cli.h"
 
+#include "counters.h"
 #include "input_file.h"
 
 #include <errno.h>
@@ -339,8 +340,16 @@ void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options 
         fprintf(stderr, "%s: %s\n(try '%s --help')\n", spec->program, err, spec->program);
         exit(2);
     }
-    /* Inputs are bounded (input_file.h). */
+    /* Inputs are bounded, and none may be a file this run writes. */
     input_file_set_mesh_limit((uint64_t)opts->max_input_mb << 20);
+    char sidecar[PATH_MAX];
+    input_file_protect(spec->program, "--out", opts->out, opts->out, "");
+    if (has_suffix(opts->out, ".exr")) {
+        snprintf(sidecar, sizeof sidecar, "%.*s.png", (int)strlen(opts->out) - 4, opts->out);
+        input_file_protect(spec->program, "--out", opts->out, sidecar, "its .png preview");
+    }
+    counters_path_for_image(opts->out, sidecar, sizeof sidecar);
+    input_file_protect(spec->program, "--out", opts->out, sidecar, "its counters file");
 #ifdef _OPENMP
     if (opts->threads == 0)
         opts->threads = omp_get_max_threads();

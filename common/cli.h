@@ -75,7 +75,9 @@ cli_options cli_defaults(const char *out, int width, int height, int spp);
 cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *opts, char *err, size_t err_size);
 /* cli_parse, then: --help prints usage and exits 0; an error prints
  * "program: message" and "try --help", and exits 2. Then applies
- * --max-input-mb (input_file_set_mesh_limit). */
+ * --max-input-mb, and declares --out, its .png preview and its counters
+ * file as outputs no input may be (input_file_protect: reading one of them
+ * as input stops the program with status 2). */
 void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options *opts);
 void cli_print_help(const cli_spec *spec, const cli_options *defaults);
 

@@ -9,13 +9,63 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-enum { MB = 1 << 20 };
+enum { MB = 1 << 20, PROTECTED_MAX = 8, PROTECTED_PATH_SIZE = 4096, PROTECTED_TEXT_SIZE = 64 };
 
 static uint64_t mesh_limit = (uint64_t)INPUT_DEFAULT_MESH_MB * MB;
 
 uint64_t input_file_mesh_limit(void) { return mesh_limit; }
 
 void input_file_set_mesh_limit(uint64_t bytes) { mesh_limit = bytes; }
+
+/* ---- the files this run writes ------------------------------------------------ */
+
+typedef struct {
+    char label[PROTECTED_TEXT_SIZE], flag[PROTECTED_TEXT_SIZE], what[PROTECTED_TEXT_SIZE];
+    char flag_value[PROTECTED_PATH_SIZE], path[PROTECTED_PATH_SIZE];
+} protected_path;
+
+static protected_path protected_paths[PROTECTED_MAX];
+static int protected_count;
+
+void input_file_protect(const char *label, const char *flag, const char *flag_value, const char *path,
+                        const char *what)
+{
+    if (protected_count == PROTECTED_MAX)
+        return;
+    protected_path *p = &protected_paths[protected_count++];
+    snprintf(p->label, sizeof p->label, "%s", label);
+    snprintf(p->flag, sizeof p->flag, "%s", flag);
+    snprintf(p->flag_value, sizeof p->flag_value, "%s", flag_value);
+    snprintf(p->path, sizeof p->path, "%s", path);
+    snprintf(p->what, sizeof p->what, "%s", what);
+}
+
+void input_file_protect_clear(void) { protected_count = 0; }
+
+/* Stops the program if the open input `info` (read as `path`) is a file
+ * the run will write. Same device and inode: the same file whatever the
+ * names, so "./x.obj", "dir/../x.obj" and a hard link all match, and stat
+ * follows a symbolic link to what it names. An output that does not exist
+ * yet cannot be this input. */
+static void refuse_if_output(const char *path, const struct stat *info)
+{
+    for (int i = 0; i < protected_count; i++) {
+        const protected_path *p = &protected_paths[i];
+        struct stat out;
+        if (stat(p->path, &out) != 0 || out.st_dev != info->st_dev || out.st_ino != info->st_ino)
+            continue;
+        fprintf(stderr, "%s: %s '%s' would overwrite the input '%s'%s%s%s\n", p->label, p->flag, p->flag_value, path,
+                p->what[0] ? " (" : "", p->what, p->what[0] ? ")" : "");
+        exit(2);
+    }
+}
+
+void input_file_check_not_output(const char *path)
+{
+    struct stat info;
+    if (protected_count > 0 && stat(path, &info) == 0)
+        refuse_if_output(path, &info);
+}
 
 /* ---- reading ------------------------------------------------------------------ */
 
@@ -90,6 +140,7 @@ bool input_file_read(const char *path, const char *kind, uint64_t max_bytes, boo
         close(fd);
         return false;
     }
+    refuse_if_output(path, &info);
     if (info.st_size < 0 || (uint64_t)info.st_size > max_bytes) {
         too_large((uint64_t)info.st_size, kind, max_bytes, raisable, why, why_size);
         close(fd);

@@ -1,4 +1,5 @@
-/* input_file.h -- reading the files a run is given, bounded.
+/* input_file.h -- reading the files a run is given: bounded, and never one
+ * the run is about to overwrite.
  *
  * Usage:
  *   char *text; size_t length; char why[INPUT_ERROR_SIZE];
@@ -13,7 +14,8 @@
  *     with no writer would block forever;
  *   - a file over `max_bytes`: checked against fstat's size before anything
  *     is allocated, and again while reading (a file may grow, and some
- *     regular files, those in /proc, report size 0).
+ *     regular files, those in /proc, report size 0);
+ *   - a file the run will write (input_file_protect): the program stops.
  */
 #ifndef INPUT_FILE_H
 #define INPUT_FILE_H
@@ -48,5 +50,24 @@ void input_file_set_mesh_limit(uint64_t bytes);
  * files (--max-input-mb N raises it)"). */
 bool input_file_read(const char *path, const char *kind, uint64_t max_bytes, bool raisable, char **text,
                      size_t *length, char *why, size_t why_size);
+
+/* Declares that this run will write `path` (which need not exist yet):
+ * `flag` and `flag_value` are what the user typed ("--out", "x.exr") and
+ * `what` says how path follows from it ("" for the file itself, "its .png
+ * preview"). From then on, when input_file_read is asked for a file that
+ * is one of these (the same file, however named: "./x.obj", a hard or
+ * symbolic link), the program stops before reading it, as for a bad flag:
+ *   "label: --out 'x.exr' would overwrite the input 'x.png' (its .png preview)"
+ * on stderr and exit status 2. Programs call it once, when their flags are
+ * read (cli_parse_or_exit); a library or a test that never does keeps
+ * input_file_read free of side effects. Up to 8 paths. */
+void input_file_protect(const char *label, const char *flag, const char *flag_value, const char *path,
+                        const char *what);
+/* The same check for a file named as input that this program will not
+ * read itself (a scene's mesh in a chapter that ignores meshes): stops the
+ * program if `path` exists and is a protected output. */
+void input_file_check_not_output(const char *path);
+/* Forgets every protected path (for tests). */
+void input_file_protect_clear(void);
 
 #endif

@@ -267,6 +267,29 @@ for program in "$bin"/[0-9][0-9]-*; do
         { echo "newmtl m"; head -c 2097152 /dev/zero | tr '\0' '#'; echo; } > "$dir/in.mtl"
         expect_failure "$p --obj with an MTL of 2 MB, --max-input-mb 1" "in.mtl': 2.0 MB is over the 1 MB limit for MTL files (--max-input-mb N raises it)" -- \
             run --out "$dir/out.exr" --obj "$dir/in.obj" --max-input-mb 1
+
+        # ---- --out and its sidecars may not name an input (status 2, input kept) --
+        out_case() { # NAME OBJ_NAME OUT_NAME [OBJ_ARG]: the OBJ is written as $dir/OBJ_NAME, named $dir/OBJ_ARG
+            fresh_dir; printf "${tri}f 1 2 3\n" > "$dir/$2"; keep="$2"; unchanged="$2"; want=2
+            expect_failure "$p $1" "--out '$dir/$3' would overwrite the input '$dir/${4:-$2}'" -- \
+                run --out "$dir/$3" --obj "$dir/${4:-$2}"
+        }
+        out_case "--out is the --obj file" in.png in.png
+        out_case "--out is the --obj file as ./" in.png in.png ./in.png
+        out_case "--out's .png preview is the --obj file" out.png out.exr
+        out_case "--out's counters file is the --obj file" out.counters.json out.exr
+        fresh_dir; printf "${tri}f 1 2 3\n" > "$dir/in.obj"; ln "$dir/in.obj" "$dir/out.png"
+        keep="in.obj out.png"; unchanged="in.obj"; want=2
+        expect_failure "$p --out is a hard link to the --obj file" "--out '$dir/out.png' would overwrite the input '$dir/in.obj'" -- \
+            run --out "$dir/out.png" --obj "$dir/in.obj"
+        fresh_dir; keep="in.obj out.png"; unchanged="out.png"; want=2
+        printf 'mtllib out.png\n'"$tri"'usemtl m\nf 1 2 3\n' > "$dir/in.obj"; printf 'newmtl m\nKd 1 1 1\n' > "$dir/out.png"
+        expect_failure "$p --out's preview is the MTL file" "--out '$dir/out.exr' would overwrite the input '$dir/out.png' (its .png preview)" -- \
+            run --out "$dir/out.exr" --obj "$dir/in.obj"
+        # The control: an old output that is no input is replaced as usual.
+        fresh_dir; printf "${tri}f 1 2 3\n" > "$dir/in.obj"; echo old > "$dir/out.png"
+        expect_success "$p --out replaces an old output" -- run --out "$dir/out.png" --obj "$dir/in.obj"
+        cmp -s "$dir/out.png" - <<< old && { failures=$((failures + 1)); echo "FAIL $p --out replaces an old output: it did not"; }
     fi
 
     # ---- scene files (every program but 08, which has no scene) -----------------
@@ -285,6 +308,13 @@ for program in "$bin"/[0-9][0-9]-*; do
         expect_failure "$p --scene /dev/zero" "/dev/zero: not a regular file (a character device)" -- run --out "$dir/out.exr" --scene /dev/zero
         fresh_dir; truncate -s 17M "$dir/in.scene"; keep="in.scene"; want=1
         expect_failure "$p --scene of 17 MB" "in.scene: 17.0 MB is over the 16 MB limit for scene files" -- \
+            run --out "$dir/out.exr" --scene "$dir/in.scene"
+        fresh_dir; printf "$cam" > "$dir/in.png"; keep="in.png"; unchanged="in.png"; want=2
+        expect_failure "$p --out is the --scene file" "--out '$dir/in.png' would overwrite the input '$dir/in.png'" -- \
+            run --out "$dir/in.png" --scene "$dir/in.png"
+        fresh_dir; printf "${cam}mesh path \"out.png\"\n" > "$dir/in.scene"; printf "${tri}f 1 2 3\n" > "$dir/out.png"
+        keep="in.scene out.png"; unchanged="out.png"; want=2
+        expect_failure "$p --out's preview is a mesh of the scene" "--out '$dir/out.exr' would overwrite the input '$dir/out.png' (its .png preview)" -- \
             run --out "$dir/out.exr" --scene "$dir/in.scene"
         ;;
     esac

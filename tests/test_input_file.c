@@ -1,9 +1,12 @@
 /* test_input_file.c -- tests for common/input_file.c: inputs are read whole
- * only when they are regular files within their limit.
+ * only when they are regular files within their limit, and a run never reads
+ * as input a file it is about to write (--out and its sidecars).
  *
  * Files live in a fresh mkdtemp directory under /tmp, removed at the end.
  * The limit is tested with small limits and a sparse file (ftruncate), so
- * nothing large is ever written.
+ * nothing large is ever written. The refusal of an output stops the
+ * program, so it is tested in a child process (fork), whose exit status and
+ * stderr are checked.
  */
 #include <stdarg.h>
 #include <stddef.h>
@@ -23,6 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 enum { PATH_SIZE = 4096 };
@@ -64,10 +68,11 @@ static int remove_test_dir(void **state)
     return 0;
 }
 
-/* Each test starts from the default limit, 1 GB. */
+/* Each test starts from the defaults: no protected outputs, the 1 GB limit. */
 static int reset(void **state)
 {
     (void)state;
+    input_file_protect_clear();
     input_file_set_mesh_limit((uint64_t)INPUT_DEFAULT_MESH_MB << 20);
     return 0;
 }
@@ -263,6 +268,99 @@ static void test_the_flag_sets_the_limit(void **state)
     }
 }
 
+/* ---- outputs are not inputs --------------------------------------------------- */
+
+/* Runs input_file_read(path) in a child that has protected `out` as
+ * cli_parse_or_exit would (with its preview and counters file); returns the
+ * child's exit status and what it printed on stderr. Status 0: read. */
+static int read_in_child(const char *out, const char *path, char *message, size_t message_size)
+{
+    char err_path[PATH_SIZE];
+    in_dir(err_path, "child.stderr");
+    fflush(NULL);
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) {
+        if (freopen(err_path, "w", stderr) == NULL)
+            _exit(99);
+        cli_spec spec = {"prog", "t", NULL, 0};
+        cli_options o = cli_defaults(out, 8, 8, 1);
+        char *argv[] = {"prog"};
+        cli_parse_or_exit(1, argv, &spec, &o);
+        char *text, why[INPUT_ERROR_SIZE];
+        size_t length;
+        bool ok = input_file_read(path, "OBJ", 1000, true, &text, &length, why, sizeof why);
+        _exit(ok ? 0 : 1);
+    }
+    int status;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status));
+    FILE *f = fopen(err_path, "r");
+    assert_non_null(f);
+    size_t n = fread(message, 1, message_size - 1, f);
+    message[n] = '\0';
+    fclose(f);
+    return WEXITSTATUS(status);
+}
+
+/* The image, its .png preview and its counters file, however the input is
+ * named: the same path, "./" and "dir/../", a hard link, a symbolic link.
+ * The input is left as it was; the program says which flag and which file. */
+static void test_an_output_is_never_read_as_input(void **state)
+{
+    reset(state);
+    char out[PATH_SIZE], in[PATH_SIZE], message[1024], expected[3 * PATH_SIZE];
+    write_text(in_dir(out, "o.png"), "v 0 0 0\n");
+    assert_int_equal(read_in_child(out, out, message, sizeof message), 2);
+    snprintf(expected, sizeof expected, "prog: --out '%s' would overwrite the input '%s'\n", out, out);
+    assert_string_equal(message, expected);
+
+    snprintf(in, sizeof in, "%s/./sub/../o.png", test_dir);
+    assert_int_equal(mkdir(in_dir(expected, "sub"), 0755), 0);
+    assert_int_equal(read_in_child(out, in, message, sizeof message), 2);
+    assert_contains(message, "--out");
+
+    assert_int_equal(link(out, in_dir(in, "hard.obj")), 0);
+    assert_int_equal(read_in_child(out, in, message, sizeof message), 2);
+    snprintf(expected, sizeof expected, "would overwrite the input '%s'", in);
+    assert_contains(message, expected);
+    assert_int_equal(symlink(out, in_dir(in, "soft.obj")), 0);
+    assert_int_equal(read_in_child(out, in, message, sizeof message), 2);
+
+    /* The sidecars of an .exr: its preview and its counters file. */
+    in_dir(out, "o.exr");
+    assert_int_equal(read_in_child(out, in_dir(in, "o.png"), message, sizeof message), 2);
+    snprintf(expected, sizeof expected, "prog: --out '%s' would overwrite the input '%s' (its .png preview)\n", out, in);
+    assert_string_equal(message, expected);
+    write_text(in_dir(in, "o.counters.json"), "v 0 0 0\n");
+    assert_int_equal(read_in_child(out, in, message, sizeof message), 2);
+    assert_contains(message, "(its counters file)");
+    in_dir(in, "o.png");
+    FILE *f = fopen(in, "r");
+    char first[16] = "";
+    assert_non_null(fgets(first, sizeof first, f));
+    fclose(f);
+    assert_string_equal(first, "v 0 0 0\n");
+}
+
+/* Nothing is refused that is not an output: another file, an output that
+ * does not exist yet, a file with the output's contents, and any file at
+ * all when no program has protected its outputs (a library, a test). */
+static void test_other_files_are_read_as_usual(void **state)
+{
+    reset(state);
+    char out[PATH_SIZE], in[PATH_SIZE], message[1024];
+    write_text(in_dir(in, "model.obj"), "v 0 0 0\n");
+    assert_int_equal(read_in_child(in_dir(out, "fresh.exr"), in, message, sizeof message), 0);
+    assert_string_equal(message, "");
+    write_text(in_dir(out, "copy.png"), "v 0 0 0\n");
+    assert_int_equal(read_in_child(out, in, message, sizeof message), 0);
+    char *text, why[INPUT_ERROR_SIZE];
+    size_t length;
+    assert_true(input_file_read(out, "OBJ", 1000, true, &text, &length, why, sizeof why));
+    free(text);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -273,6 +371,8 @@ int main(void)
         cmocka_unit_test(test_only_regular_files_are_read),
         cmocka_unit_test(test_loaders_refuse_what_is_not_a_regular_file_or_too_large),
         cmocka_unit_test(test_the_flag_sets_the_limit),
+        cmocka_unit_test(test_an_output_is_never_read_as_input),
+        cmocka_unit_test(test_other_files_are_read_as_usual),
     };
     return cmocka_run_group_tests(tests, make_test_dir, remove_test_dir);
 }

@@ -350,6 +350,12 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
 
     bool colour = field_is(keyword, "Kd") || field_is(keyword, "Ks") || field_is(keyword, "Ke");
     bool scalar = field_is(keyword, "Ns") || field_is(keyword, "Ni");
+    /* An unknown word before the first newmtl: the file is of another kind
+     * (an OBJ, an image, or any file an OBJ names, such as a private key).
+     * Say so without printing what it holds; after newmtl it is a typo. */
+    if (!colour && !scalar && mtl->current < 0)
+        return fail_at(s, "not an MTL file (a material library starts with 'newmtl'; this line starts with no MTL "
+                          "statement)");
     if (!colour && !scalar)
         return fail_at(s, "unknown statement '%s'", quote(keyword.start, keyword.length, shown));
     /* keyword is one of five two-letter words: safe to print as a string. */
@@ -410,6 +416,7 @@ typedef struct {
     int position_base, normal_base, texcoord_base;
     int material;        /* for the faces that follow: from usemtl, -1 before */
     bool skipped_mtllib; /* an mtllib was not read because base_dir is NULL */
+    bool recognised;     /* a statement with data (v, vn, vt, f, mtllib, usemtl) was read */
 } obj_reader;
 
 typedef struct {
@@ -584,11 +591,10 @@ static bool obj_usemtl(obj_reader *obj, const source *s, line_reader *r)
     return true;
 }
 
-static bool obj_statement(void *context, source *s, line_reader *r, field keyword)
+/* v, vn, vt, f, mtllib, usemtl: the statements that carry data. */
+static bool obj_data_statement(obj_reader *obj, source *s, line_reader *r, field keyword)
 {
-    obj_reader *obj = context;
     mesh *m = obj->m;
-    char shown[QUOTE_SIZE];
     float x[6];
 
     if (field_is(keyword, "v")) {
@@ -626,11 +632,29 @@ static bool obj_statement(void *context, source *s, line_reader *r, field keywor
         return obj_face(obj, s, r);
     if (field_is(keyword, "mtllib"))
         return obj_mtllib(obj, s, r);
-    if (field_is(keyword, "usemtl"))
-        return obj_usemtl(obj, s, r);
+    return obj_usemtl(obj, s, r);
+}
+
+static bool obj_statement(void *context, source *s, line_reader *r, field keyword)
+{
+    obj_reader *obj = context;
+    char shown[QUOTE_SIZE];
+    if (field_is(keyword, "v") || field_is(keyword, "vn") || field_is(keyword, "vt") || field_is(keyword, "f") ||
+        field_is(keyword, "mtllib") || field_is(keyword, "usemtl")) {
+        if (!obj_data_statement(obj, s, r, keyword))
+            return false;
+        obj->recognised = true;
+        return true;
+    }
     if (field_is(keyword, "o") || field_is(keyword, "g") || field_is(keyword, "s") || field_is(keyword, "l") ||
         field_is(keyword, "p"))
         return true;
+    /* Before any data, an unknown word says the file is of another kind
+     * (an image, a scene file, a private key named by mistake or by a
+     * hostile scene): say so, and print nothing of what it holds. After
+     * data, it is a typo in an OBJ file ("vv 1 2 3"), shown to be found. */
+    if (!obj->recognised)
+        return fail_at(s, "not an OBJ file (this line starts with none of v, vn, vt, f, mtllib, usemtl, o, g, s, l, p)");
     return fail_at(s, "unknown statement '%s'", quote(keyword.start, keyword.length, shown));
 }
 

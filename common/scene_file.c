@@ -51,6 +51,7 @@ typedef struct {
     int line;
     char *err;
     size_t err_size;
+    bool recognised; /* a statement was read: the file is a scene file */
 } parse_context;
 
 static bool fail(const parse_context *pc, int column, const char *format, ...)
@@ -702,6 +703,13 @@ static bool parse_line(const parse_context *pc, scene_desc *d, const token *t, i
         *seen_effects = true;
         return statement_effects(pc, d, t, n);
     }
+    /* Before any statement, an unknown word says the file is of another
+     * kind (an OBJ file, an image, anything named by mistake): say so, and
+     * print nothing of what it holds. After one, it is a typo, shown. */
+    if (!pc->recognised)
+        return fail(pc, t[0].column,
+                    "not a scene file (this line starts with none of camera, image, background, ambient, material, "
+                    "light, sphere, plane, triangle, quad, implicit, mesh, integrator, max_depth, effects)");
     return fail(pc, t[0].column,
                 "unknown statement '%.*s' (camera, image, background, ambient, material, light, sphere, plane, "
                 "triangle, quad, implicit, mesh, integrator, max_depth, effects)",
@@ -713,7 +721,7 @@ bool scene_desc_parse(scene_desc *d, const char *text, size_t length, const char
 {
     scene_desc_init(d);
     snprintf(d->source, sizeof d->source, "%s", name);
-    parse_context pc = {name, 0, err, err_size};
+    parse_context pc = {name, 0, err, err_size, false};
     if (length > (size_t)SCENE_MAX_FILE_BYTES) {
         snprintf(err, err_size, "%s: larger than %d bytes", name, SCENE_MAX_FILE_BYTES);
         return false;
@@ -732,8 +740,10 @@ bool scene_desc_parse(scene_desc *d, const char *text, size_t length, const char
         } else {
             int count;
             ok = tokenize(&pc, text + at, (int)(end - at), tokens, &count);
-            if (ok && count > 0)
+            if (ok && count > 0) {
                 ok = parse_line(&pc, d, tokens, count, base_dir, &seen_effects);
+                pc.recognised = true;
+            }
         }
         if (!ok) {
             scene_desc_free(d);

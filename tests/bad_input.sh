@@ -267,6 +267,15 @@ for program in "$bin"/[0-9][0-9]-*; do
         { echo "newmtl m"; head -c 2097152 /dev/zero | tr '\0' '#'; echo; } > "$dir/in.mtl"
         expect_failure "$p --obj with an MTL of 2 MB, --max-input-mb 1" "in.mtl': 2.0 MB is over the 1 MB limit for MTL files (--max-input-mb N raises it)" -- \
             run --out "$dir/out.exr" --obj "$dir/in.obj" --max-input-mb 1
+        # A file of another kind: named with its line, its content not shown
+        # (an OBJ, or an mtllib, could name a private key).
+        fresh_dir; keep="in.obj"; want=1; forbid="SECRET"
+        printf 'SECRET-TOKEN-7f3a and more\n' > "$dir/in.obj"
+        expect_failure "$p --obj of another kind" "in.obj:1: not an OBJ file" -- run --out "$dir/out.exr" --obj "$dir/in.obj"
+        fresh_dir; keep="in.obj key.txt"; want=1; forbid="SECRET"
+        printf '# key\nSECRET-TOKEN-7f3a and more\n' > "$dir/key.txt"
+        printf 'mtllib key.txt\n'"$tri"'f 1 2 3\n' > "$dir/in.obj"
+        expect_failure "$p --obj with an MTL of another kind" "key.txt:2: not an MTL file" -- run --out "$dir/out.exr" --obj "$dir/in.obj"
 
         # ---- --out and its sidecars may not name an input (status 2, input kept) --
         out_case() { # NAME OBJ_NAME OUT_NAME [OBJ_ARG]: the OBJ is written as $dir/OBJ_NAME, named $dir/OBJ_ARG
@@ -299,6 +308,8 @@ for program in "$bin"/[0-9][0-9]-*; do
             expect_failure "$p --scene $1" "$3" -- run --out "$dir/out.exr" --scene "$dir/in.scene"
         }
         cam='camera eye 0 0 5 target 0 0 0 up 0 1 0 fov 40\n'
+        fresh_dir; printf 'SECRET-TOKEN-7f3a and more\n' > "$dir/in.scene"; keep="in.scene"; want=1; forbid="SECRET"
+        expect_failure "$p --scene of another kind" "in.scene:1:1: not a scene file" -- run --out "$dir/out.exr" --scene "$dir/in.scene"
         # Chapter 07 takes only the camera and the lights from a scene.
         case $p in 07-*) ;; *)
             scene_case "naming a mesh that is /dev/zero" "${cam}mesh path \"/dev/zero\"\n" \

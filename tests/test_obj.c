@@ -509,7 +509,52 @@ static void test_error_unknown_statement(void **state)
 {
     (void)state;
     expect_error("v 0 0 0\nvv 1 2 3\n", 2, "unknown statement 'vv'");
-    expect_error("V 0 0 0\n", 1, "unknown statement 'V'");
+    expect_error("v 0 0 0\nV 0 0 0\n", 2, "unknown statement 'V'");
+}
+
+/* A file of another kind (named by mistake, or by a hostile scene or
+ * mtllib: a private key, a password file) fails at the line where that
+ * shows, naming the file and the line and nothing of what the file holds. */
+static void test_a_file_of_another_kind_is_named_not_quoted(void **state)
+{
+    (void)state;
+    static const char *const texts[] = {
+        "SECRET-KEY-0123 abc\n",
+        "# a comment first\n\nSECRET-KEY-0123 abc\n",
+        "o name\ng group\ns 1\nSECRET-KEY-0123\n", /* names and groups are no OBJ data yet */
+        "camera eye 0 0 5 target 0 0 0 SECRET-KEY-0123\n",
+    };
+    static const int lines[] = {1, 3, 4, 1};
+    for (size_t i = 0; i < sizeof texts / sizeof texts[0]; i++) {
+        expect_error(texts[i], lines[i], "not an OBJ file");
+        mesh m;
+        mesh_init(&m);
+        char err[MESH_ERROR_SIZE] = "";
+        assert_false(mesh_parse_obj(&m, texts[i], strlen(texts[i]), "bad.obj", NULL, err, sizeof err));
+        if (strstr(err, "SECRET") != NULL || strstr(err, "camera") != NULL)
+            fail_msg("the message quotes the file: %s", err);
+        mesh_free(&m);
+    }
+
+    /* An mtllib naming a file that is not a material library: the OBJ
+     * itself, or any other file. The MTL file and its line are named. */
+    char path[PATH_SIZE], obj_path[PATH_SIZE], expected[2 * PATH_SIZE];
+    write_text(in_dir(path, "secret.txt"), "SECRET-KEY-0123 abc\nmore\n");
+    write_text(in_dir(obj_path, "names_secret.obj"), "v 0 0 0\nmtllib secret.txt\n");
+    mesh m;
+    mesh_init(&m);
+    char err[MESH_ERROR_SIZE] = "";
+    assert_false(mesh_load_obj(&m, obj_path, err, sizeof err));
+    snprintf(expected, sizeof expected, "%s:1: not an MTL file", path);
+    assert_starts_with(err, expected);
+    assert_null(strstr(err, "SECRET"));
+    write_text(obj_path, "mtllib names_secret.obj\n");
+    assert_false(mesh_load_obj(&m, obj_path, err, sizeof err));
+    snprintf(expected, sizeof expected, "%s:1: not an MTL file", obj_path);
+    assert_starts_with(err, expected);
+    assert_null(strstr(err, "mtllib"));
+    assert_int_equal(m.position_count, 0);
+    mesh_free(&m);
 }
 
 static void test_error_garbage_bytes(void **state)
@@ -933,6 +978,7 @@ int main(void)
         cmocka_unit_test(test_error_trailing_junk),
         cmocka_unit_test(test_error_nan_and_inf),
         cmocka_unit_test(test_error_unknown_statement),
+        cmocka_unit_test(test_a_file_of_another_kind_is_named_not_quoted),
         cmocka_unit_test(test_error_garbage_bytes),
         cmocka_unit_test(test_error_truncated_face_vertex),
         cmocka_unit_test(test_error_mid_polygon_adds_no_faces),

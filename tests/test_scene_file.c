@@ -154,6 +154,24 @@ static void test_errors_name_line_and_column(void **state)
     }
 }
 
+/* A file of another kind given as a scene (an OBJ, a password file): the
+ * file and the line, nothing of its content. After a statement, an unknown
+ * word is a typo and is shown. */
+static void test_a_file_of_another_kind_is_named_not_quoted(void **state)
+{
+    (void)state;
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    assert_false(parse(&d, "# first\nroot:x:0:0:SECRET /bin/sh\n", err));
+    assert_non_null(strstr(err, "t.scene:2:1: not a scene file"));
+    assert_null(strstr(err, "root"));
+    assert_null(strstr(err, "SECRET"));
+    assert_false(parse(&d, "v 0 0 0\nv 1 0 0\n", err));
+    assert_non_null(strstr(err, "t.scene:1:1: not a scene file"));
+    assert_false(parse(&d, "camera eye 0 0 5 target 0 0 0\ncube size 1\n", err));
+    assert_non_null(strstr(err, "t.scene:2:1: unknown statement 'cube'"));
+}
+
 static void test_long_line_and_missing_file_are_errors(void **state)
 {
     (void)state;
@@ -363,6 +381,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_full_scene_parses_every_statement),
         cmocka_unit_test(test_errors_name_line_and_column),
+        cmocka_unit_test(test_a_file_of_another_kind_is_named_not_quoted),
         cmocka_unit_test(test_long_line_and_missing_file_are_errors),
         cmocka_unit_test(test_mesh_paths_are_relative_to_the_scene_file),
         cmocka_unit_test(test_effects_follow_from_the_scene),

@@ -511,20 +511,37 @@ static bool obj_face(obj_reader *obj, const source *s, line_reader *r)
 {
     corner first = {0, 0, 0}, previous = {0, 0, 0}, current;
     int count = 0;
+    bool has_area = false;
     field f;
     while (next_field(r, &f)) {
         if (!parse_corner(obj, s, f, &current))
             return false;
-        if (count == 0)
+        if (count == 0) {
             first = current;
-        else if (count >= 2)
+        } else if (count >= 2) {
             add_face(obj, &first, &previous, &current);
+            const vec3 *p = obj->m->positions;
+            vec3 n = vec3_cross(vec3_sub(p[previous.position], p[first.position]),
+                                vec3_sub(p[current.position], p[first.position]));
+            has_area = has_area || vec3_length_squared(n) > 0.0f;
+        }
         previous = current;
         if (count < 3)
             count++;
     }
     if (count < 3)
         return fail_at(s, "a face needs at least 3 vertices");
+    /* An emitting face must have area, as a scene file's emitting quad or
+     * area light must: one without gives no light (its power is L_e times
+     * its area) and a scene lit only by it renders black. A fan triangle
+     * without area inside a face with area (three corners of a polygon on
+     * a line) is harmless: it is never hit and never sampled. */
+    const mesh_material *material = obj->material >= 0 ? &obj->m->materials[obj->material] : NULL;
+    if (material != NULL && vec3_max_component(material->emission) > 0.0f && !has_area) {
+        char shown[QUOTE_SIZE];
+        return fail_at(s, "the face emits light (material '%s', Ke > 0) but has no area: its corners are on a line",
+                       quote(material->name, strlen(material->name), shown));
+    }
     return true;
 }
 

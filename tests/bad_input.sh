@@ -10,8 +10,12 @@
 # Cases: unknown flags, missing values, non-numbers, out-of-range values,
 # NaN and Inf, unwritable or impossible outputs, a full disk (simulated with
 # a file-size limit: write() then fails with EFBIG, as it would with ENOSPC),
-# and, for the programs that read them, broken OBJ and MTL files and data
-# directories. Prints one line per failing case and a summary.
+# and, for the programs that read them, broken OBJ, MTL and scene files and
+# data directories; inputs that are not regular files or are over their
+# size limit, files of another kind (whose content must not be printed),
+# emitting shapes without area, and --out or its sidecars naming an input
+# (status 2, the input untouched). Prints one line per failing case and a
+# summary.
 set -u
 build=${1:?usage: bad_input.sh BUILD_DIR}
 bin=$build/bin
@@ -239,6 +243,13 @@ for program in "$bin"/[0-9][0-9]-*; do
         mtl_case "statement before newmtl" 'Kd 0.5 0.5 0.5\nnewmtl m\n' "in.mtl:1"
         mtl_case "garbage" 'newmtl m\n\x01\x02\x03\xff\n' "in.mtl:2"
         mtl_case "empty (material never defined)" '' "in.obj"
+        # A face that emits (Ke > 0) must have area, like an area light.
+        fresh_dir; keep="in.obj in.mtl"; want=1
+        printf 'newmtl m\nKe 1 1 1\n' > "$dir/in.mtl"
+        printf 'mtllib in.mtl\nv 0 0 0\nv 1 0 0\nv 2 0 0\nusemtl m\nf 1 2 3\n' > "$dir/in.obj"
+        expect_failure "$p --obj with an emitting face without area" "in.obj:6: the face emits light (material 'm', Ke > 0) but has no area" -- \
+            run --out "$dir/out.exr" --obj "$dir/in.obj"
+
         # ---- what an input may not be -------------------------------------------
         # Not a regular file: refused before reading (/dev/zero never ends,
         # a FIFO without a writer would block: the timeout catches a hang).
@@ -308,6 +319,13 @@ for program in "$bin"/[0-9][0-9]-*; do
             expect_failure "$p --scene $1" "$3" -- run --out "$dir/out.exr" --scene "$dir/in.scene"
         }
         cam='camera eye 0 0 5 target 0 0 0 up 0 1 0 fov 40\n'
+        glow='material glow emissive emission 4 4 4\n'
+        scene_case "an emitting quad without area" "$cam${glow}quad p0 0 0 0 p1 1 0 0 p2 2 0 0 p3 0 1 0 material glow\n" \
+            "in.scene:3:1: the quad emits light (material 'glow') but has no area"
+        scene_case "an emitting triangle without area" "$cam${glow}triangle p0 0 0 0 p1 0 0 0 p2 1 1 1 material glow\n" \
+            "in.scene:3:1: the triangle emits light (material 'glow') but has no area"
+        scene_case "an area light without area" "${cam}light area p0 0 0 0 p1 1 0 0 p2 2 0 0 p3 0 1 0 emission 4 4 4\n" \
+            "in.scene:2:7: the area light has no area"
         fresh_dir; printf 'SECRET-TOKEN-7f3a and more\n' > "$dir/in.scene"; keep="in.scene"; want=1; forbid="SECRET"
         expect_failure "$p --scene of another kind" "in.scene:1:1: not a scene file" -- run --out "$dir/out.exr" --scene "$dir/in.scene"
         # Chapter 07 takes only the camera and the lights from a scene.

@@ -699,6 +699,41 @@ static void test_usemtl_assigns_following_faces(void **state)
     mesh_free(&m);
 }
 
+/* A face that emits (its material's Ke > 0) must have area, like a scene
+ * file's emitting quad: without, it gives no light. A polygon with some
+ * corners on a line still has area; a face that does not emit may be
+ * degenerate (it is never hit). The error leaves the mesh as it was. */
+static void test_an_emitting_face_without_area_is_an_error(void **state)
+{
+    (void)state;
+    char path[PATH_SIZE];
+    write_text(in_dir(path, "lamp.mtl"), "newmtl lamp\nKe 0 0 2\nnewmtl dark\nKe 0 0 0\nnewmtl paint\nKd 1 1 1\n");
+    static const char corners[] = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\n";
+    char text[512], err[MESH_ERROR_SIZE] = "";
+    mesh m;
+    mesh_init(&m);
+    parse_ok(&m, valid_obj, NULL);
+    counts before = counts_of(&m);
+    /* Corners 1 2 3 are on a line (as is 1 2 1, and a face on one point). */
+    static const char *const degenerate[] = {"f 1 2 3", "f 1 2 3 2", "f 4 4 4"};
+    for (size_t i = 0; i < sizeof degenerate / sizeof degenerate[0]; i++) {
+        snprintf(text, sizeof text, "mtllib lamp.mtl\n%susemtl lamp\n%s\n", corners, degenerate[i]);
+        assert_false(mesh_parse_obj(&m, text, strlen(text), "e.obj", test_dir, err, sizeof err));
+        assert_string_equal(err, "e.obj:7: the face emits light (material 'lamp', Ke > 0) but has no area: its corners "
+                                 "are on a line");
+        assert_counts_equal(counts_of(&m), before);
+    }
+    /* With area: a triangle, and a quad whose first fan triangle has none. */
+    snprintf(text, sizeof text, "mtllib lamp.mtl\n%susemtl lamp\nf 1 2 4\nf 1 2 3 4\n", corners);
+    parse_ok(&m, text, test_dir);
+    assert_int_equal(m.face_count, before.faces + 3);
+    /* Not emitting: no material, Ke 0, a diffuse paint. */
+    snprintf(text, sizeof text, "mtllib lamp.mtl\n%sf 1 2 3\nusemtl dark\nf 1 2 3\nusemtl paint\nf 1 2 3\n", corners);
+    parse_ok(&m, text, test_dir);
+    assert_int_equal(m.face_count, before.faces + 6);
+    mesh_free(&m);
+}
+
 static void test_mtllib_several_files_on_one_line(void **state)
 {
     (void)state;
@@ -986,6 +1021,7 @@ int main(void)
         cmocka_unit_test(test_mtllib_skipped_without_base_dir),
         cmocka_unit_test(test_mtl_values_and_defaults),
         cmocka_unit_test(test_usemtl_assigns_following_faces),
+        cmocka_unit_test(test_an_emitting_face_without_area_is_an_error),
         cmocka_unit_test(test_mtllib_several_files_on_one_line),
         cmocka_unit_test(test_error_missing_mtl_file),
         cmocka_unit_test(test_error_in_mtl_names_mtl_file_and_line),

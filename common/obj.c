@@ -28,9 +28,15 @@
  *   Ka d Tr Tf illum map_* bump ...   ignored (common, and nothing here uses them)
  *
  * Any other statement is an error rather than silently skipped: a typo such
- * as "vv 1 2 3" should not quietly lose geometry. Every error reads
- * "file:line: what is wrong", and a failed call leaves the mesh exactly as
- * it found it (we remember the counts at entry and cut back to them).
+ * as "vv 1 2 3" should not quietly lose geometry. Before the file has shown
+ * it is OBJ (or MTL) with a statement of data, an unknown word means a file
+ * of another kind, and the message says so without quoting it: an mtllib,
+ * or a scene's mesh path, may name any file. A face whose material emits
+ * (Ke > 0) must have area, as a scene file's emitting quad must. Every error
+ * reads "file:line: what is wrong", and a failed call leaves the mesh
+ * exactly as it found it (we remember the counts at entry and cut back to
+ * them). Files are read through input_file_read (input_file.h): regular
+ * files only, within the mesh limit (--max-input-mb).
  *
  * The text is never copied or modified: lines and fields are spans of the
  * caller's buffer, which need not be NUL-terminated. Only a single number

@@ -87,7 +87,9 @@ bool mesh_bounds(const mesh *m, vec3 *lo, vec3 *hi);
  * negative (relative) indices, polygons fan-triangulated; mtllib and usemtl
  * with Kd, Ks, Ns, Ke, Ni from the MTL file; o, g, s and comments ignored.
  * On malformed input: false, err = "file:line: what is wrong", and m is left
- * as it was before the call (nothing half-loaded). */
+ * as it was before the call (nothing half-loaded). The OBJ and its MTL files
+ * must be regular files within input_file_mesh_limit() (input_file.h); an
+ * emitting face (Ke > 0) must have area. */
 bool mesh_load_obj(mesh *m, const char *path, char *err, size_t err_size);
 /* The same from text in memory (`name` is used in messages; MTL files are
  * looked up relative to base_dir, or not at all when it is NULL). */

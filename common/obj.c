@@ -30,9 +30,15 @@
  *   Ka Tf map_* bump ...   ignored (common, and nothing here uses them)
  *
  * Any other statement is an error rather than silently skipped: a typo such
- * as "vv 1 2 3" should not quietly lose geometry. Every error reads
- * "file:line: what is wrong", and a failed call leaves the mesh exactly as
- * it found it (we remember the counts at entry and cut back to them).
+ * as "vv 1 2 3" should not quietly lose geometry. Before the file has shown
+ * it is OBJ (or MTL) with a statement of data, an unknown word means a file
+ * of another kind, and the message says so without quoting it: an mtllib,
+ * or a scene's mesh path, may name any file. A face whose material emits
+ * (Ke > 0) must have area, as a scene file's emitting quad must. Every error
+ * reads "file:line: what is wrong", and a failed call leaves the mesh
+ * exactly as it found it (we remember the counts at entry and cut back to
+ * them). Files are read through input_file_read (input_file.h): regular
+ * files only, within the mesh limit (--max-input-mb).
  *
  * The text is never copied or modified: lines and fields are spans of the
  * caller's buffer, which need not be NUL-terminated. Only a single number
@@ -42,6 +48,7 @@
 #include "mesh.h"
 
 #include "atomic_file.h"
+#include "input_file.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -361,6 +368,12 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
     bool colour = field_is(keyword, "Kd") || field_is(keyword, "Ks") || field_is(keyword, "Ke");
     bool scalar = field_is(keyword, "Ns") || field_is(keyword, "Ni") || field_is(keyword, "Tr") ||
                   field_is(keyword, "d") || field_is(keyword, "illum");
+    /* An unknown word before the first newmtl: the file is of another kind
+     * (an OBJ, an image, or any file an OBJ names, such as a private key).
+     * Say so without printing what it holds; after newmtl it is a typo. */
+    if (!colour && !scalar && mtl->current < 0)
+        return fail_at(s, "not an MTL file (a material library starts with 'newmtl'; this line starts with no MTL "
+                          "statement)");
     if (!colour && !scalar)
         return fail_at(s, "unknown statement '%s'", quote(keyword.start, keyword.length, shown));
     /* keyword is one of the eight words above: safe to print as a string. */
@@ -406,49 +419,6 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
 
 /* ---- reading files ----------------------------------------------------- */
 
-/* The whole file in a malloc'ed buffer. On failure returns an errno value
- * (and *text is NULL); 0 on success. Reads until EOF rather than trusting a
- * size from stat, so pipes and files that change size are no special case. */
-static int read_file(const char *path, char **text, size_t *length)
-{
-    *text = NULL;
-    *length = 0;
-    FILE *f = fopen(path, "rb");
-    if (f == NULL)
-        return errno;
-    size_t capacity = 0, used = 0;
-    char *buffer = NULL;
-    int failure = 0;
-    for (;;) {
-        if (used == capacity) {
-            size_t grown = capacity == 0 ? 65536 : capacity * 2;
-            char *p = grown > capacity ? realloc(buffer, grown) : NULL;
-            if (p == NULL) {
-                failure = ENOMEM;
-                break;
-            }
-            buffer = p;
-            capacity = grown;
-        }
-        size_t n = fread(buffer + used, 1, capacity - used, f);
-        used += n;
-        if (n == 0) {
-            /* A directory opens fine on Linux; the read then fails with EISDIR. */
-            if (ferror(f))
-                failure = errno != 0 ? errno : EIO;
-            break;
-        }
-    }
-    fclose(f);
-    if (failure != 0) {
-        free(buffer);
-        return failure;
-    }
-    *text = buffer;
-    *length = used;
-    return 0;
-}
-
 /* base_dir/name, or name itself when it is absolute or base_dir is "" (the
  * current directory). malloc'ed; NULL when out of memory. */
 static char *join_path(const char *base_dir, const char *name, size_t name_length)
@@ -476,6 +446,7 @@ typedef struct {
     int position_base, normal_base, texcoord_base;
     int material;        /* for the faces that follow: from usemtl, -1 before */
     bool skipped_mtllib; /* an mtllib was not read because base_dir is NULL */
+    bool recognised;     /* a statement with data (v, vn, vt, f, mtllib, usemtl) was read */
 } obj_reader;
 
 typedef struct {
@@ -570,20 +541,37 @@ static bool obj_face(obj_reader *obj, const source *s, line_reader *r)
 {
     corner first = {0, 0, 0}, previous = {0, 0, 0}, current;
     int count = 0;
+    bool has_area = false;
     field f;
     while (next_field(r, &f)) {
         if (!parse_corner(obj, s, f, &current))
             return false;
-        if (count == 0)
+        if (count == 0) {
             first = current;
-        else if (count >= 2)
+        } else if (count >= 2) {
             add_face(obj, &first, &previous, &current);
+            const vec3 *p = obj->m->positions;
+            vec3 n = vec3_cross(vec3_sub(p[previous.position], p[first.position]),
+                                vec3_sub(p[current.position], p[first.position]));
+            has_area = has_area || vec3_length_squared(n) > 0.0f;
+        }
         previous = current;
         if (count < 3)
             count++;
     }
     if (count < 3)
         return fail_at(s, "a face needs at least 3 vertices");
+    /* An emitting face must have area, as a scene file's emitting quad or
+     * area light must: one without gives no light (its power is L_e times
+     * its area) and a scene lit only by it renders black. A fan triangle
+     * without area inside a face with area (three corners of a polygon on
+     * a line) is harmless: it is never hit and never sampled. */
+    const mesh_material *material = obj->material >= 0 ? &obj->m->materials[obj->material] : NULL;
+    if (material != NULL && vec3_max_component(material->emission) > 0.0f && !has_area) {
+        char shown[QUOTE_SIZE];
+        return fail_at(s, "the face emits light (material '%s', Ke > 0) but has no area: its corners are on a line",
+                       quote(material->name, strlen(material->name), shown));
+    }
     return true;
 }
 
@@ -600,11 +588,10 @@ static bool obj_mtllib(obj_reader *obj, const source *s, line_reader *r)
         char *path = join_path(obj->base_dir, f.start, f.length);
         if (path == NULL)
             return fail_at(s, "%s", strerror(ENOMEM));
-        char *text;
+        char *text, why[INPUT_ERROR_SIZE];
         size_t length;
-        int failure = read_file(path, &text, &length);
-        if (failure != 0) {
-            fail_at(s, "cannot read material library '%s': %s", path, strerror(failure));
+        if (!input_file_read(path, "MTL", input_file_mesh_limit(), true, &text, &length, why, sizeof why)) {
+            fail_at(s, "cannot read material library '%s': %s", path, why);
             free(path);
             return false;
         }
@@ -651,11 +638,10 @@ static bool obj_usemtl(obj_reader *obj, const source *s, line_reader *r)
     return true;
 }
 
-static bool obj_statement(void *context, source *s, line_reader *r, field keyword)
+/* v, vn, vt, f, mtllib, usemtl: the statements that carry data. */
+static bool obj_data_statement(obj_reader *obj, source *s, line_reader *r, field keyword)
 {
-    obj_reader *obj = context;
     mesh *m = obj->m;
-    char shown[QUOTE_SIZE];
     float x[6];
 
     if (field_is(keyword, "v")) {
@@ -693,11 +679,29 @@ static bool obj_statement(void *context, source *s, line_reader *r, field keywor
         return obj_face(obj, s, r);
     if (field_is(keyword, "mtllib"))
         return obj_mtllib(obj, s, r);
-    if (field_is(keyword, "usemtl"))
-        return obj_usemtl(obj, s, r);
+    return obj_usemtl(obj, s, r);
+}
+
+static bool obj_statement(void *context, source *s, line_reader *r, field keyword)
+{
+    obj_reader *obj = context;
+    char shown[QUOTE_SIZE];
+    if (field_is(keyword, "v") || field_is(keyword, "vn") || field_is(keyword, "vt") || field_is(keyword, "f") ||
+        field_is(keyword, "mtllib") || field_is(keyword, "usemtl")) {
+        if (!obj_data_statement(obj, s, r, keyword))
+            return false;
+        obj->recognised = true;
+        return true;
+    }
     if (field_is(keyword, "o") || field_is(keyword, "g") || field_is(keyword, "s") || field_is(keyword, "l") ||
         field_is(keyword, "p"))
         return true;
+    /* Before any data, an unknown word says the file is of another kind
+     * (an image, a scene file, a private key named by mistake or by a
+     * hostile scene): say so, and print nothing of what it holds. After
+     * data, it is a typo in an OBJ file ("vv 1 2 3"), shown to be found. */
+    if (!obj->recognised)
+        return fail_at(s, "not an OBJ file (this line starts with none of v, vn, vt, f, mtllib, usemtl, o, g, s, l, p)");
     return fail_at(s, "unknown statement '%s'", quote(keyword.start, keyword.length, shown));
 }
 
@@ -731,11 +735,10 @@ bool mesh_parse_obj(mesh *m, const char *text, size_t length, const char *name, 
 
 bool mesh_load_obj(mesh *m, const char *path, char *err, size_t err_size)
 {
-    char *text;
+    char *text, why[INPUT_ERROR_SIZE];
     size_t length;
-    int failure = read_file(path, &text, &length);
-    if (failure != 0) {
-        set_error(err, err_size, "%s: %s", path, strerror(failure));
+    if (!input_file_read(path, "OBJ", input_file_mesh_limit(), true, &text, &length, why, sizeof why)) {
+        set_error(err, err_size, "%s: %s", path, why);
         return false;
     }
     /* MTL files are named relative to the OBJ file, not to the current

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "explain.h"
+#include "input_file.h"
 #include "timer.h"
 
 #include <omp.h>
@@ -56,6 +57,11 @@ bool program_load_scene(cli_options *opts, const char *label, scene_desc *d)
         fprintf(stderr, "%s: %s\n", label, err);
         exit(1);
     }
+    /* The meshes it names are inputs too, whether or not this chapter
+     * reads them: none may be a file the run writes (exits 2 if one is). */
+    for (int i = 0; i < d->shape_count; i++)
+        if (d->shapes[i].kind == SCENE_SHAPE_MESH_OBJ)
+            input_file_check_not_output(d->shapes[i].path);
     if (d->has_width && !opts->width_given)
         opts->width = d->width;
     if (d->has_height && !opts->height_given)

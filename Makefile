@@ -182,8 +182,8 @@ fp-contract-leaks:
 .PHONY: test-bvh8
 test-bvh8:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/bvh8 CFLAGS="$(OPT) -g -DBVH4_WIDTH=8" \
-	  $(BUILD)/bvh8/tests/test_ch06 $(BUILD)/bvh8/bin/bench_accel >/dev/null
-	@$(BUILD)/bvh8/tests/test_ch06
+	  $(BUILD)/bvh8/tests/test_ch13 $(BUILD)/bvh8/bin/bench_accel >/dev/null
+	@$(BUILD)/bvh8/tests/test_ch13
 
 # ---------------------------------------------------------------- benchmarks --
 # The Embree harness lives in ../shared/anchors (beside this repository); it
@@ -214,7 +214,7 @@ $(BUILD)/bin/bench_pt_embree: $(BUILD)/obj/tests/bench_pt_embree.o $(ALL_LIBS)
 # Embree and ours, one after the other, on the same machine in one run; then
 # the path tracer's seconds per million camera samples (chapter 09), and the
 # same path tracer on Embree's kernels.
-bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/09-path-tracing
+bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/13-production
 	@mkdir -p $(BUILD)/data
 	@if [ -f $(SHARED)/anchors/embree_bench.c ]; then \
 	  $(MAKE) --no-print-directory $(BUILD)/bin/embree_bench && \
@@ -225,7 +225,7 @@ bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/09-path-tracing
 	else echo "no $(SHARED)/anchors/embree_bench.c: timing without Embree"; fi
 	$(BUILD)/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS) \
 	  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv $(if $(wildcard $(SHARED)/anchors/embree_bench.c),--embree $(BUILD)/data/embree.txt)
-	$(BUILD)/bin/09-path-tracing --bench --width 256 --spp 16 --bench-csv $(BUILD)/data/ch09_speed.csv --out $(BUILD)/data/ch09.exr
+	$(BUILD)/bin/13-production --bench --width 256 --spp 16 --bench-csv $(BUILD)/data/ch13_speed.csv
 	@if [ -n "$(EMBREE_HEADER)" ]; then \
 	  $(MAKE) --no-print-directory $(BUILD)/bin/bench_pt_embree && \
 	  echo "$(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data" && \

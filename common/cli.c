@@ -1,6 +1,9 @@
 /* cli.c -- one parser for every chapter program's flags (see cli.h). */
 #include "cli.h"
 
+#include "counters.h"
+#include "input_file.h"
+
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -30,6 +33,7 @@ cli_options cli_defaults(const char *out, int width, int height, int spp)
     o.out = out;
     o.exposure = 0.0f;
     o.quiet = false;
+    o.max_input_mb = INPUT_DEFAULT_MESH_MB;
     return o;
 }
 
@@ -224,6 +228,10 @@ static bool set_core(cli_options *opts, const char *name, const char *value, cha
         if (parse_pixel(value, &opts->explain_x, &opts->explain_y))
             return opts->explain = true;
         snprintf(err, err_size, "--explain: expected a pixel as X,Y (two whole numbers >= 0), got '%s'", value);
+    } else if (strcmp(name, INPUT_LIMIT_FLAG) == 0) {
+        if (parse_int(value, 1, INPUT_MAX_MESH_MB, &opts->max_input_mb))
+            return true;
+        snprintf(err, err_size, "%s: expected megabytes from 1 to %d, got '%s'", name, INPUT_MAX_MESH_MB, value);
     } else if (strcmp(name, "--threads") == 0) {
         if (parse_int(value, 1, CLI_MAX_THREADS, &opts->threads))
             return true;
@@ -245,8 +253,8 @@ static bool set_core(cli_options *opts, const char *name, const char *value, cha
 
 static bool is_core_flag(const char *name)
 {
-    static const char *const core[] = {"--width", "--height", "--spp",   "--seed",    "--threads",
-                                       "--out",   "--exposure", "--scene", "--explain", NULL};
+    static const char *const core[] = {"--width", "--height",   "--spp",   "--seed",    "--threads",
+                                       "--out",   "--exposure", "--scene", "--explain", INPUT_LIMIT_FLAG, NULL};
     for (int k = 0; core[k] != NULL; k++)
         if (strcmp(name, core[k]) == 0)
             return true;
@@ -373,6 +381,7 @@ void cli_print_help(const cli_spec *spec, const cli_options *d)
     printf("  --scene FILE     render a scene file instead of the built-in scene (docs/scene-format.md)\n");
     printf("  --explain X,Y    print the path tree of pixel (X, Y) -- every ray, hit, light sample and\n");
     printf("                   Russian roulette decision -- instead of rendering the image\n");
+    printf("  --max-input-mb N the largest OBJ or MTL file read, in MB of 2^20 bytes (default %d)\n", d->max_input_mb);
     printf("  --quiet          no progress line and no report\n");
     printf("  --help           this text\n");
     if (spec->extra_count > 0)
@@ -401,6 +410,16 @@ void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options 
         fprintf(stderr, "%s: %s\n(try '%s --help')\n", spec->program, err, spec->program);
         exit(2);
     }
+    /* Inputs are bounded, and none may be a file this run writes. */
+    input_file_set_mesh_limit((uint64_t)opts->max_input_mb << 20);
+    char sidecar[PATH_MAX];
+    input_file_protect(spec->program, "--out", opts->out, opts->out, "");
+    if (has_suffix(opts->out, ".exr")) {
+        snprintf(sidecar, sizeof sidecar, "%.*s.png", (int)strlen(opts->out) - 4, opts->out);
+        input_file_protect(spec->program, "--out", opts->out, sidecar, "its .png preview");
+    }
+    counters_path_for_image(opts->out, sidecar, sizeof sidecar);
+    input_file_protect(spec->program, "--out", opts->out, sidecar, "its counters file");
 #ifdef _OPENMP
     if (opts->threads == 0)
         opts->threads = omp_get_max_threads();

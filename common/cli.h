@@ -1,7 +1,7 @@
 /* cli.h -- the command line every chapter program shares.
  *
  *   --width N --height N --spp N --seed N --threads N --out FILE
- *   --exposure STOPS --scene FILE --explain X,Y --quiet --help
+ *   --exposure STOPS --scene FILE --explain X,Y --max-input-mb N --quiet --help
  *
  * plus flags of a chapter's own, described in a small table so that --help
  * lists them and parsing checks them the same way.
@@ -38,6 +38,7 @@ typedef struct {
     const char *scene;  /* --scene FILE (docs/scene-format.md), or NULL: the built-in scene */
     bool explain;       /* --explain X,Y: print the path tree of that pixel */
     int explain_x, explain_y;
+    int max_input_mb;   /* --max-input-mb N: the largest OBJ or MTL file read (input_file.h) */
     /* Whether --width, --height, --spp were given: a scene file's image
      * statement applies to those that were not. */
     bool width_given, height_given, spp_given;
@@ -95,7 +96,10 @@ cli_options cli_defaults(const char *out, int width, int height, int spp);
  * can be created (its directory exists and is writable). */
 cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *opts, char *err, size_t err_size);
 /* cli_parse, then: --help prints usage and exits 0; an error prints
- * "program: message" and "try --help", and exits 2. */
+ * "program: message" and "try --help", and exits 2. Then applies
+ * --max-input-mb, and declares --out, its .png preview and its counters
+ * file as outputs no input may be (input_file_protect: reading one of them
+ * as input stops the program with status 2). */
 void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options *opts);
 void cli_print_help(const cli_spec *spec, const cli_options *defaults);
 

@@ -83,7 +83,10 @@ effects_report effects_analyse(const scene_desc *d)
     /* Everything that can stand in a light's way: the shapes, and area
      * lights (they are geometry too). */
     int surfaces = d->shape_count + area_lights;
-    bool sampled_lights = point_lights + area_lights + emitting_shapes > 0;
+    /* A mesh with its own MTL materials is not read here: it may emit (Ke),
+     * so it counts as a light that may cast shadows, as it counts as glass
+     * that may reflect and refract below. Kept, never dropped on a guess. */
+    bool sampled_lights = point_lights + area_lights + emitting_shapes + own_mtl_meshes > 0;
     const char *mtl_note = own_mtl_meshes > 0 ? " (a mesh with its own MTL materials may hold them: kept)" : "";
 
     /* Shadows: a light can be occluded only if something other than the
@@ -92,13 +95,14 @@ effects_report effects_analyse(const scene_desc *d)
     for (int i = 0; i < d->shape_count; i++)
         self_shadowing = self_shadowing || shape_can_shadow_itself(d, &d->shapes[i]);
     if (!sampled_lights) {
-        snprintf(e.why[0], EFFECT_REASON_SIZE, "no light to cast them (point, area or emitting shape)");
+        snprintf(e.why[0], EFFECT_REASON_SIZE, "no light to cast them (point, area, emitting shape or mesh)");
     } else if (surfaces >= 2 || self_shadowing) {
         e.needed |= EFFECT_SHADOWS;
         e.hard_shadows = point_lights > 0;
-        e.soft_shadows = area_lights + emitting_shapes > 0;
-        snprintf(e.why[0], EFFECT_REASON_SIZE, "%s%s%s: %s", e.hard_shadows ? "hard (point lights)" : "",
+        e.soft_shadows = area_lights + emitting_shapes + own_mtl_meshes > 0;
+        snprintf(e.why[0], EFFECT_REASON_SIZE, "%s%s%s%s: %s", e.hard_shadows ? "hard (point lights)" : "",
                  e.hard_shadows && e.soft_shadows ? " and " : "", e.soft_shadows ? "soft (area lights)" : "",
+                 own_mtl_meshes > 0 && area_lights + emitting_shapes == 0 ? ", if a mesh's MTL emits" : "",
                  surfaces >= 2 ? "several surfaces, one may block a light from another"
                                : "a surface that can shadow itself");
     } else {

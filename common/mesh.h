@@ -31,12 +31,24 @@ typedef struct {
     int material;    /* index into materials, or -1 */
 } mesh_face;
 
-/* The colours an MTL file gives a material (Kd, Ks, Ns, Ke, Ni). */
+/* What an MTL file gives a material: the colours (Kd, Ks, Ke), shininess
+ * (Ns), index of refraction (Ni), and whether light passes through it
+ * (d, the dissolve; Tr = 1 - d, its other spelling; illum, the illumination
+ * model: 4, 6, 7 and 9 are the transparent ones). */
 typedef struct {
     char name[MESH_NAME_SIZE];
     vec3 diffuse, specular, emission;
     float shininess, ior;
+    float dissolve; /* d: 1 opaque (the default), 0 fully transparent */
+    int illum;      /* -1 if not given */
 } mesh_material;
+
+/* Does the MTL say light passes through (illum 4, 6, 7 or 9, or d < 1)?
+ * An index of refraction alone does not: exporters write one for every
+ * material (Blender: Ni 1.45 on opaque ones). */
+bool mesh_material_transparent(const mesh_material *m);
+/* Does it emit (a positive Ke)? */
+bool mesh_material_emits(const mesh_material *m);
 
 typedef struct {
     vec3 *positions;
@@ -75,7 +87,9 @@ bool mesh_bounds(const mesh *m, vec3 *lo, vec3 *hi);
  * negative (relative) indices, polygons fan-triangulated; mtllib and usemtl
  * with Kd, Ks, Ns, Ke, Ni from the MTL file; o, g, s and comments ignored.
  * On malformed input: false, err = "file:line: what is wrong", and m is left
- * as it was before the call (nothing half-loaded). */
+ * as it was before the call (nothing half-loaded). The OBJ and its MTL files
+ * must be regular files within input_file_mesh_limit() (input_file.h); an
+ * emitting face (Ke > 0) must have area. */
 bool mesh_load_obj(mesh *m, const char *path, char *err, size_t err_size);
 /* The same from text in memory (`name` is used in messages; MTL files are
  * looked up relative to base_dir, or not at all when it is NULL). */

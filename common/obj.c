@@ -22,15 +22,23 @@
  *
  * and in an MTL file:
  *
- *   newmtl name            starts a material: Kd 0.8 grey, Ks 0, Ns 1, Ke 0, Ni 1
+ *   newmtl name            starts a material: Kd 0.8 grey, Ks 0, Ns 1, Ke 0, Ni 1, d 1
  *   Kd/Ks/Ke r g b         diffuse, specular, emitted colour (one number = grey)
  *   Ns s, Ni n             shininess, index of refraction
- *   Ka d Tr Tf illum map_* bump ...   ignored (common, and nothing here uses them)
+ *   d a, Tr t              dissolve (1 opaque), transparency (Tr = 1 - d), in [0, 1]
+ *   illum n                illumination model 0-10 (4, 6, 7, 9: transparent)
+ *   Ka Tf map_* bump ...   ignored (common, and nothing here uses them)
  *
  * Any other statement is an error rather than silently skipped: a typo such
- * as "vv 1 2 3" should not quietly lose geometry. Every error reads
- * "file:line: what is wrong", and a failed call leaves the mesh exactly as
- * it found it (we remember the counts at entry and cut back to them).
+ * as "vv 1 2 3" should not quietly lose geometry. Before the file has shown
+ * it is OBJ (or MTL) with a statement of data, an unknown word means a file
+ * of another kind, and the message says so without quoting it: an mtllib,
+ * or a scene's mesh path, may name any file. A face whose material emits
+ * (Ke > 0) must have area, as a scene file's emitting quad must. Every error
+ * reads "file:line: what is wrong", and a failed call leaves the mesh
+ * exactly as it found it (we remember the counts at entry and cut back to
+ * them). Files are read through input_file_read (input_file.h): regular
+ * files only, within the mesh limit (--max-input-mb).
  *
  * The text is never copied or modified: lines and fields are spans of the
  * caller's buffer, which need not be NUL-terminated. Only a single number
@@ -40,6 +48,7 @@
 #include "mesh.h"
 
 #include "atomic_file.h"
+#include "input_file.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -280,16 +289,27 @@ static const mesh_material default_material = {
     .emission = {0.0f, 0.0f, 0.0f},
     .shininess = 1.0f,
     .ior = 1.0f,
+    .dissolve = 1.0f,
+    .illum = -1,
 };
+
+bool mesh_material_transparent(const mesh_material *m)
+{
+    return m->illum == 4 || m->illum == 6 || m->illum == 7 || m->illum == 9 || m->dissolve < 1.0f;
+}
+
+bool mesh_material_emits(const mesh_material *m)
+{
+    return m->emission.x > 0.0f || m->emission.y > 0.0f || m->emission.z > 0.0f;
+}
 
 /* Statements we know and deliberately skip: exporters write them all the
  * time (Blender, 3ds Max, Maya), and a renderer of colours has no use for
  * them. A name not here and not handled is an error, as in the OBJ reader. */
 static bool mtl_ignored(field keyword)
 {
-    static const char *const words[] = {"Ka",   "Tf",    "d",     "Tr",   "illum", "sharpness", "bump", "disp",
-                                        "decal", "refl", "norm",  "Pr",   "Pm",    "Ps",        "Pc",   "Pcr",
-                                        "aniso", "anisor"};
+    static const char *const words[] = {"Ka",   "Tf",   "sharpness", "bump", "disp", "decal", "refl", "norm",
+                                        "Pr",   "Pm",   "Ps",        "Pc",   "Pcr",  "aniso", "anisor"};
     for (size_t i = 0; i < sizeof words / sizeof words[0]; i++)
         if (field_is(keyword, words[i]))
             return true;
@@ -346,11 +366,19 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
         return true;
 
     bool colour = field_is(keyword, "Kd") || field_is(keyword, "Ks") || field_is(keyword, "Ke");
-    bool scalar = field_is(keyword, "Ns") || field_is(keyword, "Ni");
+    bool scalar = field_is(keyword, "Ns") || field_is(keyword, "Ni") || field_is(keyword, "Tr") ||
+                  field_is(keyword, "d") || field_is(keyword, "illum");
+    /* An unknown word before the first newmtl: the file is of another kind
+     * (an OBJ, an image, or any file an OBJ names, such as a private key).
+     * Say so without printing what it holds; after newmtl it is a typo. */
+    if (!colour && !scalar && mtl->current < 0)
+        return fail_at(s, "not an MTL file (a material library starts with 'newmtl'; this line starts with no MTL "
+                          "statement)");
     if (!colour && !scalar)
         return fail_at(s, "unknown statement '%s'", quote(keyword.start, keyword.length, shown));
-    /* keyword is one of five two-letter words: safe to print as a string. */
-    char word[3] = {keyword.start[0], keyword.start[1], '\0'};
+    /* keyword is one of the eight words above: safe to print as a string. */
+    char word[6] = {0};
+    memcpy(word, keyword.start, keyword.length);
     if (mtl->current < 0)
         return fail_at(s, "'%s' before any 'newmtl'", word);
 
@@ -370,7 +398,18 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
         float value = 0.0f;
         if (!mtl_scalar(s, r, word, &value))
             return false;
-        if (word[1] == 's')
+        bool fraction = word[0] == 'd' || word[0] == 'T';
+        if (fraction && !(value >= 0.0f && value <= 1.0f))
+            return fail_at(s, "'%s %g': expected a number from 0 to 1", word, (double)value);
+        if (word[0] == 'i' && !(value >= 0.0f && value <= 10.0f && value == (float)(int)value))
+            return fail_at(s, "'illum %g': expected an illumination model, 0 to 10", (double)value);
+        if (word[0] == 'd')
+            material->dissolve = value;
+        else if (word[0] == 'T')
+            material->dissolve = 1.0f - value;
+        else if (word[0] == 'i')
+            material->illum = (int)value;
+        else if (word[1] == 's')
             material->shininess = value;
         else
             material->ior = value;
@@ -379,49 +418,6 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
 }
 
 /* ---- reading files ----------------------------------------------------- */
-
-/* The whole file in a malloc'ed buffer. On failure returns an errno value
- * (and *text is NULL); 0 on success. Reads until EOF rather than trusting a
- * size from stat, so pipes and files that change size are no special case. */
-static int read_file(const char *path, char **text, size_t *length)
-{
-    *text = NULL;
-    *length = 0;
-    FILE *f = fopen(path, "rb");
-    if (f == NULL)
-        return errno;
-    size_t capacity = 0, used = 0;
-    char *buffer = NULL;
-    int failure = 0;
-    for (;;) {
-        if (used == capacity) {
-            size_t grown = capacity == 0 ? 65536 : capacity * 2;
-            char *p = grown > capacity ? realloc(buffer, grown) : NULL;
-            if (p == NULL) {
-                failure = ENOMEM;
-                break;
-            }
-            buffer = p;
-            capacity = grown;
-        }
-        size_t n = fread(buffer + used, 1, capacity - used, f);
-        used += n;
-        if (n == 0) {
-            /* A directory opens fine on Linux; the read then fails with EISDIR. */
-            if (ferror(f))
-                failure = errno != 0 ? errno : EIO;
-            break;
-        }
-    }
-    fclose(f);
-    if (failure != 0) {
-        free(buffer);
-        return failure;
-    }
-    *text = buffer;
-    *length = used;
-    return 0;
-}
 
 /* base_dir/name, or name itself when it is absolute or base_dir is "" (the
  * current directory). malloc'ed; NULL when out of memory. */
@@ -450,6 +446,7 @@ typedef struct {
     int position_base, normal_base, texcoord_base;
     int material;        /* for the faces that follow: from usemtl, -1 before */
     bool skipped_mtllib; /* an mtllib was not read because base_dir is NULL */
+    bool recognised;     /* a statement with data (v, vn, vt, f, mtllib, usemtl) was read */
 } obj_reader;
 
 typedef struct {
@@ -544,20 +541,37 @@ static bool obj_face(obj_reader *obj, const source *s, line_reader *r)
 {
     corner first = {0, 0, 0}, previous = {0, 0, 0}, current;
     int count = 0;
+    bool has_area = false;
     field f;
     while (next_field(r, &f)) {
         if (!parse_corner(obj, s, f, &current))
             return false;
-        if (count == 0)
+        if (count == 0) {
             first = current;
-        else if (count >= 2)
+        } else if (count >= 2) {
             add_face(obj, &first, &previous, &current);
+            const vec3 *p = obj->m->positions;
+            vec3 n = vec3_cross(vec3_sub(p[previous.position], p[first.position]),
+                                vec3_sub(p[current.position], p[first.position]));
+            has_area = has_area || vec3_length_squared(n) > 0.0f;
+        }
         previous = current;
         if (count < 3)
             count++;
     }
     if (count < 3)
         return fail_at(s, "a face needs at least 3 vertices");
+    /* An emitting face must have area, as a scene file's emitting quad or
+     * area light must: one without gives no light (its power is L_e times
+     * its area) and a scene lit only by it renders black. A fan triangle
+     * without area inside a face with area (three corners of a polygon on
+     * a line) is harmless: it is never hit and never sampled. */
+    const mesh_material *material = obj->material >= 0 ? &obj->m->materials[obj->material] : NULL;
+    if (material != NULL && vec3_max_component(material->emission) > 0.0f && !has_area) {
+        char shown[QUOTE_SIZE];
+        return fail_at(s, "the face emits light (material '%s', Ke > 0) but has no area: its corners are on a line",
+                       quote(material->name, strlen(material->name), shown));
+    }
     return true;
 }
 
@@ -574,11 +588,10 @@ static bool obj_mtllib(obj_reader *obj, const source *s, line_reader *r)
         char *path = join_path(obj->base_dir, f.start, f.length);
         if (path == NULL)
             return fail_at(s, "%s", strerror(ENOMEM));
-        char *text;
+        char *text, why[INPUT_ERROR_SIZE];
         size_t length;
-        int failure = read_file(path, &text, &length);
-        if (failure != 0) {
-            fail_at(s, "cannot read material library '%s': %s", path, strerror(failure));
+        if (!input_file_read(path, "MTL", input_file_mesh_limit(), true, &text, &length, why, sizeof why)) {
+            fail_at(s, "cannot read material library '%s': %s", path, why);
             free(path);
             return false;
         }
@@ -625,11 +638,10 @@ static bool obj_usemtl(obj_reader *obj, const source *s, line_reader *r)
     return true;
 }
 
-static bool obj_statement(void *context, source *s, line_reader *r, field keyword)
+/* v, vn, vt, f, mtllib, usemtl: the statements that carry data. */
+static bool obj_data_statement(obj_reader *obj, source *s, line_reader *r, field keyword)
 {
-    obj_reader *obj = context;
     mesh *m = obj->m;
-    char shown[QUOTE_SIZE];
     float x[6];
 
     if (field_is(keyword, "v")) {
@@ -667,11 +679,29 @@ static bool obj_statement(void *context, source *s, line_reader *r, field keywor
         return obj_face(obj, s, r);
     if (field_is(keyword, "mtllib"))
         return obj_mtllib(obj, s, r);
-    if (field_is(keyword, "usemtl"))
-        return obj_usemtl(obj, s, r);
+    return obj_usemtl(obj, s, r);
+}
+
+static bool obj_statement(void *context, source *s, line_reader *r, field keyword)
+{
+    obj_reader *obj = context;
+    char shown[QUOTE_SIZE];
+    if (field_is(keyword, "v") || field_is(keyword, "vn") || field_is(keyword, "vt") || field_is(keyword, "f") ||
+        field_is(keyword, "mtllib") || field_is(keyword, "usemtl")) {
+        if (!obj_data_statement(obj, s, r, keyword))
+            return false;
+        obj->recognised = true;
+        return true;
+    }
     if (field_is(keyword, "o") || field_is(keyword, "g") || field_is(keyword, "s") || field_is(keyword, "l") ||
         field_is(keyword, "p"))
         return true;
+    /* Before any data, an unknown word says the file is of another kind
+     * (an image, a scene file, a private key named by mistake or by a
+     * hostile scene): say so, and print nothing of what it holds. After
+     * data, it is a typo in an OBJ file ("vv 1 2 3"), shown to be found. */
+    if (!obj->recognised)
+        return fail_at(s, "not an OBJ file (this line starts with none of v, vn, vt, f, mtllib, usemtl, o, g, s, l, p)");
     return fail_at(s, "unknown statement '%s'", quote(keyword.start, keyword.length, shown));
 }
 
@@ -705,11 +735,10 @@ bool mesh_parse_obj(mesh *m, const char *text, size_t length, const char *name, 
 
 bool mesh_load_obj(mesh *m, const char *path, char *err, size_t err_size)
 {
-    char *text;
+    char *text, why[INPUT_ERROR_SIZE];
     size_t length;
-    int failure = read_file(path, &text, &length);
-    if (failure != 0) {
-        set_error(err, err_size, "%s: %s", path, strerror(failure));
+    if (!input_file_read(path, "OBJ", input_file_mesh_limit(), true, &text, &length, why, sizeof why)) {
+        set_error(err, err_size, "%s: %s", path, why);
         return false;
     }
     /* MTL files are named relative to the OBJ file, not to the current

@@ -6,6 +6,10 @@
 #include <string.h>
 
 #include "explain.h"
+#include "input_file.h"
+#include "timer.h"
+
+#include <omp.h>
 
 /* The effects of the current render, for its counters file ("" until noted). */
 static char noted_effects[256];
@@ -22,6 +26,11 @@ void program_note_effects(const effects_report *e)
         }
     snprintf(noted_effects + used, sizeof noted_effects - used, "]");
 }
+
+/* The structure the rays were traced through, for the report ("" until noted). */
+static char noted_accel[64];
+
+void program_note_accel(const char *name) { snprintf(noted_accel, sizeof noted_accel, "%s", name); }
 
 void program_warn(const char *label, const scene_desc *d, int line, int column, const char *format, ...)
 {
@@ -48,6 +57,11 @@ bool program_load_scene(cli_options *opts, const char *label, scene_desc *d)
         fprintf(stderr, "%s: %s\n", label, err);
         exit(1);
     }
+    /* The meshes it names are inputs too, whether or not this chapter
+     * reads them: none may be a file the run writes (exits 2 if one is). */
+    for (int i = 0; i < d->shape_count; i++)
+        if (d->shapes[i].kind == SCENE_SHAPE_MESH_OBJ)
+            input_file_check_not_output(d->shapes[i].path);
     if (d->has_width && !opts->width_given)
         opts->width = d->width;
     if (d->has_height && !opts->height_given)
@@ -85,6 +99,38 @@ static int program_explain(const cli_options *opts, const char *label, const ren
     return 0;
 }
 
+/* ---- a warning before a long render ---------------------------------------------
+ * A learner who asks for 4096 samples of a million-triangle mesh through a
+ * brute-force chapter should hear so before the minutes pass, not after.
+ * A pilot renders PILOT_PIXELS pixels spread over the image at the full
+ * spp, on one thread, and scales its time to the image and the threads.
+ * It costs PILOT_PIXELS / (width x height) of the render, and draws its
+ * numbers from its own counters and the pixels' own streams, so the image
+ * is untouched. Only renders of more than LONG_RENDER_PIXELS pixels are
+ * piloted: smaller ones end before a warning would help. */
+enum { PILOT_PIXELS = 64, LONG_RENDER_PIXELS = 16384 };
+static const double LONG_RENDER_SECONDS = 60.0;
+
+static void warn_if_long(const cli_options *opts, const char *label, const render_job *job)
+{
+    long pixels = (long)job->cam->width * job->cam->height;
+    if (opts->quiet || pixels < LONG_RENDER_PIXELS)
+        return;
+    ray_counters ignored;
+    memset(&ignored, 0, sizeof ignored);
+    double start = timer_seconds();
+    for (int k = 0; k < PILOT_PIXELS; k++) {
+        long i = (long)((double)k * (double)pixels / PILOT_PIXELS);
+        render_pixel(job, (int)(i % job->cam->width), (int)(i / job->cam->width), &ignored, NULL);
+    }
+    int threads = opts->threads > 0 ? opts->threads : omp_get_max_threads();
+    double estimate = (timer_seconds() - start) / PILOT_PIXELS * (double)pixels / threads;
+    if (estimate > LONG_RENDER_SECONDS)
+        fprintf(stderr, "%s: warning: this render will take about %.0f minutes on %d threads (from a pilot of %d "
+                "pixels): a smaller --width, --height or --spp first, or a chapter with an acceleration structure "
+                "(06, 09, 13) for a large mesh\n", label, estimate / 60.0, threads, PILOT_PIXELS);
+}
+
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
                    const camera *cam, render_stats *stats_out)
 {
@@ -100,6 +146,7 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
                       .stratify = opts->stratify};
     if (opts->explain)
         return program_explain(opts, label, &job, stats_out);
+    warn_if_long(opts, label, &job);
     image img = image_make(cam->width, cam->height);
     if (img.rgb == NULL) {
         fprintf(stderr, "%s: out of memory for a %dx%d image\n", label, cam->width, cam->height);
@@ -115,10 +162,12 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
         fprintf(stderr, "%s: %s\n", label, err);
         return 1;
     }
-    char counters_path[4096], extra[512];
+    char counters_path[4096], extra[640], accel_note[96] = "";
     counters_path_for_image(opts->out, counters_path, sizeof counters_path);
-    snprintf(extra, sizeof extra, "\"program\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n  \"spp\": %d%s%s", label,
-             cam->width, cam->height, opts->spp, noted_effects[0] ? ",\n  " : "", noted_effects);
+    if (noted_accel[0] != '\0')
+        snprintf(accel_note, sizeof accel_note, ",\n  \"accel\": \"%s\"", noted_accel);
+    snprintf(extra, sizeof extra, "\"program\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n  \"spp\": %d%s%s%s",
+             label, cam->width, cam->height, opts->spp, accel_note, noted_effects[0] ? ",\n  " : "", noted_effects);
     if (!counters_write_json(counters_path, &stats.counters, stats.seconds, extra, err, sizeof err)) {
         fprintf(stderr, "%s: %s\n", label, err);
         return 1;
@@ -127,6 +176,8 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
         printf("%s: %dx%d, %d spp, %d threads, %.3f s -> %s\n", label, cam->width, cam->height, opts->spp,
                opts->threads, stats.seconds, opts->out);
         counters_print(stdout, &stats.counters, stats.seconds);
+        if (noted_accel[0] != '\0')
+            printf("rays traced through: %s\n", noted_accel);
         printf("counters -> %s\n", counters_path);
     }
     if (stats_out != NULL)

@@ -33,6 +33,9 @@ bool program_load_scene(cli_options *opts, const char *label, scene_desc *d);
 
 /* Records which effects the render simulates, for the counters file. */
 void program_note_effects(const effects_report *e);
+/* Records the acceleration structure the rays go through (its
+ * accel_stats name), for the report and the counters file. */
+void program_note_accel(const char *name);
 
 /* A chapter's warning about something in the scene file it cannot show:
  * "label: file:line:col: warning: message". */

@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "input_file.h"
 #include "memory.h"
 
 /* Coordinates and colours beyond these are typos, not scenes (and float
@@ -50,6 +51,7 @@ typedef struct {
     int line;
     char *err;
     size_t err_size;
+    bool recognised; /* a statement was read: the file is a scene file */
 } parse_context;
 
 static bool fail(const parse_context *pc, int column, const char *format, ...)
@@ -434,6 +436,20 @@ static bool statement_material(const parse_context *pc, scene_desc *d, const tok
     return true;
 }
 
+/* Whether the parallelogram or triangle on corners p0, p1, p2 has area:
+ * false when they are on a line (or the cross product underflows), the
+ * same test for an area light and for an emitting triangle or quad. */
+static bool corners_have_area(const vec3 *p)
+{
+    vec3 normal = vec3_cross(vec3_sub(p[1], p[0]), vec3_sub(p[2], p[0]));
+    return vec3_length_squared(normal) > 0.0f;
+}
+
+static bool material_emits(const scene_material *m)
+{
+    return m->kind == SCENE_MATERIAL_EMISSIVE && vec3_max_component(m->emission) > 0.0f;
+}
+
 static bool statement_light(const parse_context *pc, scene_desc *d, const token *t, int n)
 {
     if (n < 2)
@@ -470,8 +486,7 @@ static bool statement_light(const parse_context *pc, scene_desc *d, const token 
         for (int k = 0; k < 4; k++)
             l.corners[k] = value_vec3(&v[k]);
         l.emission = value_vec3(&v[4]);
-        vec3 normal = vec3_cross(vec3_sub(l.corners[1], l.corners[0]), vec3_sub(l.corners[2], l.corners[0]));
-        if (!(vec3_length_squared(normal) > 0.0f))
+        if (!corners_have_area(l.corners))
             return fail(pc, t[1].column, "the area light has no area (p0, p1, p2 on a line)");
     } else {
         return fail(pc, t[1].column, "unknown light kind '%.*s' (point, area)", t[1].length > 40 ? 40 : t[1].length,
@@ -552,6 +567,12 @@ static bool statement_polygon(const parse_context *pc, scene_desc *d, const toke
         s.p[k] = value_vec3(&v[k]);
     if (corners == 4)
         s.p[3] = value_vec3(&v[4]);
+    /* An emitting shape is a light: like an area light it must have area
+     * (its power is L_e times its area; without, a scene lit by it renders
+     * black). A shape that only reflects may be degenerate: it is never hit. */
+    if (material_emits(&d->materials[s.material]) && !corners_have_area(s.p))
+        return fail(pc, t[0].column, "the %s emits light (material '%s') but has no area (p0, p1, p2 on a line)", name,
+                    d->materials[s.material].name);
     return add_shape(pc, d, &s, t[0].column);
 }
 
@@ -701,6 +722,13 @@ static bool parse_line(const parse_context *pc, scene_desc *d, const token *t, i
         *seen_effects = true;
         return statement_effects(pc, d, t, n);
     }
+    /* Before any statement, an unknown word says the file is of another
+     * kind (an OBJ file, an image, anything named by mistake): say so, and
+     * print nothing of what it holds. After one, it is a typo, shown. */
+    if (!pc->recognised)
+        return fail(pc, t[0].column,
+                    "not a scene file (this line starts with none of camera, image, background, ambient, material, "
+                    "light, sphere, plane, triangle, quad, implicit, mesh, integrator, max_depth, effects)");
     return fail(pc, t[0].column,
                 "unknown statement '%.*s' (camera, image, background, ambient, material, light, sphere, plane, "
                 "triangle, quad, implicit, mesh, integrator, max_depth, effects)",
@@ -712,7 +740,7 @@ bool scene_desc_parse(scene_desc *d, const char *text, size_t length, const char
 {
     scene_desc_init(d);
     snprintf(d->source, sizeof d->source, "%s", name);
-    parse_context pc = {name, 0, err, err_size};
+    parse_context pc = {name, 0, err, err_size, false};
     if (length > (size_t)SCENE_MAX_FILE_BYTES) {
         snprintf(err, err_size, "%s: larger than %d bytes", name, SCENE_MAX_FILE_BYTES);
         return false;
@@ -731,8 +759,10 @@ bool scene_desc_parse(scene_desc *d, const char *text, size_t length, const char
         } else {
             int count;
             ok = tokenize(&pc, text + at, (int)(end - at), tokens, &count);
-            if (ok && count > 0)
+            if (ok && count > 0) {
                 ok = parse_line(&pc, d, tokens, count, base_dir, &seen_effects);
+                pc.recognised = true;
+            }
         }
         if (!ok) {
             scene_desc_free(d);
@@ -746,23 +776,12 @@ bool scene_desc_parse(scene_desc *d, const char *text, size_t length, const char
 bool scene_desc_load(scene_desc *d, const char *path, char *err, size_t err_size)
 {
     scene_desc_init(d);
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        snprintf(err, err_size, "%s: cannot open: %s", path, strerror(errno));
-        return false;
-    }
-    char *text = malloc((size_t)SCENE_MAX_FILE_BYTES + 1);
-    if (text == NULL) {
-        fclose(f);
-        snprintf(err, err_size, "%s: out of memory", path);
-        return false;
-    }
-    size_t length = fread(text, 1, (size_t)SCENE_MAX_FILE_BYTES + 1, f);
-    bool read_error = ferror(f) != 0;
-    fclose(f);
-    if (read_error) {
-        free(text);
-        snprintf(err, err_size, "%s: read error", path);
+    /* Scene files are written by hand: their fixed limit is far above any
+     * of them, and geometry of any size belongs in an OBJ file. */
+    char *text, why[INPUT_ERROR_SIZE];
+    size_t length;
+    if (!input_file_read(path, "scene", (uint64_t)SCENE_MAX_FILE_BYTES, false, &text, &length, why, sizeof why)) {
+        snprintf(err, err_size, "%s: %s", path, why);
         return false;
     }
     /* Mesh paths are relative to the scene file's directory. */
@@ -789,9 +808,32 @@ bool scene_desc_load_mesh(const scene_desc *d, int index, mesh *m, char *err, si
         return false;
     }
     char why[MESH_ERROR_SIZE];
+    int first_face = m->face_count, first_position = m->position_count, first_material = m->material_count;
+    int first_normal = m->normal_count, first_texcoord = m->texcoord_count;
     if (!mesh_load_obj(m, s->path, why, sizeof why)) {
         snprintf(err, err_size, "%s:%d:%d: mesh: %s", d->source, s->line, s->column, why);
         return false;
+    }
+    /* A mesh given an emitting material is a light: like an emitting quad,
+     * it must have area somewhere (a triangle without area among others
+     * with area is harmless: it is never sampled). */
+    if (s->material >= 0 && material_emits(&d->materials[s->material])) {
+        bool has_area = false;
+        for (int i = first_face; i < m->face_count && !has_area; i++) {
+            vec3 p[3] = {mesh_vertex(m, i, 0), mesh_vertex(m, i, 1), mesh_vertex(m, i, 2)};
+            has_area = corners_have_area(p);
+        }
+        if (!has_area) {
+            snprintf(err, err_size, "%s:%d:%d: mesh: %s: emits light (material '%s') but no triangle of it has area",
+                     d->source, s->line, s->column, s->path, d->materials[s->material].name);
+            /* m as it was before the call, as on any other failure. */
+            m->face_count = first_face;
+            m->position_count = first_position;
+            m->material_count = first_material;
+            m->normal_count = first_normal;
+            m->texcoord_count = first_texcoord;
+            return false;
+        }
     }
     return true;
 }

@@ -132,8 +132,9 @@ void scene_desc_init(scene_desc *d);
 void scene_desc_free(scene_desc *d);
 
 /* Reads and parses a scene file. On failure: false, err = "file:line:col:
- * message" (or "file: message" when the file cannot be read), and d is left
- * empty (nothing half-built). */
+ * message" (or "file: message" when the file cannot be read: missing, not a
+ * regular file, over SCENE_MAX_FILE_BYTES), and d is left empty (nothing
+ * half-built). */
 bool scene_desc_load(scene_desc *d, const char *path, char *err, size_t err_size);
 /* The same from text in memory; `name` is used in messages, mesh paths are
  * resolved against base_dir (NULL: kept as written). */
@@ -141,8 +142,9 @@ bool scene_desc_parse(scene_desc *d, const char *text, size_t length, const char
                       char *err, size_t err_size);
 
 /* Appends the triangles of mesh shape `index` (OBJ file or generator) to m.
- * The OBJ's MTL materials are appended to m's materials. On failure: false,
- * err = "scene:line:col: mesh 'path': reason", m unchanged. */
+ * The OBJ's MTL materials are appended to m's materials. A mesh given an
+ * emitting material must have a triangle with area. On failure: false,
+ * err = "scene:line:col: mesh: reason", m unchanged. */
 bool scene_desc_load_mesh(const scene_desc *d, int index, mesh *m, char *err, size_t err_size);
 
 /* Where a statement is, for a chapter's warnings: "file:line:col". */

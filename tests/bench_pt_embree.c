@@ -1,21 +1,21 @@
-/* bench_pt_embree.c -- where chapter 09's time goes: the same path tracer,
- * its rays traced once by chapter 06's 4-wide BVH and once by Embree 3,
- * the industry's fast CPU kernel. The difference bounds what any work on
- * traversal can buy; what is left is shading and sampling.
+/* bench_pt_embree.c -- where the path tracer's time goes: the same path
+ * tracer, its rays traced once by chapter 13's structures and once by
+ * Embree 3, the industry's fast CPU kernel. The difference bounds what any
+ * work on traversal can buy; what is left is shading and sampling.
  *
- * The path tracer reaches its triangles only through two accels (chapter
- * 03's interface; on the Cornell box chapter 06's flat sets, which test
- * every triangle): sc->bvh, over every triangle, and sc->occluders, over
- * the triangles that are not walls, for shadow rays inside the walls
- * (scene_pt.c). Here both are swapped for accels backed by Embree, which
- * fill the hit record with the same triangle_set_fill_hit() from Embree's
- * triangle index, t and barycentrics. Nothing else changes.
+ * The path tracer reaches its triangles only through one accel (chapter
+ * 03's interface), sc->bvh. Chapter 13 makes it a walls_accel (walls.h):
+ * the structure of every triangle (on the Cornell box the flat set, which
+ * tests every triangle), and that of the triangles that are not walls, for
+ * shadow rays inside the walls. Here both inner structures are Embree's,
+ * which fill the hit record with the same triangle_set_fill_hit() from
+ * Embree's triangle index, t and barycentrics. Nothing else changes.
  *
  * Prints, on the Cornell box:
  *   1. a check on 10^4 random rays in the box: Embree and ours find the same
  *      triangle at the same t (within 1e-4 relative) and the same hit point,
  *      and give the same any-hit answer, except where two candidates tie;
- *   2. chapter 09's speed table (experiment_speed_scene) for ours, then for
+ *   2. chapter 13's speed table (production_speed_scene) for ours, then for
  *      Embree, and per case the ratio of wall times, ours / Embree;
  *   3. for the lecture rung on one thread: every ray of one render recorded,
  *      then traced alone by ours and by Embree: nanoseconds per closest-hit
@@ -39,10 +39,12 @@
 #include <string.h>
 
 #include "03-aabb-slabs/accel.h"
-#include "06-bvh/bvh4.h"
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "09-path-tracing/scene_pt.h"
+#include "13-production/bvh4.h"
+#include "13-production/speed.h"
+#include "13-production/walls.h"
 #include "atomic_file.h"
 #include "memory.h"
 #include "timer.h"
@@ -194,8 +196,8 @@ typedef struct {
 
 typedef struct {
     accel base;
-    const accel *inner;
-    ray_list *closest, *shadow;
+    const accel *inner;                   /* a walls_accel */
+    ray_list *closest, *shadow, *inside; /* inside: shadow rays inside the walls */
 } recording_accel;
 
 static void ray_list_push(ray_list *list, ray r)
@@ -214,7 +216,7 @@ static bool recording_closest_hit(const accel *a, ray r, hit_record *hit, ray_co
 static bool recording_any_hit(const accel *a, ray r, ray_counters *counters)
 {
     const recording_accel *rec = (const recording_accel *)a;
-    ray_list_push(rec->shadow, r);
+    ray_list_push(walls_segment_inside(rec->inner, &r) ? rec->inside : rec->shadow, r);
     return accel_any_hit(rec->inner, r, counters);
 }
 
@@ -388,17 +390,24 @@ static void image_mean(const estimate_image *e, int channel, double *mean, doubl
     *standard_error = sqrt(variance) / (double)n;
 }
 
-/* Which kernels trace the scene's rays: the whole tree's, and the
- * occluders' for shadow rays inside the walls. */
-static void use_kernel(pt_scene *sc, accel *whole, accel *occluders)
+/* Which structure traces the scene's rays (a walls_accel: the whole
+ * tree, and the occluders' for shadow rays inside the walls). The caller
+ * keeps them and restores the scene's own before freeing it. */
+static void use_kernel(pt_scene *sc, accel *structure) { sc->bvh = structure; }
+
+/* Embree's scene as a walls_inner_builder (walls.h), with the twin the
+ * command line asked for. */
+static twin_kind embree_twin = TWIN_NONE;
+static accel *embree_inner(const triangle_set *set) { return embree_build(set, embree_twin); }
+
+static accel *embree_scene_accel(const triangle_set *set, const void *scene)
 {
-    sc->bvh = whole;
-    sc->occluders = occluders;
+    return walls_accel_build_over(set, scene, true, embree_inner);
 }
 
 static path_tracer lecture_rung(const pt_scene *sc)
 {
-    /* experiment_speed's first case: the lecture's estimator, P_RR 0.8,
+    /* the speed table's first case: the lecture's estimator, P_RR 0.8,
      * at most 50 bounces. */
     path_tracer pt = path_tracer_defaults(sc);
     pt.integrator = PT_LECTURE;
@@ -412,8 +421,8 @@ static path_tracer lecture_rung(const pt_scene *sc)
 static void usage(void)
 {
     printf("usage: bench_pt_embree [--width N] [--spp N] [--reps N] [--data DIR] [--twin uv|no-shadows]\n"
-           "Chapter 09's path tracer on the Cornell box with its rays traced by chapter 06's\n"
-           "bvh4 and by Embree 3: the speed table of each, their ratio, the time of tracing\n"
+           "Chapter 09's path tracer on the Cornell box with its rays traced by chapter 13's\n"
+           "structures and by Embree 3: the speed table of each, their ratio, the time of tracing\n"
            "alone, and checks that both give the same hits and the same image.\n"
            "  --width N    image N x N (default 256)\n"
            "  --spp N      samples per pixel, at least 2: the image check needs each pixel's\n"
@@ -472,29 +481,30 @@ int main(int argc, char **argv)
 
     pt_scene sc;
     pt_scene_build_cornell_box(&sc);
-    /* Shadow rays inside the room's walls go to the occluders' own tree
-     * (scene_pt.c, "walls cast no shadows"): Embree gets one there too. */
-    accel *ours = sc.bvh, *ours_occluders = sc.occluders;
-    accel *embree = embree_build(&sc.triangles, twin);
-    accel *embree_occluders = ours_occluders != NULL ? embree_build(&sc.occluder_triangles, twin) : NULL;
+    /* Shadow rays inside the room's walls go to the occluders' own
+     * structure (walls.h): Embree gets one there too. */
+    embree_twin = twin;
+    pt_scene_use_accel(&sc, production_scene_accel, &sc);
+    accel *ours = sc.bvh, *embree = embree_scene_accel(&sc.triangles, &sc);
+    const accel *ours_occluders = walls_occluders(ours);
+    const accel *embree_occluders = embree != NULL ? walls_occluders(embree) : NULL;
     if (embree == NULL || (ours_occluders != NULL && embree_occluders == NULL)) {
         fprintf(stderr, "bench_pt_embree: Embree failed to build the scene\n");
         accel_destroy(embree);
-        accel_destroy(embree_occluders);
         pt_scene_free(&sc);
         if (csv != NULL)
             atomic_file_abandon(&out);
         return 1;
     }
     printf("Cornell box: %d triangles; %s, %s\n", sc.triangles.count, ours->stats.name, embree->stats.name);
-    int failures = check_random_rays(ours, embree, 10000, 9) != 0;
+    int failures = check_random_rays(walls_all(ours), walls_all(embree), 10000, 9) != 0;
     if (ours_occluders != NULL)
         failures += check_random_rays(ours_occluders, embree_occluders, 10000, 10) != 0;
 
     /* 2. The speed tables, ours then Embree's, in one run. */
-    experiment_speed_row rows[2][EXPERIMENT_SPEED_CASES];
-    /* ours: whatever the scene built (scene_pt.c, build_accel): chapter
-     * 06's flat set on the Cornell box, its 4-wide BVH on larger scenes */
+    production_speed_row rows[2][PRODUCTION_SPEED_CASES];
+    /* ours: chapter 13's structure (production_accel_build): the flat set
+     * on the Cornell box, the 4-wide BVH on larger scenes */
     char ours_name[64];
     snprintf(ours_name, sizeof ours_name, "ours (%s)", ours->stats.name);
     const char *tracers[2] = {ours_name, "Embree 3"};
@@ -503,10 +513,13 @@ int main(int argc, char **argv)
         char label[128];
         snprintf(label, sizeof label, "Cornell box, traced by %s,", tracers[k]);
         printf("\n");
-        use_kernel(&sc, k == 0 ? ours : embree, k == 0 ? ours_occluders : embree_occluders);
-        n = experiment_speed_scene(&sc, label, size, spp, reps, rows[k]);
+        n = production_speed_scene(&sc, label, size, spp, reps, k == 0 ? production_scene_accel : embree_scene_accel,
+                                   &sc, rows[k]);
     }
-    use_kernel(&sc, ours, ours_occluders);
+    /* the speed table rebuilt the scene's structure for each case */
+    pt_scene_use_accel(&sc, production_scene_accel, &sc);
+    ours = sc.bvh;
+    ours_occluders = walls_occluders(ours);
     printf("\nours / Embree (wall s/M)                         1 thread  2 threads\n");
     for (int c = 0; c < n; c++)
         printf("%-44s %9.2fx %9.2fx%s\n", rows[0][c].label, rows[0][c].wall[0] / rows[1][c].wall[0],
@@ -526,15 +539,13 @@ int main(int argc, char **argv)
     /* lists[0] closest hits, [1] shadow rays through the whole tree, [2]
      * shadow rays inside the walls, through the occluders' tree */
     ray_list lists[3] = {{0}};
-    recording_accel recorder = {{&recording_ops, &sc.triangles, ours->stats}, ours, &lists[0], &lists[1]};
-    recording_accel recorder_occluders = {{&recording_ops, &sc.occluder_triangles, ours->stats}, ours_occluders,
-                                          &lists[0], &lists[2]};
+    recording_accel recorder = {{&recording_ops, &sc.triangles, ours->stats}, ours, &lists[0], &lists[1], &lists[2]};
     camera cam = pt_scene_camera(&sc, size, size);
     double million_samples = (double)size * size * spp * 1e-6;
-    use_kernel(&sc, &recorder.base, ours_occluders != NULL ? &recorder_occluders.base : NULL);
+    use_kernel(&sc, &recorder.base);
     path_tracer pt = lecture_rung(&sc);
     estimate_image recorded = render_estimate(&pt, &cam, spp, 1, 1);
-    use_kernel(&sc, ours, ours_occluders);
+    use_kernel(&sc, ours);
     int shadow_count = lists[1].count + lists[2].count;
     printf("\nlecture rung, 1 thread, %.2f M camera samples: %d closest-hit and %d shadow rays recorded, %d of "
            "them inside the walls (the render counted %llu)\n",
@@ -551,7 +562,8 @@ int main(int argc, char **argv)
     for (int rep = 0; rep < reps; rep++)
         for (int k = 0; k < 12; k++) {
             int kernel = k / 6, chained = k / 3 % 2, kind = k % 3;
-            const accel *a = kind == 2 ? (kernel == 0 ? ours_occluders : embree_occluders) : (kernel == 0 ? ours : embree);
+            const accel *a = kind == 2 ? (kernel == 0 ? ours_occluders : embree_occluders)
+                                       : walls_all(kernel == 0 ? ours : embree);
             double s = lists[kind].count > 0 ? trace_alone(a, &lists[kind], kind == 0, chained, &hits[kernel][kind]) : 0.0;
             seconds[kernel][chained][kind] = fmin(seconds[kernel][chained][kind], s);
         }
@@ -572,7 +584,7 @@ int main(int argc, char **argv)
      * streams help? They hide waits for memory, and this scene's trees
      * (1.5 KB) never wait: expect them slower. */
     accel *tree = bvh4_build(&sc.triangles, BVH_SPLIT_SAH);
-    accel *tree_occluders = ours_occluders != NULL ? bvh4_build(&sc.occluder_triangles, BVH_SPLIT_SAH) : NULL;
+    accel *tree_occluders = ours_occluders != NULL ? bvh4_build(ours_occluders->set, BVH_SPLIT_SAH) : NULL;
     double tree_seconds[2][3];
     long tree_hits[2][3] = {{0}};
     for (int k = 0; k < 6; k++)
@@ -589,7 +601,7 @@ int main(int argc, char **argv)
         }
     for (int streams = 0; streams < 2; streams++) {
         double shadow_seconds = tree_seconds[streams][1] + tree_seconds[streams][2];
-        printf("%-20s %-12s %12.1f %12.1f %12.3f\n", "bvh4 (chapter 06)", streams ? "streams" : "independent",
+        printf("%-20s %-12s %12.1f %12.1f %12.3f\n", "bvh4 (chapter 13)", streams ? "streams" : "independent",
                tree_seconds[streams][0] / lists[0].count * 1e9, shadow_seconds / shadow_count * 1e9,
                (tree_seconds[streams][0] + shadow_seconds) / million_samples);
     }
@@ -609,10 +621,10 @@ int main(int argc, char **argv)
     /* 4. The same image: the lecture rung rendered by both, on 2 threads. */
     estimate_image images[2];
     for (int k = 0; k < 2; k++) {
-        use_kernel(&sc, k == 0 ? ours : embree, k == 0 ? ours_occluders : embree_occluders);
+        use_kernel(&sc, k == 0 ? ours : embree);
         images[k] = render_estimate(&pt, &cam, spp, 1, 2);
     }
-    use_kernel(&sc, ours, ours_occluders);
+    use_kernel(&sc, ours);
     printf("\nimage mean, lecture rung, %dx%d, %d spp:\n", size, size, spp);
     double worst = 0.0;
     for (int channel = 0; channel < 3; channel++) {
@@ -632,7 +644,6 @@ int main(int argc, char **argv)
         estimate_image_free(&images[k]);
 
     accel_destroy(embree);
-    accel_destroy(embree_occluders);
     pt_scene_free(&sc);
     if (csv != NULL && !atomic_file_commit(&out, err, sizeof err)) {
         fprintf(stderr, "bench_pt_embree: %s\n", err);

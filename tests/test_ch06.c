@@ -14,8 +14,7 @@
 #include "03-aabb-slabs/accel_program.h"
 #include "03-aabb-slabs/accel_view.h"
 #include "06-bvh/bvh.h"
-#include "06-bvh/bvh4.h"
-#include "06-bvh/flat.h"
+#include "06-bvh/bvh_internal.h" /* the tuned slab test, checked against chapter 03's */
 #include "render.h"
 #include "scene_file.h"
 #include "accel_check.h"
@@ -523,6 +522,197 @@ static void test_hand_built_tree_is_checked(void **state)
     mesh_free(&m);
 }
 
+/* ---- the lecture's recursive traversal ------------------------------------------ */
+
+typedef bool (*bvh_closest_fn)(const bvh *b, ray r, hit_record *hit, ray_counters *counters);
+
+/* The twin: the slide's recursion with its last line wrong, "return hit1 if
+ * there is one, else hit2": the first hit in tree order, not the closer. */
+typedef struct {
+    int triangle; /* in the set; -1: none */
+    float t, b1, b2;
+} twin_hit;
+
+static twin_hit first_hit_recursive(const bvh *b, const ray *r, const slab_ray *sr, int n)
+{
+    const bvh_node *node = &b->nodes[n];
+    twin_hit none = {-1, 0.0f, 0.0f, 0.0f};
+    float t_enter, t_exit;
+    if (!aabb_slab_test(&node->box, sr, r->t_min, r->t_max, &t_enter, &t_exit))
+        return none;
+    if (bvh_node_is_leaf(node)) {
+        twin_hit closest = none;
+        ray shorter = *r;
+        for (int i = node->first; i < node->first + bvh_node_triangles(node); i++) {
+            twin_hit h = {b->triangle_index[i], 0.0f, 0.0f, 0.0f};
+            if (triangle_intersect_barycentric(&b->base.set->triangles[h.triangle], &shorter, &h.t, &h.b1, &h.b2)) {
+                closest = h;
+                shorter.t_max = h.t;
+            }
+        }
+        return closest;
+    }
+    twin_hit hit1 = first_hit_recursive(b, r, sr, node->first);
+    if (hit1.triangle >= 0)
+        return hit1; /* the mistake: child2 may hold a closer hit */
+    return first_hit_recursive(b, r, sr, node->first + 1);
+}
+
+static bool first_hit_recursive_closest(const bvh *b, ray r, hit_record *hit, ray_counters *counters)
+{
+    (void)counters;
+    slab_ray sr = slab_ray_make(r);
+    twin_hit h = first_hit_recursive(b, &r, &sr, 0);
+    if (h.triangle < 0)
+        return false;
+    triangle_set_fill_hit(b->base.set, h.triangle, r, h.t, h.b1, h.b2, hit);
+    return true;
+}
+
+/* Over the differential test's meshes and rays (accel_check.h), on trees of
+ * both splits: how many rays get an answer other than brute force's (hit or
+ * miss, t bit for bit, the same triangle), and how many hit at all. */
+static long recursive_mismatches(bvh_closest_fn closest, int ray_count, long *hits)
+{
+    long mismatches = 0;
+    *hits = 0;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        accel *brute = brute_force_build(&set);
+        for (int split = 0; split < 2; split++) {
+            accel *a = bvh_build(&set, split ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN);
+            pcg32 rng = pcg32_for_pixel(20261123, (uint64_t)kind);
+            for (int i = 0; i < ray_count; i++) {
+                ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+                hit_record want, got;
+                ray_counters counters = {0};
+                bool want_hit = accel_closest_hit(brute, r, &want, &counters);
+                bool got_hit = closest((const bvh *)a, r, &got, &counters);
+                *hits += want_hit;
+                if (want_hit != got_hit || (want_hit && (got.t != want.t || got.shape_id != want.shape_id))) {
+                    if (mismatches < 3)
+                        print_message("%s, %s split, ray %d: brute %s t=%a tri %d, recursive %s t=%a tri %d\n",
+                                      accel_check_mesh_names[kind], split ? "sah" : "median", i,
+                                      want_hit ? "hit" : "miss", want_hit ? (double)want.t : 0.0,
+                                      want_hit ? want.shape_id : -1, got_hit ? "hit" : "miss",
+                                      got_hit ? (double)got.t : 0.0, got_hit ? got.shape_id : -1);
+                    mismatches++;
+                }
+            }
+            accel_destroy(a);
+        }
+        accel_destroy(brute);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    return mismatches;
+}
+
+enum { RECURSIVE_CHECK_RAYS = 2000 };
+
+/* The slide's recursion returns brute force's closest hit: the same t, bit
+ * for bit (the same Moller-Trumbore on the same triangle), and the same
+ * triangle (ties at equal t go to the lower index, as in brute force). It
+ * tests every leaf whose box the ray crosses, and brute force's triangle
+ * lies in one of them. */
+static void test_recursive_traversal_equals_brute_force(void **state)
+{
+    (void)state;
+    long hits;
+    long mismatches = recursive_mismatches(bvh_closest_hit_recursive, RECURSIVE_CHECK_RAYS, &hits);
+    print_message("recursive traversal: %ld of %d rays differ from brute force (%ld hits)\n", mismatches,
+                  2 * MESH_KIND_COUNT * RECURSIVE_CHECK_RAYS, hits);
+    assert_int_equal(mismatches, 0);
+    assert_true(hits > MESH_KIND_COUNT * RECURSIVE_CHECK_RAYS); /* more than a quarter of the rays hit */
+}
+
+/* Its twin returns the first hit in tree order and must fail the same check
+ * (on a closed mesh a ray through it crosses at least two triangles, and
+ * child1 holds the farther one about half the time). */
+static void test_recursive_twin_returning_the_first_hit_is_caught(void **state)
+{
+    (void)state;
+    long hits;
+    long mismatches = recursive_mismatches(first_hit_recursive_closest, RECURSIVE_CHECK_RAYS, &hits);
+    print_message("twin (first hit, not the closer): %ld of %d rays differ from brute force\n", mismatches,
+                  2 * MESH_KIND_COUNT * RECURSIVE_CHECK_RAYS);
+    assert_true(mismatches > hits / 10);
+}
+
+/* The iterative traversals test a node's box against [t_min, closest hit
+ * so far]; the recursion against the whole ray [t_min, t_max]. With
+ * t_max = inf, whatever box passes the first passes the second (the slab
+ * test is the same float arithmetic, and its answer only grows with t_max),
+ * so every node the iterative traversals reach, the recursion reaches too:
+ * per ray, at least as many box tests and triangle tests, in either order.
+ * And fewer is the point of the pruning: over all rays, strictly more,
+ * except on the flat mesh, where every box lies in the one plane z = 0.5
+ * and so begins where the hit is: nothing lies beyond it to skip. On the
+ * overlap scene with B found first, the recursion tests A as well (the
+ * worked example of test_far_child_beyond_the_closest_hit_is_skipped). */
+static void test_recursive_traversal_visits_at_least_as_many_nodes(void **state)
+{
+    (void)state;
+    mesh m;
+    triangle_set set;
+    make_overlap_scene(&m, &set);
+    accel *a = overlap_tree(&set, (int[2]){TRI_B, TRI_D}, TRI_A);
+    hit_record hit;
+    ray_counters counters = {0};
+    assert_true(bvh_closest_hit_recursive((const bvh *)a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
+    assert_int_equal(hit.shape_id, TRI_B);
+    assert_int_equal(counters.box_tests, 3);       /* the root and both children */
+    assert_int_equal(counters.primitive_tests, 3); /* B and D, then A: the iterative ones skip A */
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set_from_mesh(&set, &m);
+        a = bvh_build(&set, BVH_SPLIT_SAH);
+        const bvh *b = (const bvh *)a;
+        pcg32 rng = pcg32_for_pixel(20261123, (uint64_t)kind);
+        ray_counters total[3] = {{0}, {0}, {0}}; /* recursive, axis sign, distance */
+        for (int i = 0; i < 4 * RECURSIVE_CHECK_RAYS; i++) {
+            ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+            ray_counters c[3] = {{0}, {0}, {0}};
+            bvh_closest_hit_recursive(b, r, &hit, &c[0]);
+            bvh_set_order(a, BVH_ORDER_AXIS_SIGN);
+            accel_closest_hit(a, r, &hit, &c[1]);
+            bvh_set_order(a, BVH_ORDER_DISTANCE);
+            accel_closest_hit(a, r, &hit, &c[2]);
+            for (int k = 1; k < 3; k++)
+                if (c[0].box_tests < c[k].box_tests || c[0].primitive_tests < c[k].primitive_tests)
+                    fail_msg("%s, ray %d: recursive %llu boxes %llu triangles, %s order %llu boxes %llu triangles",
+                             accel_check_mesh_names[kind], i, (unsigned long long)c[0].box_tests,
+                             (unsigned long long)c[0].primitive_tests, k == 1 ? "axis-sign" : "distance",
+                             (unsigned long long)c[k].box_tests, (unsigned long long)c[k].primitive_tests);
+            for (int k = 0; k < 3; k++) {
+                total[k].box_tests += c[k].box_tests;
+                total[k].primitive_tests += c[k].primitive_tests;
+            }
+        }
+        print_message("%-17s boxes, triangles per ray: recursive %6.1f %6.1f, axis-sign %6.1f %6.1f, distance "
+                      "%6.1f %6.1f\n",
+                      accel_check_mesh_names[kind], (double)total[0].box_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[0].primitive_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[1].box_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[1].primitive_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[2].box_tests / (4 * RECURSIVE_CHECK_RAYS),
+                      (double)total[2].primitive_tests / (4 * RECURSIVE_CHECK_RAYS));
+        if (kind != MESH_FLAT)
+            assert_true(total[0].box_tests > total[1].box_tests &&
+                        total[0].primitive_tests > total[1].primitive_tests);
+        accel_destroy(a);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+}
+
 /* ---- a chain: triangles growing exponentially -------------------------------- */
 
 /* 65 triangles in the planes x = 17^i, i = -36 .. 28 (17^-36 is subnormal;
@@ -641,710 +831,11 @@ static void test_empty_set_builds_and_misses(void **state)
         ray_counters counters = {0};
         assert_false(accel_closest_hit(a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
         assert_false(accel_any_hit(a, ray_from(0, 0, 0, 0, 0, 1), &counters));
+        assert_false(bvh_closest_hit_recursive((const bvh *)a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
         accel_destroy(a);
     }
     triangle_set_free(&set);
     mesh_free(&m);
-}
-
-/* ---- the 4-wide BVH ------------------------------------------------------------ */
-
-static accel *build_bvh4_sah(const triangle_set *set) { return bvh4_build(set, BVH_SPLIT_SAH); }
-static accel *build_bvh4_median(const triangle_set *set) { return bvh4_build(set, BVH_SPLIT_MEDIAN); }
-static accel *build_bvh4_sah_scalar(const triangle_set *set)
-{
-    accel *a = bvh4_build(set, BVH_SPLIT_SAH);
-    assert_true(bvh4_set_kernel(a, BVH4_KERNEL_SCALAR));
-    return a;
-}
-
-static void test_bvh4_agrees_with_brute_force(void **state)
-{
-    (void)state;
-    accel_check_all(build_bvh4_sah, 15000, "bvh4 sah");
-    accel_check_all(build_bvh4_median, 3000, "bvh4 median");
-}
-
-/* The plain C loops, the path a machine without SSE takes. */
-static void test_bvh4_scalar_kernel_agrees_with_brute_force(void **state)
-{
-    (void)state;
-    accel_check_all(build_bvh4_sah_scalar, 5000, "bvh4 sah, scalar kernel");
-}
-
-/* Walks the 4-wide tree: each child box contains the boxes below it and its
- * triangles' boxes, empty slots come last and have the empty box, each
- * triangle is in exactly one lane, with its own P0 and edges. */
-static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth, int *seen, int *leaves,
-                               int *nodes_seen)
-{
-    assert_true(depth < BVH4_STACK_SIZE / (BVH4_WIDTH - 1));
-    if (bvh4_is_leaf(ref)) {
-        int count = bvh4_leaf_triangles(ref), first = bvh4_leaf_first_packet(ref);
-        assert_true(count >= 1);
-        (*leaves)++;
-        for (int i = 0; i < 4 * ((count + 3) / 4); i++) {
-            int lane = 4 * first + i;
-            assert_true(lane < 4 * b->packet_count);
-            const bvh4_packet *p = &b->packets[first + i / 4];
-            int t = bvh4_lane_triangle(p->index[i % 4]);
-            if (i >= count) {
-                assert_int_equal(t, -1);
-                assert_true(p->e1[0][i % 4] == 0.0f && p->e2[2][i % 4] == 0.0f);
-                continue;
-            }
-            assert_true(t >= 0 && t < b->triangle_count);
-            seen[t]++;
-            assert_true(box_contains(box, b->base.set->boxes[t]));
-            const triangle *tri = &b->base.set->triangles[t];
-            assert_true(p->p0[0][i % 4] == tri->p0.x && p->e1[1][i % 4] == tri->p1.y - tri->p0.y &&
-                        p->e2[2][i % 4] == tri->p2.z - tri->p0.z);
-            if (p->index[i % 4] & BVH4_LANE_EXACT) { /* P0 + E1 and P0 + E2 are P1 and P2, bit for bit */
-                vec3 p0 = vec3_make(p->p0[0][i % 4], p->p0[1][i % 4], p->p0[2][i % 4]);
-                vec3 p1 = vec3_add(p0, vec3_make(p->e1[0][i % 4], p->e1[1][i % 4], p->e1[2][i % 4]));
-                vec3 p2 = vec3_add(p0, vec3_make(p->e2[0][i % 4], p->e2[1][i % 4], p->e2[2][i % 4]));
-                assert_memory_equal(&p1, &tri->p1, sizeof p1);
-                assert_memory_equal(&p2, &tri->p2, sizeof p2);
-            }
-        }
-        return;
-    }
-    assert_true(ref < (uint32_t)b->node_count);
-    (*nodes_seen)++;
-    const bvh4_node *node = &b->nodes[ref];
-    bool empty_seen = false;
-    for (int k = 0; k < BVH4_WIDTH; k++) {
-        aabb child = {vec3_make(node->bounds[0][k], node->bounds[1][k], node->bounds[2][k]),
-                      vec3_make(node->bounds[3][k], node->bounds[4][k], node->bounds[5][k])};
-        if (node->child[k] == BVH4_EMPTY) {
-            assert_true(k > 0);
-            assert_true(child.lo.x == INFINITY && child.hi.x == -INFINITY);
-            empty_seen = true;
-            continue;
-        }
-        assert_false(empty_seen); /* children first, empty slots last */
-        assert_true(box_contains(box, child));
-        check_bvh4_subtree(b, node->child[k], child, depth + 1, seen, leaves, nodes_seen);
-    }
-}
-
-static void check_bvh4_structure(const accel *a)
-{
-    const bvh4 *b = (const bvh4 *)a;
-    int n = a->set->count;
-    int *seen = calloc((size_t)n + 1, sizeof *seen);
-    int leaves = 0, nodes_seen = 0;
-    if (b->node_count > 0)
-        check_bvh4_subtree(b, 0, a->set->bounds, 0, seen, &leaves, &nodes_seen);
-    for (int t = 0; t < n; t++)
-        assert_int_equal(seen[t], 1);
-    assert_int_equal(leaves, a->stats.leaves);
-    assert_int_equal(nodes_seen, b->node_count);
-    free(seen);
-}
-
-static void test_bvh4_every_triangle_in_exactly_one_lane_and_boxes_nest(void **state)
-{
-    (void)state;
-    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
-        mesh m;
-        accel_check_make_mesh(&m, (accel_check_mesh)kind);
-        triangle_set set;
-        triangle_set_from_mesh(&set, &m);
-        for (int split = 0; split < 2; split++) {
-            accel *a = bvh4_build(&set, split ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN);
-            check_bvh4_structure(a);
-            accel_destroy(a);
-        }
-        triangle_set_free(&set);
-        mesh_free(&m);
-    }
-}
-
-/* More coincident triangles than a leaf reference can count (255): the
- * leaf is split into a node over smaller leaves with the same box, and the
- * closest hit is still found, at the same t as brute force's. */
-static void test_bvh4_more_coincident_triangles_than_a_leaf_holds(void **state)
-{
-    (void)state;
-    mesh m;
-    mesh_init(&m);
-    mesh_coincident(&m, 1000);
-    triangle_set set;
-    triangle_set_from_mesh(&set, &m);
-    accel *a = bvh4_build(&set, BVH_SPLIT_SAH), *brute = brute_force_build(&set);
-    check_bvh4_structure(a);
-    assert_true(((const bvh4 *)a)->node_count >= 2); /* the root, and the node splitting the leaf */
-    for (int kernel = 0; kernel < 2; kernel++) {
-        bvh4_set_kernel(a, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
-        pcg32 rng = pcg32_for_pixel(6, 4);
-        int hits = 0;
-        for (int i = 0; i < 2000; i++) {
-            ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
-            hit_record want, got;
-            ray_counters counters = {0};
-            bool want_hit = accel_closest_hit(brute, r, &want, &counters);
-            assert_int_equal(accel_closest_hit(a, r, &got, &counters), want_hit);
-            assert_int_equal(accel_any_hit(a, r, &counters), want_hit);
-            if (want_hit) {
-                assert_true(got.t == want.t); /* any of the coincident triangles: they tie */
-                hits++;
-            }
-        }
-        assert_true(hits > 100);
-    }
-    accel_destroy(brute);
-    accel_destroy(a);
-    triangle_set_free(&set);
-    mesh_free(&m);
-}
-
-/* A mesh of the differential test, its triangle set and its 4-wide SAH BVH. */
-static accel *bvh4_of_mesh_kind(accel_check_mesh kind, mesh *m, triangle_set *set)
-{
-    accel_check_make_mesh(m, kind);
-    triangle_set_from_mesh(set, m);
-    return bvh4_build(set, BVH_SPLIT_SAH);
-}
-
-/* The hit record of a lane marked BVH4_LANE_EXACT is made from the packet's
- * P0, E1, E2 instead of the set's triangle: it must be the very record the
- * set's triangle gives (point, normals, material, bit for bit), on every
- * mesh, and both kinds of lane must occur, so that both paths are checked. */
-static void test_bvh4_hit_records_equal_the_sets(void **state)
-{
-    (void)state;
-    long exact_hits = 0, other_hits = 0;
-    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
-        mesh m;
-        triangle_set set;
-        accel *a = bvh4_of_mesh_kind((accel_check_mesh)kind, &m, &set);
-        const bvh4 *b = (const bvh4 *)a;
-        bool *exact = calloc((size_t)set.count + 1, sizeof *exact);
-        for (int lane = 0; lane < 4 * b->packet_count; lane++) {
-            int32_t index = b->packets[lane / 4].index[lane % 4];
-            if (index >= 0)
-                exact[bvh4_lane_triangle(index)] = (index & BVH4_LANE_EXACT) != 0;
-        }
-        pcg32 rng = pcg32_for_pixel(6, 45 + kind);
-        for (int i = 0; i < 4000; i++) {
-            ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
-            hit_record got, want;
-            ray_counters counters = {0};
-            if (!accel_closest_hit(a, r, &got, &counters))
-                continue;
-            triangle_set_fill_hit(&set, got.shape_id, r, got.t, got.u, got.v, &want);
-            if (exact[got.shape_id])
-                exact_hits++;
-            else
-                other_hits++;
-            assert_memory_equal(&got.point, &want.point, sizeof want.point);
-            assert_memory_equal(&got.normal_geometric, &want.normal_geometric, sizeof want.normal_geometric);
-            assert_memory_equal(&got.normal_shading, &want.normal_shading, sizeof want.normal_shading);
-            assert_int_equal(got.material_id, want.material_id);
-            assert_int_equal(got.front_face, want.front_face);
-        }
-        free(exact);
-        accel_destroy(a);
-        triangle_set_free(&set);
-        mesh_free(&m);
-    }
-    print_message("bvh4 hit records: %ld from exact lanes, %ld from the set's triangles\n", exact_hits, other_hits);
-    assert_true(exact_hits > 0 && other_hits > 0);
-}
-
-/* The SSE and the scalar kernel: the same hits, the same floats, the same
- * counters, ray by ray, on the tori field. */
-static void test_bvh4_kernels_give_identical_answers(void **state)
-{
-    (void)state;
-    if (!BVH4_HAVE_SSE)
-        skip();
-    mesh m;
-    accel_check_make_mesh(&m, MESH_TORI_FIELD);
-    triangle_set set;
-    triangle_set_from_mesh(&set, &m);
-    accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
-    pcg32 rng = pcg32_for_pixel(6, 44);
-    int hits = 0;
-    for (int i = 0; i < 20000; i++) {
-        ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
-        hit_record sse_hit, scalar_hit;
-        ray_counters sse = {0}, scalar = {0};
-        assert_true(bvh4_set_kernel(a, BVH4_KERNEL_SSE));
-        bool sse_found = accel_closest_hit(a, r, &sse_hit, &sse);
-        bool sse_any = accel_any_hit(a, r, &sse);
-        bvh4_set_kernel(a, BVH4_KERNEL_SCALAR);
-        bool scalar_found = accel_closest_hit(a, r, &scalar_hit, &scalar);
-        bool scalar_any = accel_any_hit(a, r, &scalar);
-        assert_int_equal(sse_found, scalar_found);
-        assert_int_equal(sse_any, scalar_any);
-        assert_int_equal(sse.box_tests, scalar.box_tests);
-        assert_int_equal(sse.primitive_tests, scalar.primitive_tests);
-        if (sse_found) {
-            hits++;
-            assert_true(sse_hit.t == scalar_hit.t && sse_hit.u == scalar_hit.u && sse_hit.v == scalar_hit.v);
-            assert_int_equal(sse_hit.shape_id, scalar_hit.shape_id);
-        }
-    }
-    assert_true(hits > 5000);
-    accel_destroy(a);
-    triangle_set_free(&set);
-    mesh_free(&m);
-}
-
-/* The slab test of chapter 03, four boxes at once, both kernels: the IEEE
- * cases of test_slab_test_matches_chapter_03 (zero direction components of
- * both signs, origins exactly on a plane: 0 * inf = NaN, flat boxes), each
- * lane the same answer and t_enter as aabb_slab_test(), bit for bit. */
-static void test_bvh4_slab_test_matches_chapter_03(void **state)
-{
-    (void)state;
-    pcg32 rng = pcg32_for_pixel(606, 4);
-    int nan_cases = 0, hits = 0;
-    for (int i = 0; i < 50000; i++) {
-        bvh4_node node;
-        memset(&node, 0, sizeof node);
-        aabb boxes[BVH4_WIDTH];
-        for (int k = 0; k < BVH4_WIDTH; k++) {
-            vec3 a = vec3_make(pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2);
-            vec3 b = vec3_make(pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2);
-            boxes[k] = (aabb){vec3_min(a, b), vec3_max(a, b)};
-            if (pcg32_bounded(&rng, 5) == 0)
-                boxes[k].hi.y = boxes[k].lo.y; /* flat */
-            for (int axis = 0; axis < 3; axis++) {
-                node.bounds[axis][k] = vec3_axis(boxes[k].lo, axis);
-                node.bounds[3 + axis][k] = vec3_axis(boxes[k].hi, axis);
-            }
-        }
-        /* the origin on a plane of box 0 or 1 (alternately), direction
-         * components zero of both signs */
-        const aabb *on_box = &boxes[i % 2];
-        float o[3], d[3];
-        for (int k = 0; k < 3; k++) {
-            o[k] = pcg32_float(&rng) * 6 - 3;
-            d[k] = pcg32_float(&rng) * 2 - 1;
-            uint32_t pick = pcg32_bounded(&rng, 8);
-            if (pick == 0)
-                d[k] = 0.0f;
-            else if (pick == 1)
-                d[k] = -0.0f;
-            uint32_t on = pcg32_bounded(&rng, 6);
-            if (on == 0)
-                o[k] = vec3_axis(on_box->lo, k);
-            else if (on == 1)
-                o[k] = vec3_axis(on_box->hi, k);
-            nan_cases += d[k] == 0.0f && on < 2;
-        }
-        ray r = ray_from(o[0], o[1], o[2], d[0], d[1], d[2]);
-        r.t_max = (i % 3 == 0) ? INFINITY : 5.0f;
-        slab_ray sr = slab_ray_make(r);
-        for (int kernel = 0; kernel < 2; kernel++) {
-            float enter4[BVH4_WIDTH];
-            int mask = bvh4_slab_test(&node, r, r.t_min, r.t_max, enter4, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
-            for (int k = 0; k < BVH4_WIDTH; k++) {
-                float enter03 = 0.0f, exit03 = 0.0f;
-                bool hit03 = aabb_slab_test(&boxes[k], &sr, r.t_min, r.t_max, &enter03, &exit03);
-                bool hit4 = mask >> k & 1;
-                if (hit03 != hit4 || (hit03 && enter03 != enter4[k]))
-                    fail_msg("ray %d box %d kernel %d: chapter 03 %d t_enter %g, bvh4 %d t_enter %g", i, k, kernel,
-                             hit03, (double)enter03, hit4, (double)enter4[k]);
-                hits += hit03 && kernel == 0;
-            }
-        }
-        /* an empty slot's box is missed by every ray */
-        bvh4_node empty;
-        for (int k = 0; k < BVH4_WIDTH; k++)
-            for (int axis = 0; axis < 3; axis++) {
-                empty.bounds[axis][k] = INFINITY;
-                empty.bounds[3 + axis][k] = -INFINITY;
-            }
-        float enter4[BVH4_WIDTH];
-        assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SSE), 0);
-        assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SCALAR), 0);
-    }
-    print_message("bvh4 slab tests: %d boxes, %d hit, %d axes with 0 * inf\n", 50000 * BVH4_WIDTH, hits, nan_cases);
-    assert_true(hits > 10000 && nan_cases > 3000);
-}
-
-/* The 4-lane Moller-Trumbore, both kernels, against chapter 01's
- * triangle_intersect_barycentric(): the same hit or miss, and the same t,
- * b1, b2 bit for bit, on rays aimed at vertices and edges (the near-ties)
- * and with degenerate lanes (zero area, and the empty lane). */
-static void test_bvh4_triangle_test_matches_chapter_01(void **state)
-{
-    (void)state;
-    pcg32 rng = pcg32_for_pixel(607, 4);
-    int hits = 0;
-    for (int i = 0; i < 50000; i++) {
-        triangle tris[4];
-        bvh4_packet packet;
-        memset(&packet, 0, sizeof packet);
-        for (int k = 0; k < 4; k++) {
-            vec3 p[3];
-            for (int j = 0; j < 3; j++)
-                p[j] = vec3_make(pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1);
-            if (k == 3 && i % 4 == 0)
-                p[2] = p[1]; /* zero area */
-            tris[k] = (triangle){p[0], p[1], p[2]};
-            vec3 e1 = vec3_sub(p[1], p[0]), e2 = vec3_sub(p[2], p[0]);
-            for (int axis = 0; axis < 3; axis++) {
-                packet.p0[axis][k] = vec3_axis(p[0], axis);
-                packet.e1[axis][k] = vec3_axis(e1, axis);
-                packet.e2[axis][k] = vec3_axis(e2, axis);
-            }
-        }
-        bool empty_lane = i % 4 == 1; /* lane 3 left as an empty lane */
-        if (empty_lane)
-            for (int axis = 0; axis < 3; axis++)
-                packet.p0[axis][3] = packet.e1[axis][3] = packet.e2[axis][3] = 0.0f;
-        /* aim at a vertex or an edge midpoint of lane i % 3's triangle */
-        const triangle *aim = &tris[i % 3];
-        vec3 target = i % 2 ? aim->p1 : vec3_scale(vec3_add(aim->p0, aim->p2), 0.5f);
-        vec3 o = vec3_make(pcg32_float(&rng) * 6 - 3, pcg32_float(&rng) * 6 - 3, pcg32_float(&rng) * 6 - 3);
-        ray r = ray_make(o, vec3_sub(target, o));
-        float t_max = i % 5 == 0 ? 0.9f : INFINITY;
-        for (int kernel = 0; kernel < 2; kernel++) {
-            float t[4] = {0}, b1[4] = {0}, b2[4] = {0};
-            int mask = bvh4_triangle_test(&packet, r, t_max, t, b1, b2, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
-            for (int k = 0; k < 4; k++) {
-                float want_t = 0.0f, want_b1 = 0.0f, want_b2 = 0.0f;
-                bool want = !(k == 3 && empty_lane) &&
-                            triangle_intersect_barycentric(&tris[k], &r, &want_t, &want_b1, &want_b2) &&
-                            want_t < t_max;
-                bool got = mask >> k & 1;
-                if (want != got || (want && (t[k] != want_t || b1[k] != want_b1 || b2[k] != want_b2)))
-                    fail_msg("case %d lane %d kernel %d: chapter 01 %d t %a, bvh4 %d t %a", i, k, kernel, want,
-                             (double)want_t, got, (double)t[k]);
-                hits += want && kernel == 0;
-            }
-        }
-    }
-    print_message("bvh4 triangle tests: 200000 lanes, %d hit\n", hits);
-    assert_true(hits > 20000);
-}
-
-static void test_bvh4_empty_set_builds_and_misses(void **state)
-{
-    (void)state;
-    mesh m;
-    mesh_init(&m);
-    triangle_set set;
-    triangle_set_from_mesh(&set, &m);
-    accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
-    hit_record hit;
-    ray_counters counters = {0};
-    assert_false(accel_closest_hit(a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
-    assert_false(accel_any_hit(a, ray_from(0, 0, 0, 0, 0, 1), &counters));
-    /* and a stream of rays: every one misses, none is left unanswered */
-    ray rays[3] = {ray_from(0, 0, 0, 0, 0, 1), ray_from(1, 2, 3, -1, 0, 0), ray_from(0, 0, 0, 1, 1, 1)};
-    hit_record hits[3];
-    bool found[3] = {true, true, true}, any[3] = {true, true, true};
-    bvh4_closest_hit_stream(a, rays, 3, hits, found, &counters);
-    bvh4_any_hit_stream(a, rays, 3, any, &counters);
-    for (int i = 0; i < 3; i++)
-        assert_false(found[i] || any[i]);
-    accel_destroy(a);
-    triangle_set_free(&set);
-    mesh_free(&m);
-}
-
-/* ---- no tree: every triangle, eight at a time (flat.h) -------------------------- */
-
-/* Rays on which `a` answers differently from chapter 03's brute force,
- * which tests the triangles one by one in order: found or not, and the hit
- * record bit for bit (t, barycentrics, point, normal, triangle, material;
- * of equal t the lower index wins in both), the triangles tested, and any
- * hit. Flat runs the same arithmetic, so nothing may differ, not even on
- * the coincident and degenerate meshes where ties are everywhere. */
-static long flat_mismatches(const accel *a, const accel *brute, const mesh *m, const triangle_set *set, int rays,
-                            uint64_t seed, long *hits)
-{
-    pcg32 rng = pcg32_for_pixel(seed, 606);
-    long wrong = 0;
-    for (int i = 0; i < rays; i++) {
-        ray r = accel_check_ray(m, set->bounds.lo, set->bounds.hi, &rng, i);
-        hit_record want, got;
-        memset(&want, 0, sizeof want);
-        memset(&got, 0, sizeof got);
-        ray_counters c_want = {0}, c_got = {0};
-        bool want_hit = accel_closest_hit(brute, r, &want, &c_want);
-        bool got_hit = accel_closest_hit(a, r, &got, &c_got);
-        bool same = want_hit == got_hit && c_want.primitive_tests == c_got.primitive_tests &&
-                    accel_any_hit(a, r, &c_got) == want_hit;
-        if (same && want_hit)
-            same = memcmp(&want, &got, sizeof want) == 0;
-        *hits += want_hit;
-        wrong += !same;
-    }
-    return wrong;
-}
-
-static void test_flat_equals_brute_force_bit_for_bit(void **state)
-{
-    (void)state;
-    const flat_kernel kernels[] = {FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR};
-    const char *names[] = {"avx with avx-512 registers", "avx", "sse", "scalar"};
-    int kernels_run = 0;
-    for (int k = 0; k < 4; k++) {
-        long hits = 0, wrong = 0;
-        bool available = flat_kernel_runs(kernels[k]);
-        for (int kind = 0; kind < MESH_KIND_COUNT && available; kind++) {
-            mesh m;
-            triangle_set set;
-            accel_check_make_mesh(&m, (accel_check_mesh)kind);
-            triangle_set_from_mesh(&set, &m);
-            accel *brute = brute_force_build(&set), *a = flat_build(&set);
-            assert_true(flat_set_kernel(a, kernels[k]));
-            /* the big meshes cost brute force's time twice: fewer rays */
-            if (available)
-                wrong += flat_mismatches(a, brute, &m, &set, set.count > 2000 ? 300 : 3000, 60 + (uint64_t)kind, &hits);
-            accel_destroy(a);
-            accel_destroy(brute);
-            triangle_set_free(&set);
-            mesh_free(&m);
-        }
-        if (!available) {
-            print_message("flat: the %s kernel does not run here\n", names[k]);
-            continue;
-        }
-        kernels_run++;
-        print_message("flat, %s kernel: %ld rays hit, %ld answers differ from brute force\n", names[k], hits, wrong);
-        assert_true(hits > 2000);
-        assert_int_equal(wrong, 0);
-    }
-    assert_true(kernels_run >= 1);
-}
-
-/* The twins: two ways to get a flat set wrong, each caught. The last block
- * dropped (the count of blocks rounded down, a classic), and the triangle
- * numbers of lanes 0 and 1 swapped in every block (a hit reported for the
- * wrong triangle). */
-static void test_flat_twins_are_caught(void **state)
-{
-    (void)state;
-    mesh m;
-    triangle_set set;
-    /* the first mesh with a partial last block to drop */
-    for (int kind = 0;; kind++) {
-        assert_true(kind < MESH_KIND_COUNT);
-        accel_check_make_mesh(&m, (accel_check_mesh)kind);
-        triangle_set_from_mesh(&set, &m);
-        if (set.count % FLAT_LANES != 0 && set.count < 2000)
-            break;
-        triangle_set_free(&set);
-        mesh_free(&m);
-    }
-    accel *brute = brute_force_build(&set), *a = flat_build(&set);
-    flat *f = (flat *)a;
-    long hits = 0;
-    assert_int_equal(flat_mismatches(a, brute, &m, &set, 3000, 61, &hits), 0);
-    f->block_count--;
-    long dropped = flat_mismatches(a, brute, &m, &set, 3000, 61, &hits);
-    f->block_count++;
-    for (int i = 0; i < f->block_count; i++) {
-        int32_t first = f->blocks[i].index[0];
-        f->blocks[i].index[0] = f->blocks[i].index[1];
-        f->blocks[i].index[1] = first;
-    }
-    long swapped = flat_mismatches(a, brute, &m, &set, 3000, 61, &hits);
-    print_message("flat twins: last block dropped %ld, two lanes swapped %ld of 3000 rays wrong\n", dropped, swapped);
-    assert_true(dropped > 0 && swapped > 0);
-    accel_destroy(a);
-    accel_destroy(brute);
-    triangle_set_free(&set);
-    mesh_free(&m);
-}
-
-/* Eight rays at once (flat_closest_hit8, flat_any_hit8): each active lane
- * gets the single ray's answer, bit for bit, and idle lanes are left alone.
- * `shift` > 0 is the twin: lane k is handed ray k + shift's answer. */
-static long packet_mismatches(flat_kernel kernel, int shift, long *compared)
-{
-    long wrong = 0;
-    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
-        mesh m;
-        triangle_set set;
-        accel_check_make_mesh(&m, (accel_check_mesh)kind);
-        triangle_set_from_mesh(&set, &m);
-        if (set.count > 2000) { /* brute force on a big mesh: slow, and nothing new */
-            triangle_set_free(&set);
-            mesh_free(&m);
-            continue;
-        }
-        accel *a = flat_build(&set);
-        assert_true(flat_set_kernel(a, kernel));
-        pcg32 rng = pcg32_for_pixel(62, (uint64_t)kind);
-        for (int packet = 0; packet < 300; packet++) {
-            ray rays[FLAT_LANES];
-            for (int k = 0; k < FLAT_LANES; k++)
-                rays[k] = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, packet * FLAT_LANES + k);
-            int active = packet % 3 == 0 ? (int)(pcg32_next(&rng) & 0xFF) : 0xFF;
-            hit_record hits[FLAT_LANES];
-            bool found[FLAT_LANES], any[FLAT_LANES];
-            memset(hits, 0, sizeof hits);
-            for (int k = 0; k < FLAT_LANES; k++)
-                found[k] = any[k] = true; /* idle lanes must keep these */
-            ray_counters c = {0};
-            flat_closest_hit8(a, rays, active, hits, found, &c);
-            flat_any_hit8(a, rays, active, any, &c);
-            for (int k = 0; k < FLAT_LANES; k++) {
-                if (!((active >> k) & 1)) {
-                    wrong += !(found[k] && any[k]);
-                    continue;
-                }
-                const ray *r = &rays[(k + shift) % FLAT_LANES];
-                hit_record want;
-                memset(&want, 0, sizeof want);
-                bool want_hit = accel_closest_hit(a, *r, &want, &c);
-                bool same = found[k] == want_hit && any[k] == accel_any_hit(a, *r, &c);
-                if (same && want_hit)
-                    same = memcmp(&hits[k], &want, sizeof want) == 0;
-                wrong += !same;
-                (*compared)++;
-            }
-        }
-        accel_destroy(a);
-        triangle_set_free(&set);
-        mesh_free(&m);
-    }
-    return wrong;
-}
-
-static void test_flat_packets_give_each_ray_its_own_answer(void **state)
-{
-    (void)state;
-    const flat_kernel kernels[] = {FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE};
-    const char *names[] = {"avx with avx-512 registers", "avx", "sse: one ray at a time"};
-    int run = 0;
-    for (int k = 0; k < 3; k++) {
-        if (!flat_kernel_runs(kernels[k])) {
-            print_message("flat packets: the %s kernel does not run here\n", names[k]);
-            continue;
-        }
-        long compared = 0, twin_compared = 0;
-        long wrong = packet_mismatches(kernels[k], 0, &compared);
-        long twin = packet_mismatches(kernels[k], 1, &twin_compared);
-        print_message("flat packets (%s): %ld rays, %ld wrong; each lane given its neighbour's answer: %ld wrong\n",
-                      names[k], compared, wrong, twin);
-        assert_true(compared > 5000);
-        assert_int_equal(wrong, 0);
-        assert_true(twin > compared / 4);
-        run++;
-    }
-    assert_true(run >= 1);
-}
-
-static void test_flat_empty_set_builds_and_misses(void **state)
-{
-    (void)state;
-    mesh m;
-    mesh_init(&m);
-    triangle_set set;
-    triangle_set_from_mesh(&set, &m);
-    accel *a = flat_build(&set);
-    hit_record hit;
-    ray_counters counters = {0};
-    const flat_kernel kernels[] = {FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR};
-    for (int k = 0; k < 4; k++) {
-        if (!flat_set_kernel(a, kernels[k]))
-            continue;
-        assert_false(accel_closest_hit(a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
-        assert_false(accel_any_hit(a, ray_from(0, 0, 0, 0, 0, 1), &counters));
-    }
-    assert_int_equal(counters.primitive_tests, 0);
-    accel_destroy(a);
-    triangle_set_free(&set);
-    mesh_free(&m);
-}
-
-/* ---- streams: rays taking turns ------------------------------------------------- */
-
-/* Rays of one stream whose answers differ from what the same rays get one
- * at a time: found or not, and the whole hit record (t, barycentrics, point,
- * normals, triangle, material) bit for bit; any hit the same. */
-static long stream_mismatches(const accel *a, const ray *rays, int count, const hit_record *hits,
-                              const bool *found, const bool *any)
-{
-    long mismatches = 0;
-    for (int i = 0; i < count; i++) {
-        hit_record want;
-        ray_counters c = {0};
-        bool want_found = accel_closest_hit(a, rays[i], &want, &c);
-        bool same = want_found == found[i] && accel_any_hit(a, rays[i], &c) == any[i];
-        if (same && want_found)
-            same = want.t == hits[i].t && want.u == hits[i].u && want.v == hits[i].v &&
-                   want.shape_id == hits[i].shape_id && want.material_id == hits[i].material_id &&
-                   memcmp(&want.point, &hits[i].point, sizeof want.point) == 0 &&
-                   memcmp(&want.normal_shading, &hits[i].normal_shading, sizeof want.normal_shading) == 0;
-        mismatches += !same;
-    }
-    return mismatches;
-}
-
-/* A stream hands each ray what it would get alone, whatever the stream's
- * length (0, fewer rays than lanes, not a multiple of them, thousands), on
- * every mesh of the differential test and with both kernels. Half the rays
- * are cut short before their hit, so neighbours in the stream have
- * different answers, and a lane that kept the previous ray's closest hit
- * (or its t_max) would be caught. The counters are those of the rays one at
- * a time, summed. Twin: the same answers handed on to the next ray, the
- * mistake a stream can make that a single ray cannot, are caught. */
-static void test_bvh4_stream_gives_each_ray_its_own_answer(void **state)
-{
-    (void)state;
-    enum { RAYS = 3001 };
-    static const int lengths[] = {0, 1, BVH4_STREAM_LANES - 1, BVH4_STREAM_LANES + 3, RAYS};
-    ray *rays = calloc(RAYS, sizeof *rays);
-    hit_record *hits = calloc(RAYS, sizeof *hits);
-    bool *found = calloc(RAYS, sizeof *found), *any = calloc(RAYS, sizeof *any);
-    long shifted_mismatches = 0, hit_count = 0;
-    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
-        mesh m;
-        triangle_set set;
-        accel *a = bvh4_of_mesh_kind((accel_check_mesh)kind, &m, &set);
-        pcg32 rng = pcg32_for_pixel(6, 60 + kind);
-        for (int i = 0; i < RAYS; i++) {
-            rays[i] = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
-            hit_record h;
-            ray_counters c = {0};
-            if (i % 2 == 1 && accel_closest_hit(a, rays[i], &h, &c))
-                rays[i].t_max = h.t * 0.5f;
-        }
-        for (int kernel = 0; kernel < 2; kernel++) {
-            if (!bvh4_set_kernel(a, kernel == 0 ? BVH4_KERNEL_SSE : BVH4_KERNEL_SCALAR))
-                continue;
-            for (size_t l = 0; l < sizeof lengths / sizeof lengths[0]; l++) {
-                int n = lengths[l];
-                ray_counters stream = {0}, alone = {0};
-                bvh4_closest_hit_stream(a, rays, n, hits, found, &stream);
-                bvh4_any_hit_stream(a, rays, n, any, &stream);
-                for (int i = 0; i < n; i++) {
-                    hit_record h;
-                    accel_closest_hit(a, rays[i], &h, &alone);
-                    accel_any_hit(a, rays[i], &alone);
-                    hit_count += found[i];
-                }
-                if (stream_mismatches(a, rays, n, hits, found, any) != 0)
-                    fail_msg("%s, kernel %d, stream of %d: answers differ from single rays",
-                             accel_check_mesh_names[kind], kernel, n);
-                assert_int_equal(stream.box_tests, alone.box_tests);
-                assert_int_equal(stream.primitive_tests, alone.primitive_tests);
-            }
-            /* the twin: every answer handed to the next ray */
-            shifted_mismatches += stream_mismatches(a, rays + 1, RAYS - 1, hits, found, any);
-        }
-        accel_destroy(a);
-        triangle_set_free(&set);
-        mesh_free(&m);
-    }
-    print_message("streams: %ld hits; answers handed to the next ray: %ld wrong\n", hit_count, shifted_mismatches);
-    assert_true(hit_count > 1000);
-    assert_true(shifted_mismatches > 1000);
-    free(rays);
-    free(hits);
-    free(found);
-    free(any);
 }
 
 /* ---- scene files (chapters 03-06) ---------------------------------------------- */
@@ -1455,23 +946,12 @@ int main(void)
         cmocka_unit_test(test_far_child_beyond_the_closest_hit_is_skipped),
         cmocka_unit_test(test_shared_vertex_near_tie_is_not_culled),
         cmocka_unit_test(test_hand_built_tree_is_checked),
+        cmocka_unit_test(test_recursive_traversal_equals_brute_force),
+        cmocka_unit_test(test_recursive_twin_returning_the_first_hit_is_caught),
+        cmocka_unit_test(test_recursive_traversal_visits_at_least_as_many_nodes),
         cmocka_unit_test(test_exponentially_spaced_triangles_make_a_chain),
         cmocka_unit_test(test_slab_test_matches_chapter_03),
         cmocka_unit_test(test_empty_set_builds_and_misses),
-        cmocka_unit_test(test_bvh4_agrees_with_brute_force),
-        cmocka_unit_test(test_bvh4_scalar_kernel_agrees_with_brute_force),
-        cmocka_unit_test(test_bvh4_every_triangle_in_exactly_one_lane_and_boxes_nest),
-        cmocka_unit_test(test_bvh4_more_coincident_triangles_than_a_leaf_holds),
-        cmocka_unit_test(test_bvh4_kernels_give_identical_answers),
-        cmocka_unit_test(test_bvh4_hit_records_equal_the_sets),
-        cmocka_unit_test(test_bvh4_slab_test_matches_chapter_03),
-        cmocka_unit_test(test_bvh4_triangle_test_matches_chapter_01),
-        cmocka_unit_test(test_bvh4_empty_set_builds_and_misses),
-        cmocka_unit_test(test_flat_equals_brute_force_bit_for_bit),
-        cmocka_unit_test(test_flat_twins_are_caught),
-        cmocka_unit_test(test_flat_empty_set_builds_and_misses),
-        cmocka_unit_test(test_flat_packets_give_each_ray_its_own_answer),
-        cmocka_unit_test(test_bvh4_stream_gives_each_ray_its_own_answer),
     };
     return cmocka_run_group_tests_name("ch06 bvh", tests, NULL, NULL);
 }

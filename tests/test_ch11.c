@@ -18,6 +18,7 @@
 #include "render.h"
 #include "stats.h"
 #include "image_check.h"
+#include "pt_scene_check.h"
 #include "test_support.h"
 
 /* The statistical comparisons are those of chapter 09's tests
@@ -408,9 +409,24 @@ static void test_camera_projection_and_density(void **state)
     pt_scene_free(&sc);
 }
 
+/* The shipped scene file is the built-in scene: the same triangles, bit for
+ * bit, materials, lights and camera (tests/pt_scene_check.h), so every
+ * render of it is the built-in scene's. */
+static void test_scene_file_is_the_built_in_scene(void **state)
+{
+    (void)state;
+    pt_scene from_file, built_in;
+    load_pt_scene_file(&from_file, "chapters/11-bidirectional/scenes/ceiling-lamp.scene");
+    bdpt_scene_build_ceiling_lamp(&built_in);
+    assert_same_pt_scene(&from_file, &built_in);
+    pt_scene_free(&from_file);
+    pt_scene_free(&built_in);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_scene_file_is_the_built_in_scene),
         cmocka_unit_test(test_weights_of_all_strategies_sum_to_one),
         cmocka_unit_test(test_camera_projection_and_density),
         cmocka_unit_test(test_converges_to_path_tracing_on_the_cornell_box),

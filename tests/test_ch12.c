@@ -23,6 +23,8 @@
 #include "12-metropolis/mlt_experiments.h"
 #include "render.h"
 #include "stats.h"
+#include "12-metropolis/mlt_scene.h"
+#include "pt_scene_check.h"
 #include "test_support.h"
 
 /* The false-alarm budget of each statistical check (as chapter 09's). */
@@ -510,9 +512,24 @@ static void test_twin_biased_bidirectional_disagrees(void **state)
     assert_true(count_method_disagreements(BDPT_FAULT_NO_LIGHT_COSINE) > 0);
 }
 
+/* The shipped scene file is the built-in scene: the same triangles, bit for
+ * bit, materials, lights and camera (tests/pt_scene_check.h), so every
+ * render of it is the built-in scene's. */
+static void test_scene_file_is_the_built_in_scene(void **state)
+{
+    (void)state;
+    pt_scene from_file, built_in;
+    load_pt_scene_file(&from_file, "chapters/12-metropolis/scenes/lamp.scene");
+    mlt_scene_build_lamp(&built_in);
+    assert_same_pt_scene(&from_file, &built_in);
+    pt_scene_free(&from_file);
+    pt_scene_free(&built_in);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_scene_file_is_the_built_in_scene),
         cmocka_unit_test(test_small_step_wraps),
         cmocka_unit_test(test_chain_samples_f_over_b),
         cmocka_unit_test(test_twin_chain_without_acceptance_ratio_fails),

@@ -509,7 +509,52 @@ static void test_error_unknown_statement(void **state)
 {
     (void)state;
     expect_error("v 0 0 0\nvv 1 2 3\n", 2, "unknown statement 'vv'");
-    expect_error("V 0 0 0\n", 1, "unknown statement 'V'");
+    expect_error("v 0 0 0\nV 0 0 0\n", 2, "unknown statement 'V'");
+}
+
+/* A file of another kind (named by mistake, or by a hostile scene or
+ * mtllib: a private key, a password file) fails at the line where that
+ * shows, naming the file and the line and nothing of what the file holds. */
+static void test_a_file_of_another_kind_is_named_not_quoted(void **state)
+{
+    (void)state;
+    static const char *const texts[] = {
+        "SECRET-KEY-0123 abc\n",
+        "# a comment first\n\nSECRET-KEY-0123 abc\n",
+        "o name\ng group\ns 1\nSECRET-KEY-0123\n", /* names and groups are no OBJ data yet */
+        "camera eye 0 0 5 target 0 0 0 SECRET-KEY-0123\n",
+    };
+    static const int lines[] = {1, 3, 4, 1};
+    for (size_t i = 0; i < sizeof texts / sizeof texts[0]; i++) {
+        expect_error(texts[i], lines[i], "not an OBJ file");
+        mesh m;
+        mesh_init(&m);
+        char err[MESH_ERROR_SIZE] = "";
+        assert_false(mesh_parse_obj(&m, texts[i], strlen(texts[i]), "bad.obj", NULL, err, sizeof err));
+        if (strstr(err, "SECRET") != NULL || strstr(err, "camera") != NULL)
+            fail_msg("the message quotes the file: %s", err);
+        mesh_free(&m);
+    }
+
+    /* An mtllib naming a file that is not a material library: the OBJ
+     * itself, or any other file. The MTL file and its line are named. */
+    char path[PATH_SIZE], obj_path[PATH_SIZE], expected[2 * PATH_SIZE];
+    write_text(in_dir(path, "secret.txt"), "SECRET-KEY-0123 abc\nmore\n");
+    write_text(in_dir(obj_path, "names_secret.obj"), "v 0 0 0\nmtllib secret.txt\n");
+    mesh m;
+    mesh_init(&m);
+    char err[MESH_ERROR_SIZE] = "";
+    assert_false(mesh_load_obj(&m, obj_path, err, sizeof err));
+    snprintf(expected, sizeof expected, "%s:1: not an MTL file", path);
+    assert_starts_with(err, expected);
+    assert_null(strstr(err, "SECRET"));
+    write_text(obj_path, "mtllib names_secret.obj\n");
+    assert_false(mesh_load_obj(&m, obj_path, err, sizeof err));
+    snprintf(expected, sizeof expected, "%s:1: not an MTL file", obj_path);
+    assert_starts_with(err, expected);
+    assert_null(strstr(err, "mtllib"));
+    assert_int_equal(m.position_count, 0);
+    mesh_free(&m);
 }
 
 static void test_error_garbage_bytes(void **state)
@@ -651,6 +696,41 @@ static void test_usemtl_assigns_following_faces(void **state)
     /* A later file without mtllib may use materials already in the mesh. */
     parse_ok(&m, "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl green\nf 1 2 3\n", NULL);
     assert_int_equal(m.faces[5].material, 2);
+    mesh_free(&m);
+}
+
+/* A face that emits (its material's Ke > 0) must have area, like a scene
+ * file's emitting quad: without, it gives no light. A polygon with some
+ * corners on a line still has area; a face that does not emit may be
+ * degenerate (it is never hit). The error leaves the mesh as it was. */
+static void test_an_emitting_face_without_area_is_an_error(void **state)
+{
+    (void)state;
+    char path[PATH_SIZE];
+    write_text(in_dir(path, "lamp.mtl"), "newmtl lamp\nKe 0 0 2\nnewmtl dark\nKe 0 0 0\nnewmtl paint\nKd 1 1 1\n");
+    static const char corners[] = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\n";
+    char text[512], err[MESH_ERROR_SIZE] = "";
+    mesh m;
+    mesh_init(&m);
+    parse_ok(&m, valid_obj, NULL);
+    counts before = counts_of(&m);
+    /* Corners 1 2 3 are on a line (as is 1 2 1, and a face on one point). */
+    static const char *const degenerate[] = {"f 1 2 3", "f 1 2 3 2", "f 4 4 4"};
+    for (size_t i = 0; i < sizeof degenerate / sizeof degenerate[0]; i++) {
+        snprintf(text, sizeof text, "mtllib lamp.mtl\n%susemtl lamp\n%s\n", corners, degenerate[i]);
+        assert_false(mesh_parse_obj(&m, text, strlen(text), "e.obj", test_dir, err, sizeof err));
+        assert_string_equal(err, "e.obj:7: the face emits light (material 'lamp', Ke > 0) but has no area: its corners "
+                                 "are on a line");
+        assert_counts_equal(counts_of(&m), before);
+    }
+    /* With area: a triangle, and a quad whose first fan triangle has none. */
+    snprintf(text, sizeof text, "mtllib lamp.mtl\n%susemtl lamp\nf 1 2 4\nf 1 2 3 4\n", corners);
+    parse_ok(&m, text, test_dir);
+    assert_int_equal(m.face_count, before.faces + 3);
+    /* Not emitting: no material, Ke 0, a diffuse paint. */
+    snprintf(text, sizeof text, "mtllib lamp.mtl\n%sf 1 2 3\nusemtl dark\nf 1 2 3\nusemtl paint\nf 1 2 3\n", corners);
+    parse_ok(&m, text, test_dir);
+    assert_int_equal(m.face_count, before.faces + 6);
     mesh_free(&m);
 }
 
@@ -933,6 +1013,7 @@ int main(void)
         cmocka_unit_test(test_error_trailing_junk),
         cmocka_unit_test(test_error_nan_and_inf),
         cmocka_unit_test(test_error_unknown_statement),
+        cmocka_unit_test(test_a_file_of_another_kind_is_named_not_quoted),
         cmocka_unit_test(test_error_garbage_bytes),
         cmocka_unit_test(test_error_truncated_face_vertex),
         cmocka_unit_test(test_error_mid_polygon_adds_no_faces),
@@ -940,6 +1021,7 @@ int main(void)
         cmocka_unit_test(test_mtllib_skipped_without_base_dir),
         cmocka_unit_test(test_mtl_values_and_defaults),
         cmocka_unit_test(test_usemtl_assigns_following_faces),
+        cmocka_unit_test(test_an_emitting_face_without_area_is_an_error),
         cmocka_unit_test(test_mtllib_several_files_on_one_line),
         cmocka_unit_test(test_error_missing_mtl_file),
         cmocka_unit_test(test_error_in_mtl_names_mtl_file_and_line),

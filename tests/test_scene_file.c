@@ -133,6 +133,11 @@ static void test_errors_name_line_and_column(void **state)
         {"plane point 0 0 0 normal 0 0 0 material w\n", "t.scene:2:19: a plane's normal must not be zero"},
         {"implicit torus center 0 0 0 major 1 minor 2 material w\n", "t.scene:2:37: a torus needs minor < major"},
         {"light area p0 0 0 0 p1 1 0 0 p2 2 0 0 p3 0 0 1 emission 1 1 1\n", "t.scene:2:7: the area light has no area"},
+        /* The same corners on an emitting quad or triangle: also a light without area. */
+        {"material e emissive emission 1 1 1\nquad p0 0 0 0 p1 1 0 0 p2 2 0 0 p3 0 0 1 material e\n",
+         "t.scene:3:1: the quad emits light (material 'e') but has no area (p0, p1, p2 on a line)"},
+        {"material e emissive emission 0 0 5\ntriangle p0 1 1 1 p1 1 1 1 p2 0 0 0 material e\n",
+         "t.scene:3:1: the triangle emits light (material 'e') but has no area (p0, p1, p2 on a line)"},
         {"image width 0\n", "t.scene:2:13: 0 must be from 1 to 16384"},
         {"max_depth 2.5\n", "t.scene:2:11: max_depth must be a whole number"},
         {"sphere center 0 0 0 radius 1 material w\x01\n", "t.scene:2:40: unexpected character"},
@@ -154,6 +159,43 @@ static void test_errors_name_line_and_column(void **state)
     }
 }
 
+/* A degenerate shape that does not emit is harmless (it is never hit), and
+ * an emissive material with zero emission does not emit. */
+static void test_only_emitting_shapes_must_have_area(void **state)
+{
+    (void)state;
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    const char *text = "material w diffuse albedo 0.5 0.5 0.5\n"
+                       "material off emissive emission 0 0 0\n"
+                       "material e emissive emission 1 1 1\n"
+                       "quad p0 0 0 0 p1 1 0 0 p2 2 0 0 p3 0 0 1 material w\n"
+                       "triangle p0 0 0 0 p1 0 0 0 p2 0 0 0 material off\n"
+                       "quad p0 0 0 0 p1 1 0 0 p2 1 1 0 p3 1 1 0 material e\n";
+    if (!parse(&d, text, err))
+        fail_msg("%s", err);
+    assert_int_equal(d.shape_count, 3);
+    scene_desc_free(&d);
+}
+
+/* A file of another kind given as a scene (an OBJ, a password file): the
+ * file and the line, nothing of its content. After a statement, an unknown
+ * word is a typo and is shown. */
+static void test_a_file_of_another_kind_is_named_not_quoted(void **state)
+{
+    (void)state;
+    scene_desc d;
+    char err[SCENE_ERROR_SIZE];
+    assert_false(parse(&d, "# first\nroot:x:0:0:SECRET /bin/sh\n", err));
+    assert_non_null(strstr(err, "t.scene:2:1: not a scene file"));
+    assert_null(strstr(err, "root"));
+    assert_null(strstr(err, "SECRET"));
+    assert_false(parse(&d, "v 0 0 0\nv 1 0 0\n", err));
+    assert_non_null(strstr(err, "t.scene:1:1: not a scene file"));
+    assert_false(parse(&d, "camera eye 0 0 5 target 0 0 0\ncube size 1\n", err));
+    assert_non_null(strstr(err, "t.scene:2:1: unknown statement 'cube'"));
+}
+
 static void test_long_line_and_missing_file_are_errors(void **state)
 {
     (void)state;
@@ -168,7 +210,7 @@ static void test_long_line_and_missing_file_are_errors(void **state)
     assert_non_null(strstr(err, "line longer than"));
     free(text);
     assert_false(scene_desc_load(&d, "/nonexistent/x.scene", err, sizeof err));
-    assert_non_null(strstr(err, "/nonexistent/x.scene: cannot open"));
+    assert_string_equal(err, "/nonexistent/x.scene: No such file or directory");
     /* A NUL byte inside the text is an error, not the end of the file. */
     const char with_nul[] = "camera eye 0 0 5 target 0 0 0\n\0sphere";
     assert_false(scene_desc_parse(&d, with_nul, sizeof with_nul - 1, "t.scene", NULL, err, sizeof err));
@@ -211,6 +253,33 @@ static void test_mesh_paths_are_relative_to_the_scene_file(void **state)
     snprintf(expected, sizeof expected, "%s:2:1: mesh: ", path);
     assert_memory_equal(err, expected, strlen(expected));
     assert_int_equal(m.face_count, 2); /* unchanged */
+    scene_desc_free(&d);
+
+    /* A mesh given an emitting material is a light: it must have area. */
+    snprintf(path, sizeof path, "%s/line.obj", dir);
+    f = fopen(path, "w");
+    fprintf(f, "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    fclose(f);
+    snprintf(path, sizeof path, "%s/s.scene", dir);
+    f = fopen(path, "w");
+    fprintf(f, "material e emissive emission 1 1 1\nmaterial w diffuse albedo 1 1 1\n"
+               "mesh path \"line.obj\" material w\nmesh path \"line.obj\" material e\n"
+               "mesh path \"quad.obj\" material e\n");
+    fclose(f);
+    if (!scene_desc_load(&d, path, err, sizeof err))
+        fail_msg("%s", err);
+    assert_true(scene_desc_load_mesh(&d, 0, &m, err, sizeof err));
+    assert_int_equal(m.face_count, 3);
+    int positions = m.position_count, materials = m.material_count;
+    assert_false(scene_desc_load_mesh(&d, 1, &m, err, sizeof err));
+    snprintf(expected, sizeof expected, "%s:4:1: mesh: %s/line.obj: emits light (material 'e') but no triangle of it "
+                                        "has area", path, dir);
+    assert_string_equal(err, expected);
+    assert_int_equal(m.face_count, 3);
+    assert_int_equal(m.position_count, positions);
+    assert_int_equal(m.material_count, materials);
+    assert_true(scene_desc_load_mesh(&d, 2, &m, err, sizeof err));
+    assert_int_equal(m.face_count, 5);
     mesh_free(&m);
     scene_desc_free(&d);
     snprintf(path, sizeof path, "rm -r '%s'", dir);
@@ -363,6 +432,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_full_scene_parses_every_statement),
         cmocka_unit_test(test_errors_name_line_and_column),
+        cmocka_unit_test(test_only_emitting_shapes_must_have_area),
+        cmocka_unit_test(test_a_file_of_another_kind_is_named_not_quoted),
         cmocka_unit_test(test_long_line_and_missing_file_are_errors),
         cmocka_unit_test(test_mesh_paths_are_relative_to_the_scene_file),
         cmocka_unit_test(test_effects_follow_from_the_scene),

@@ -11,7 +11,8 @@
 # correct implementation fails a test with probability about 1e-6 or less:
 # over 200 seeds the expected count is 0, and any failure is worth reading.
 # PATTERN (an extended regular expression) keeps only the tests whose names
-# match it. Exit status 1 if any run failed.
+# it matches, anywhere in the name. Exit status 1 if any run failed, or if
+# the pattern keeps no test (a typo must not pass as "0 failures").
 set -u
 build=${1:?usage: test_seeds.sh BUILD_DIR [SEEDS] [JOBS]}
 seeds=${2:-200}
@@ -30,9 +31,13 @@ for suite in "$build"/tests/test_*; do
         /^\[ RUN      \] / { name = $4 }
         /^test_seed: used/ && name != "" && !(name in seen) { seen[name] = 1; print suite, name }' >> "$work/tests"
 done
-grep -E " ($pattern)" "$work/tests" > "$work/tests.kept"
+awk -v p="$pattern" '$2 ~ p' "$work/tests" > "$work/tests.kept"
 mv "$work/tests.kept" "$work/tests"
 count=$(wc -l < "$work/tests")
+if [ "$count" -eq 0 ]; then
+    echo "test-seeds: no random test's name matches '$pattern'" >&2
+    exit 1
+fi
 echo "$count random tests, $seeds seeds each, $jobs at a time"
 
 # 2. One line per (test, seed): run it, record failures.

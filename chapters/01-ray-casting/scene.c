@@ -206,12 +206,76 @@ static material material_from_desc(const scene_desc *d, const scene_material *sm
     case SCENE_MATERIAL_EMISSIVE:
     default:
         m = material_blinn_phong(sm->albedo, vec3_splat(0.0f), 1.0f);
-        program_warn(label, d, sm->line, sm->column, "emissive '%s': shaded by its albedo, but it does not glow: "
-                     "only point lights give light here", sm->name);
+        program_warn(label, d, sm->line, sm->column, "emissive '%s': shaded by its albedo; its triangles and quads "
+                     "light the scene as point lights (below), its spheres do not", sm->name);
         break;
     }
     snprintf(m.name, sizeof m.name, "%s", sm->name);
     return m;
+}
+
+/* Where add_mesh says what each MTL material became (NULL: nowhere). */
+static FILE *material_report;
+static bool material_report_set;
+
+void scene_report_materials(FILE *out)
+{
+    material_report = out;
+    material_report_set = true;
+}
+
+/* An emitter as chapters 01-02 light a scene: as they treat an area light, a
+ * point light at its centre with intensity L_e x area, lifted off the
+ * emitting surface along its front normal by this fraction of its size, so
+ * that a shadow ray towards it does not end on the emitter's own triangles
+ * (which would block it about half the time, by rounding). */
+static const float EMITTER_LIGHT_LIFT = 1e-3f;
+
+typedef struct {
+    vec3 weighted_centre, normal; /* sums over the emitting triangles, weighted by area */
+    float area;
+} emitter_sum;
+
+static void emitter_add(emitter_sum *e, vec3 p0, vec3 p1, vec3 p2)
+{
+    vec3 cross = vec3_cross(vec3_sub(p1, p0), vec3_sub(p2, p0));
+    float area = 0.5f * vec3_length(cross);
+    vec3 centre = vec3_scale(vec3_add(vec3_add(p0, p1), p2), 1.0f / 3.0f);
+    e->weighted_centre = vec3_add(e->weighted_centre, vec3_scale(centre, area));
+    e->normal = vec3_add(e->normal, vec3_scale(cross, 0.5f));
+    e->area += area;
+}
+
+/* The point light of the emitter summed in e, if it has an area. */
+static bool emitter_light(scene *sc, const emitter_sum *e, vec3 emission)
+{
+    if (!(e->area > 0.0f))
+        return false;
+    vec3 centre = vec3_scale(e->weighted_centre, 1.0f / e->area);
+    vec3 lift = vec3_length(e->normal) > 0.0f ? vec3_normalize(e->normal) : vec3_splat(0.0f);
+    scene_add_point_light(sc, vec3_add(centre, vec3_scale(lift, EMITTER_LIGHT_LIFT * sqrtf(e->area))),
+                          vec3_scale(emission, e->area));
+    return true;
+}
+
+/* An MTL material as chapters 01-02 shade it: glass where the MTL says light
+ * passes through (illum 4, 6, 7, 9 or d < 1), else Blinn-Phong with k_d = Kd,
+ * k_s = Ks, p = Ns. */
+static material material_from_mtl(const mesh_material *mm, char *note, size_t note_size)
+{
+    material mat;
+    if (mesh_material_transparent(mm)) {
+        float ior = mm->ior > 1.0f ? mm->ior : 1.5f;
+        mat = material_glass(ior);
+        snprintf(note, note_size, "glass, ior %g", (double)ior);
+    } else {
+        mat = material_blinn_phong(mm->diffuse, mm->specular, fmaxf(1.0f, mm->shininess));
+        snprintf(note, note_size, "Blinn-Phong, k_d %g %g %g, k_s %g %g %g, p %g%s", (double)mm->diffuse.x,
+                 (double)mm->diffuse.y, (double)mm->diffuse.z, (double)mm->specular.x, (double)mm->specular.y,
+                 (double)mm->specular.z, (double)mat.shininess, mm->ior > 1.0f ? "; Ni ignored (opaque)" : "");
+    }
+    snprintf(mat.name, sizeof mat.name, "%s", mm->name);
+    return mat;
 }
 
 static bool add_mesh(scene *sc, const scene_desc *d, int index, char *err, size_t err_size)
@@ -223,14 +287,14 @@ static bool add_mesh(scene *sc, const scene_desc *d, int index, char *err, size_
         return false;
     }
     int material_id = d->shapes[index].material;
-    /* The MTL's colours as Blinn-Phong materials (Kd, Ks, Ns); faces with
-     * none get a grey. */
+    FILE *out = material_report_set ? material_report : stdout;
+    /* The MTL's materials; faces with none get a grey. */
     int first = sc->material_count;
     for (int i = 0; material_id < 0 && i < m.material_count; i++) {
-        const mesh_material *mm = &m.materials[i];
-        material mat = material_blinn_phong(mm->diffuse, mm->specular, fmaxf(1.0f, mm->shininess));
-        snprintf(mat.name, sizeof mat.name, "%s", mm->name);
-        scene_add_material(sc, mat);
+        char note[256];
+        scene_add_material(sc, material_from_mtl(&m.materials[i], note, sizeof note));
+        if (out != NULL)
+            fprintf(out, "%s: material '%s': %s\n", d->shapes[index].path, m.materials[i].name, note);
     }
     int grey = material_id;
     if (material_id < 0) {
@@ -238,13 +302,55 @@ static bool add_mesh(scene *sc, const scene_desc *d, int index, char *err, size_
         snprintf(mat.name, sizeof mat.name, "mesh default grey");
         grey = scene_add_material(sc, mat);
     }
+    emitter_sum *emitters = calloc((size_t)(m.material_count > 0 ? m.material_count : 1), sizeof *emitters);
+    if (emitters == NULL) {
+        snprintf(err, err_size, "out of memory");
+        mesh_free(&m);
+        return false;
+    }
     for (int i = 0; i < m.face_count; i++) {
         int face_material = m.faces[i].material;
         int id = material_id >= 0 ? material_id : face_material >= 0 ? first + face_material : grey;
-        scene_add_triangle(sc, mesh_vertex(&m, i, 0), mesh_vertex(&m, i, 1), mesh_vertex(&m, i, 2), id);
+        vec3 p0 = mesh_vertex(&m, i, 0), p1 = mesh_vertex(&m, i, 1), p2 = mesh_vertex(&m, i, 2);
+        scene_add_triangle(sc, p0, p1, p2, id);
+        if (material_id < 0 && face_material >= 0 && mesh_material_emits(&m.materials[face_material]))
+            emitter_add(&emitters[face_material], p0, p1, p2);
     }
+    /* Each emitting material (Ke) of the mesh lights the scene. */
+    for (int i = 0; i < m.material_count; i++)
+        if (emitter_light(sc, &emitters[i], m.materials[i].emission) && out != NULL)
+            fprintf(out, "%s: material '%s' emits (Ke): a point light of intensity Ke x area %g at its centre "
+                    "(hard shadows; soft shadows are chapter 09)\n", d->shapes[index].path, m.materials[i].name,
+                    (double)emitters[i].area);
+    free(emitters);
     mesh_free(&m);
     return true;
+}
+
+/* Chapters 01-02 test every shape for every ray: beyond this many
+ * triangles a render takes minutes where chapter 06's BVH takes seconds. */
+enum { BRUTE_FORCE_TRIANGLES_WARN = 4096 };
+
+/* What would make the picture wrong or slow, said before it is rendered:
+ * no light at all (only the ambient term and the background remain), and
+ * a mesh too large to test triangle by triangle. */
+static void warn_before_rendering(const scene *sc, const scene_desc *d, const char *label)
+{
+    int triangles = 0, emissive_spheres = 0;
+    for (int i = 0; i < sc->shape_count; i++)
+        triangles += sc->shapes[i].kind == SHAPE_TRIANGLE;
+    for (int i = 0; i < d->shape_count; i++)
+        emissive_spheres += d->shapes[i].kind == SCENE_SHAPE_SPHERE && d->shapes[i].material >= 0 &&
+                            d->materials[d->shapes[i].material].kind == SCENE_MATERIAL_EMISSIVE;
+    if (sc->light_count == 0)
+        program_warn(label, d, 0, 0, "no light: the picture shows only the ambient term and the background%s",
+                     emissive_spheres > 0 ? " (emissive spheres do not light the scene here; chapter 09 samples them "
+                                            "by the rays that hit them)"
+                                          : "; add a point or area light, or an emissive quad");
+    if (triangles > BRUTE_FORCE_TRIANGLES_WARN)
+        program_warn(label, d, 0, 0, "%d triangles: this chapter tests every one for every ray (no acceleration "
+                     "structure yet), which takes minutes; chapter 06 (06-bvh --scene ...) and chapter 09 trace them "
+                     "through a BVH", triangles);
 }
 
 bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *err, size_t err_size)
@@ -282,12 +388,21 @@ bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *er
             scene_add_plane(sc, s->point, s->normal, s->material);
             break;
         case SCENE_SHAPE_TRIANGLE:
+        case SCENE_SHAPE_QUAD: {
+            emitter_sum e = {{0, 0, 0}, {0, 0, 0}, 0.0f};
             scene_add_triangle(sc, s->p[0], s->p[1], s->p[2], s->material);
+            emitter_add(&e, s->p[0], s->p[1], s->p[2]);
+            if (s->kind == SCENE_SHAPE_QUAD) {
+                scene_add_triangle(sc, s->p[0], s->p[2], s->p[3], s->material);
+                emitter_add(&e, s->p[0], s->p[2], s->p[3]);
+            }
+            const scene_material *sm = &d->materials[s->material];
+            if (sm->kind == SCENE_MATERIAL_EMISSIVE && emitter_light(sc, &e, sm->emission))
+                program_warn(label, d, s->line, s->column, "an emitting %s: lights the scene as a point light at its "
+                             "centre with intensity L_e x area (hard shadows; soft shadows are chapter 09)",
+                             s->kind == SCENE_SHAPE_QUAD ? "quad" : "triangle");
             break;
-        case SCENE_SHAPE_QUAD:
-            scene_add_triangle(sc, s->p[0], s->p[1], s->p[2], s->material);
-            scene_add_triangle(sc, s->p[0], s->p[2], s->p[3], s->material);
-            break;
+        }
         case SCENE_SHAPE_TORUS:
             scene_add_torus(sc, s->center, s->major, s->minor, s->material);
             break;
@@ -300,6 +415,7 @@ bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *er
             break;
         }
     }
+    warn_before_rendering(sc, d, label);
     if (d->integrator[0] != '\0' && strcmp(d->integrator, "ray_casting") != 0 && strcmp(d->integrator, "whitted") != 0)
         program_warn(label, d, d->integrator_line, d->integrator_column,
                      "integrator '%s' is not one of chapters 01-02 (ray_casting, whitted): ignored", d->integrator);

@@ -14,6 +14,7 @@
 #define SCENE_H
 
 #include <stdbool.h>
+#include <stdio.h>
 
 #include "camera.h"
 #include "cli.h"
@@ -94,6 +95,9 @@ int scene_add_plane(scene *sc, vec3 point, vec3 normal, int material_id);
 int scene_add_triangle(scene *sc, vec3 p0, vec3 p1, vec3 p2, int material_id);
 int scene_add_torus(scene *sc, vec3 center, float major, float minor, int material_id);
 void scene_add_point_light(scene *sc, vec3 position, vec3 intensity);
+/* Where loading a mesh says what each MTL material became (stdout by
+ * default; NULL: nowhere, for --quiet and the tests). */
+void scene_report_materials(FILE *out);
 
 /* One shape, whatever its kind. */
 bool shape_intersect(const shape *s, ray r, hit_record *hit);

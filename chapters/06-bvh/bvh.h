@@ -60,66 +60,6 @@ static inline int bvh_node_triangles(const bvh_node *n) { return (int)(n->count_
 static inline int bvh_node_axis(const bvh_node *n) { return (int)(n->count_axis & 3u); }
 static inline bool bvh_node_is_leaf(const bvh_node *n) { return n->count_axis >> 2 != 0; }
 
-/* ---- the slab test, as the traversal runs it ---------------------------------
- * Chapter 03's slab test, aabb_slab_test(), made cheap enough to run for
- * every node: the same arithmetic and the same answer, bit for bit
- * (test_slab_test_matches_chapter_03), but inline (a call into another file
- * per node cost more than the test itself) and without a branch. Chapter 03
- * swaps t_min and t_max of an axis where 1/d < 0; here that choice is made
- * once per ray and kept as an index into the node's bounds[]: the plane met
- * first is lo where 1/d >= 0 and hi where 1/d < 0 (1/(-0) = -inf included),
- * as in Williams et al., "An Efficient and Robust Ray-Box Intersection
- * Algorithm" (2005). */
-typedef struct {
-    vec3 origin;
-    vec3 inverse_direction; /* 1/d per axis */
-    int near_x, near_y, near_z; /* index in bvh_node.bounds of the plane met first */
-} bvh_ray;
-
-/* aabb.c's SLAB_ROUNDING_PAD: 1 + 2 gamma(3), which covers the rounding of
- * t = (p - o) (1/d) in both t_enter and t_exit (see aabb.c). */
-static const float BVH_SLAB_ROUNDING_PAD = 1.0f + 2.0f * (3.0f * 0x1.0p-24f) / (1.0f - 3.0f * 0x1.0p-24f);
-
-static inline bvh_ray bvh_ray_make(const ray *r)
-{
-    bvh_ray b;
-    b.origin = r->origin;
-    b.inverse_direction = vec3_make(1.0f / r->direction.x, 1.0f / r->direction.y, 1.0f / r->direction.z);
-    b.near_x = b.inverse_direction.x < 0.0f ? 3 : 0;
-    b.near_y = b.inverse_direction.y < 0.0f ? 4 : 1;
-    b.near_z = b.inverse_direction.z < 0.0f ? 5 : 2;
-    return b;
-}
-
-/* Does the ray meet the node's box for some t in [t_min, t_max]? Returns
- * that, and t_enter (the first such t). The far plane of each axis is the
- * other one of its pair: 3 - near_x, 5 - near_y, 7 - near_z. */
-static inline bool bvh_slab_test(const bvh_node *node, const bvh_ray *r, float t_min, float t_max, float *t_enter)
-{
-    const float *b = node->bounds;
-    float near_x = (b[r->near_x] - r->origin.x) * r->inverse_direction.x;
-    float far_x = (b[3 - r->near_x] - r->origin.x) * r->inverse_direction.x;
-    float near_y = (b[r->near_y] - r->origin.y) * r->inverse_direction.y;
-    float far_y = (b[5 - r->near_y] - r->origin.y) * r->inverse_direction.y;
-    float near_z = (b[r->near_z] - r->origin.z) * r->inverse_direction.z;
-    float far_z = (b[7 - r->near_z] - r->origin.z) * r->inverse_direction.z;
-    /* t_enter = max t_min, t_exit = min t_max; a NaN leaves them as they are */
-    float enter = t_min, exit = INFINITY;
-    enter = near_x > enter ? near_x : enter;
-    enter = near_y > enter ? near_y : enter;
-    enter = near_z > enter ? near_z : enter;
-    exit = far_x < exit ? far_x : exit;
-    exit = far_y < exit ? far_y : exit;
-    exit = far_z < exit ? far_z : exit;
-    /* aabb.c pads each axis's t_max before the minimum; padding the minimum
-     * gives the same float (rounding is monotonic: min(a p, b p) = min(a, b) p)
-     * for one multiplication instead of three. */
-    exit *= BVH_SLAB_ROUNDING_PAD;
-    exit = t_max < exit ? t_max : exit;
-    *t_enter = enter;
-    return enter <= exit;
-}
-
 /* A triangle as Moller-Trumbore uses it: P0 and the edges E1 = P1 - P0,
  * E2 = P2 - P0, computed once at build time instead of once per test. */
 typedef struct {
@@ -142,10 +82,23 @@ typedef struct {
 } bvh;
 
 accel *bvh_build(const triangle_set *set, bvh_split split);
+/* The SAH tree with leaves of at most max_leaf_size triangles (bvh_build's
+ * is 8; the SAH may stop earlier). Larger leaves: fewer nodes visited and
+ * more triangles tested per ray, which chapter 09's counters show. */
+accel *bvh_build_max_leaf(const triangle_set *set, int max_leaf_size);
 
 /* Switch the traversal order of a built BVH (default BVH_ORDER_AXIS_SIGN,
  * the faster one on our measurements: README). */
 void bvh_set_order(accel *a, bvh_order order);
+
+/* The lecture's traversal (lecture 14's pseudocode, in bvh_traverse.c):
+ * recursive; if the ray misses a node's box, nothing; a leaf returns its
+ * closest hit; an interior node visits both children and returns the closer
+ * of their hits. Brute force's answer, bit for bit (at equal t, the lower
+ * triangle index, as brute force), found by visiting more nodes than
+ * accel_closest_hit() does, which skips boxes beyond the closest hit so far.
+ * Counts its box and triangle tests in counters, as every traversal does. */
+bool bvh_closest_hit_recursive(const bvh *b, ray r, hit_record *hit, ray_counters *counters);
 
 /* Wrap a tree built by hand (for tests and exercises): the nodes are
  * copied; triangle_index[i] says which triangle of the set is at leaf

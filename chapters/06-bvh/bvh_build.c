@@ -426,6 +426,12 @@ accel *bvh_build(const triangle_set *set, bvh_split split)
     return bvh_build_with(set, split, &sah);
 }
 
+accel *bvh_build_max_leaf(const triangle_set *set, int max_leaf_size)
+{
+    bvh_sah_params sah = {BVH_SAH_TRAVERSAL_COST, 1, max_leaf_size > 0 ? max_leaf_size : 1};
+    return bvh_build_with(set, BVH_SPLIT_SAH, &sah);
+}
+
 accel *bvh_build_with(const triangle_set *set, bvh_split split, const bvh_sah_params *sah)
 {
     double start = timer_seconds();

@@ -180,6 +180,81 @@ static inline bvh_found traverse_distance(const bvh *b, const ray *r, bool stop_
     return found;
 }
 
+/* ---- the lecture's recursion ---------------------------------------------------
+ * GAMES101 lecture 14's pseudocode, line for line:
+ *
+ *   Intersect(Ray ray, BVH node) {
+ *       if (ray misses node.bbox) return;
+ *       if (node is a leaf node)
+ *           test intersection with all objs;
+ *           return closest intersection;
+ *       hit1 = Intersect(ray, node.child1);
+ *       hit2 = Intersect(ray, node.child2);
+ *       return the closer of hit1, hit2;
+ *   }
+ *
+ * with the lecture's own tests: chapter 03's slab test and chapter 01's
+ * Moller-Trumbore. Every box and every triangle is tested over the whole ray
+ * [t_min, t_max]; a hit found in one child changes nothing in the other. So
+ * it visits every node whose parent's box the ray crosses, where the
+ * iterative traversals above skip a box that begins beyond the closest hit
+ * found so far (test_recursive_traversal_visits_at_least_as_many_nodes). */
+
+/* "The closer of hit1, hit2": the smaller t; at equal t (triangles sharing
+ * an edge, or coincident), the lower triangle index, the one brute force
+ * keeps (it takes a hit only if strictly closer, in index order). The answer
+ * is then brute force's, bit for bit, whatever the tree. Here
+ * bvh_found.triangle is the triangle's index in the set. */
+static bvh_found closer(bvh_found hit1, bvh_found hit2)
+{
+    if (hit1.triangle < 0)
+        return hit2;
+    if (hit2.triangle < 0)
+        return hit1;
+    if (hit2.t < hit1.t || (hit2.t == hit1.t && hit2.triangle < hit1.triangle))
+        return hit2;
+    return hit1;
+}
+
+/* The slide's Intersect(ray, node): the closest hit in the subtree of
+ * nodes[node_index], or none (triangle -1). */
+static bvh_found intersect(const bvh *b, const ray *r, const slab_ray *sr, int node_index,
+                           ray_counters *counters)
+{
+    const bvh_node *node = &b->nodes[node_index];
+    const bvh_found none = {-1, r->t_max, 0.0f, 0.0f};
+    float t_enter, t_exit;
+    counters->box_tests++;
+    if (!aabb_slab_test(&node->box, sr, r->t_min, r->t_max, &t_enter, &t_exit))
+        return none; /* the ray misses node.bbox */
+    if (bvh_node_is_leaf(node)) {
+        /* test intersection with all objs; return the closest */
+        bvh_found closest = none;
+        for (int i = node->first; i < node->first + bvh_node_triangles(node); i++) {
+            bvh_found hit = {b->triangle_index[i], 0.0f, 0.0f, 0.0f};
+            if (triangle_intersect_barycentric(&b->base.set->triangles[hit.triangle], r, &hit.t, &hit.b1, &hit.b2))
+                closest = closer(closest, hit);
+            counters->primitive_tests++;
+        }
+        return closest;
+    }
+    bvh_found hit1 = intersect(b, r, sr, node->first, counters);     /* child1 */
+    bvh_found hit2 = intersect(b, r, sr, node->first + 1, counters); /* child2 */
+    return closer(hit1, hit2);
+}
+
+bool bvh_closest_hit_recursive(const bvh *b, ray r, hit_record *hit, ray_counters *counters)
+{
+    if (b->node_count == 0)
+        return false;
+    slab_ray sr = slab_ray_make(r);
+    bvh_found found = intersect(b, &r, &sr, 0, counters);
+    if (found.triangle < 0)
+        return false;
+    triangle_set_fill_hit(b->base.set, found.triangle, r, found.t, found.b1, found.b2, hit);
+    return true;
+}
+
 /* ---- the accel interface -------------------------------------------------- */
 
 static bool finish_closest(const bvh *b, const bvh_found *found, const ray *r, hit_record *record)

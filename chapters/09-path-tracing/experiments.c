@@ -1,6 +1,5 @@
 /* experiments.c -- measuring error against time (see experiments.h). */
-#include "experiments.h"
-#include "09-path-tracing/path_tracer_wide.h"
+#include "09-path-tracing/experiments.h"
 
 #include <errno.h>
 #include <math.h>
@@ -337,7 +336,7 @@ bool experiment_roulettes(const pt_scene *sc, const camera *cam, const estimate_
      * only ever adds time. */
     enum { ROULETTE_RENDERS = 8 };
     fprintf(csv, "roulette,label,cpu_seconds,mse,mse_low,mse_high,efficiency,rays_per_sample\n");
-    printf("\nThe references' roulettes (lecture rung, 8 paths at a time where it can, %d spp, at most %d bounces,\n"
+    printf("\nThe references' roulettes (lecture rung, %d spp, at most %d bounces,\n"
            "MSE the mean of %d renders, CPU s the least):\n  %-28s %8s %11s %23s %11s %9s\n",
            spp, SPEED_MAX_DEPTH, ROULETTE_RENDERS, "roulette", "CPU s", "MSE", "(lowest, highest)", "efficiency",
            "rays/spl");
@@ -350,9 +349,7 @@ bool experiment_roulettes(const pt_scene *sc, const camera *cam, const estimate_
         double cpu = INFINITY, mse = 0.0, low = INFINITY, high = 0.0, rays = 0.0;
         for (int r = 0; r < ROULETTE_RENDERS; r++) {
             double cpu_start = experiment_cpu_seconds();
-            estimate_image e;
-            if (!render_estimate_wide(&pt, cam, spp, 78 + (uint64_t)r, threads, &e))
-                e = render_estimate(&pt, cam, spp, 78 + (uint64_t)r, threads);
+            estimate_image e = render_estimate(&pt, cam, spp, 78 + (uint64_t)r, threads);
             cpu = fmin(cpu, experiment_cpu_seconds() - cpu_start);
             double rmse, relmse;
             experiment_error(&e.mean, reference, &rmse, &relmse);
@@ -369,129 +366,4 @@ bool experiment_roulettes(const pt_scene *sc, const camera *cam, const estimate_
                1.0 / (mse * cpu), rays);
     }
     return experiment_csv_close(csv, path, err, err_size);
-}
-
-/* ---- speed ------------------------------------------------------------------------
- * Seconds per million camera samples on the Cornell box, for each rung, on 1
- * and 2 threads. Wall time is what the issue's reference points measure;
- * CPU time (all threads together) is printed beside it because on a shared
- * machine the wall time of 2 threads depends on what else runs. */
-
-typedef struct {
-    pt_integrator integrator;
-    pt_russian_roulette rr;
-    int rr_start_depth;
-    const char *label;
-    bool walls_off;
-    bool wide; /* eight paths at a time (path_tracer_wide.c) */
-} speed_case;
-
-/* Every case counts at most SPEED_MAX_DEPTH bounces, Ray Tracing: The Rest of
- * Your Life's max_depth for its Cornell box. The second is the first with
- * every shadow ray tested against the walls too (scene_pt.c, "walls cast no
- * shadows"): what they save. The last six are the comparisons at the
- * references' depths, the issue's target: Russian roulette on the
- * throughput from bounce 5 on (pbrt-v3's rule), on the surface's albedo
- * from bounce 6 on (smallpt's: `if (++depth > 5)` continue with
- * probability max(f)), and no roulette at all, the full 50 bounces
- * (RTROWL), each by MIS one path at a time and by the lecture rung eight
- * paths at a time. */
-static const speed_case speed_cases[] = {
-    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8", false, false},
-    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, walls off", true, false},
-    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, 8 paths at a time", false, true},
-    {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8", false, false},
-    {PT_MIS, RR_FIXED, 0, "mis, P_RR 0.8", false, false},
-    {PT_MIS, RR_THROUGHPUT, RR_START_PBRT, "mis, RR on throughput from 5 (pbrt)", false, false},
-    {PT_LECTURE, RR_THROUGHPUT, RR_START_PBRT, "lecture, pbrt's RR, 8 paths at a time", false, true},
-    {PT_MIS, RR_ALBEDO, RR_START_SMALLPT, "mis, RR on albedo from 6 (smallpt)", false, false},
-    {PT_LECTURE, RR_ALBEDO, RR_START_SMALLPT, "lecture, smallpt's RR, 8 paths at a time", false, true},
-    {PT_MIS, RR_OFF, 0, "mis, no RR, depth 50 (RTROWL)", false, false},
-    {PT_LECTURE, RR_OFF, 0, "lecture, RTROWL's depth, 8 paths at a time", false, true},
-};
-_Static_assert(sizeof speed_cases / sizeof speed_cases[0] == EXPERIMENT_SPEED_CASES,
-               "experiments.h: EXPERIMENT_SPEED_CASES is the number of speed cases");
-
-int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int spp, int repeats,
-                           experiment_speed_row *rows)
-{
-    camera cam = pt_scene_camera(sc, size, size);
-    double million_samples = (double)size * (double)size * (double)spp * 1e-6;
-    printf("%s %dx%d, %d spp (%.2f M camera samples), max depth %d, best of %d runs\n", label, size, size, spp,
-           million_samples, SPEED_MAX_DEPTH, repeats);
-    printf("%-44s %7s %12s %12s %10s %8s\n", "case", "threads", "s/M (wall)", "s/M (CPU)", "rays/spl", "scaling");
-    const int n_cases = (int)(sizeof speed_cases / sizeof speed_cases[0]);
-    for (int k = 0; k < n_cases; k++) {
-        /* A shallow copy, to turn the walls off for one case: the same
-         * trees and arrays, read only. */
-        pt_scene scene = *sc;
-        scene.walls_off = sc->walls_off || speed_cases[k].walls_off;
-        path_tracer pt = path_tracer_defaults(&scene);
-        pt.integrator = speed_cases[k].integrator;
-        pt.russian_roulette = speed_cases[k].rr;
-        pt.max_depth = SPEED_MAX_DEPTH;
-        if (speed_cases[k].rr_start_depth > 0)
-            pt.rr_start_depth = speed_cases[k].rr_start_depth;
-        char why[128];
-        bool wide = speed_cases[k].wide && path_tracer_wide_supported(&pt, why, sizeof why);
-        if (speed_cases[k].wide && !wide)
-            printf("%s: not here (%s), one path at a time instead\n", speed_cases[k].label, why);
-        /* 1 and 2 threads take turns, repeat after repeat, so that both see
-         * the same machine: on a shared or virtual machine the speed drifts
-         * by 10 % over seconds, and the best of runs taken back to back
-         * would put that drift into the scaling. */
-        double best_wall[2] = {INFINITY, INFINITY}, best_cpu[2] = {INFINITY, INFINITY}, rays = 0.0;
-        for (int r = 0; r < repeats; r++) {
-            for (int threads = 1; threads <= 2; threads++) {
-                double cpu_start = experiment_cpu_seconds();
-                estimate_image e;
-                if (!wide || !render_estimate_wide(&pt, &cam, spp, 1, threads, &e))
-                    e = render_estimate(&pt, &cam, spp, 1, threads);
-                double cpu = experiment_cpu_seconds() - cpu_start;
-                best_wall[threads - 1] = fmin(best_wall[threads - 1], e.seconds);
-                best_cpu[threads - 1] = fmin(best_cpu[threads - 1], cpu);
-                rays = (double)counters_total_rays(&e.counters) / (million_samples * 1e6);
-                estimate_image_free(&e);
-            }
-        }
-        experiment_speed_row row = {.label = speed_cases[k].label, .rays_per_sample = rays, .wide = wide};
-        for (int threads = 1; threads <= 2; threads++) {
-            row.wall[threads - 1] = best_wall[threads - 1] / million_samples;
-            row.cpu[threads - 1] = best_cpu[threads - 1] / million_samples;
-            row.scaling[threads - 1] = best_wall[0] / best_wall[threads - 1];
-            printf("%-44s %7d %12.3f %12.3f %10.2f %7.2fx\n", row.label, threads, row.wall[threads - 1],
-                   row.cpu[threads - 1], rays, row.scaling[threads - 1]);
-            fflush(stdout);
-        }
-        if (rows != NULL)
-            rows[k] = row;
-    }
-    return n_cases;
-}
-
-bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size)
-{
-    pt_scene sc;
-    pt_scene_build_cornell_box(&sc);
-    FILE *csv = NULL;
-    char csv_temp[4200];
-    if (csv_path != NULL)
-        csv_temp_path(csv_path, csv_temp, sizeof csv_temp);
-    /* Opened before the minutes of rendering, so that a bad path fails at once. */
-    if (csv_path != NULL && (csv = fopen(csv_temp, "w")) == NULL) {
-        snprintf(err, err_size, "%s: %s", csv_path, strerror(errno));
-        pt_scene_free(&sc);
-        return false;
-    }
-    experiment_speed_row rows[EXPERIMENT_SPEED_CASES];
-    int n = experiment_speed_scene(&sc, "Cornell box", size, spp, repeats, rows);
-    if (csv != NULL) {
-        fprintf(csv, "case,threads,wall_s_per_msample,cpu_s_per_msample,rays_per_sample,scaling\n");
-        for (int k = 0; k < n; k++)
-            for (int t = 0; t < 2; t++)
-                fprintf(csv, "\"%s\",%d,%.4f,%.4f,%.3f,%.3f\n", rows[k].label, t + 1, rows[k].wall[t], rows[k].cpu[t],
-                        rows[k].rays_per_sample, rows[k].scaling[t]);
-    }
-    pt_scene_free(&sc);
-    return csv == NULL || experiment_csv_close(csv, csv_path, err, err_size);
 }

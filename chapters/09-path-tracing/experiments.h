@@ -9,8 +9,6 @@
  *                            range of P_RR
  *   experiment_roulettes()   the same for the lecture's, pbrt's and
  *                            smallpt's roulettes and none (RTROWL's)
- *   experiment_speed()       seconds per million camera samples, per rung,
- *                            on 1 and 2 threads
  *   render_progressive()     passes of doubling sample counts until a time
  *                            budget or a target error (estimated from the
  *                            per-pixel variance) is reached
@@ -62,27 +60,6 @@ bool experiment_russian_roulette(const pt_scene *sc, const camera *cam, const es
  * 1 / (MSE x time) and rays per camera sample of each. */
 bool experiment_roulettes(const pt_scene *sc, const camera *cam, const estimate_image *reference, int spp, int threads,
                           const char *dir, char *err, size_t err_size);
-
-/* Prints seconds per million camera samples on the Cornell box (size x size,
- * spp samples, the best of `repeats` runs) for each rung on 1 and 2 threads,
- * and the 1 -> 2 thread scaling; writes them to csv_path too (if not NULL). */
-bool experiment_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size);
-
-/* The same table for a scene the caller built (its triangles traced by
- * whatever accelerator sc->bvh is: chapter 06's, or another one to compare
- * with), headed "LABEL SIZExSIZE, ...". Fills rows[0 .. returned count - 1]
- * (if rows is not NULL; room for EXPERIMENT_SPEED_CASES): seconds per
- * million camera samples, index 0 for 1 thread and 1 for 2 threads. */
-enum { EXPERIMENT_SPEED_CASES = 11 };
-typedef struct {
-    const char *label;
-    double wall[2], cpu[2]; /* seconds per million camera samples */
-    double scaling[2];      /* the 1-thread wall time over this one's */
-    double rays_per_sample;
-    bool wide; /* rendered eight paths at a time (path_tracer_wide.h) */
-} experiment_speed_row;
-int experiment_speed_scene(const pt_scene *sc, const char *label, int size, int spp, int repeats,
-                           experiment_speed_row *rows);
 
 /* The pieces the experiments are made of, shared with chapter 12's:
  * CPU seconds of the whole process (all threads: on a shared machine it

@@ -1,276 +1,214 @@
 /* 09-path-tracing: the Cornell box by path tracing (lecture 16), each rung of
- * the integrator ladder selectable, and the measurements of what accuracy
- * costs in time. */
+ * the integrator ladder selectable, traced through any structure of chapters
+ * 03-06, and the measurements of what accuracy costs in time. */
 #include <stdio.h>
 #include <string.h>
 
 #include "09-path-tracing/experiments.h"
-#include "09-path-tracing/path_tracer_wide.h"
-#include "effects.h"
 #include "09-path-tracing/path_tracer.h"
 #include "cli.h"
+#include "effects.h"
 #include "program.h"
 
-static bool build_scene(pt_scene *sc, const char *name, const char *obj, char *err, size_t err_size)
-{
-    if (obj != NULL)
-        return pt_scene_load_obj(sc, obj, err, err_size);
-    if (strcmp(name, "cornell") == 0)
-        pt_scene_build_cornell_box(sc);
-    else if (strcmp(name, "materials") == 0)
-        pt_scene_build_cornell_box_materials(sc);
-    else if (strcmp(name, "veach") == 0)
-        pt_scene_build_veach(sc);
-    else if (strcmp(name, "furnace") == 0)
-        pt_scene_build_furnace(sc, 0.5f, 0.5f);
-    else if (strcmp(name, "white-furnace") == 0)
-        pt_scene_build_white_furnace(sc, pt_diffuse(vec3_splat(0.5f)), vec3_splat(1.0f));
-    else if (strcmp(name, "glass-furnace") == 0)
-        pt_scene_build_white_furnace(sc, pt_glass(1.5f), vec3_splat(1.0f));
-    else if (strcmp(name, "point-in-sphere") == 0)
-        pt_scene_build_point_in_sphere(sc, 0.5f, (float)PI);
-    else {
-        snprintf(err, err_size, "--builtin: unknown scene '%s' (cornell, materials, veach, furnace, "
-                                "white-furnace, glass-furnace, point-in-sphere)", name);
-        return false;
-    }
-    return true;
-}
+#define PROGRAM "09-path-tracing"
 
-int main(int argc, char **argv)
-{
-    cli_options opts = cli_defaults("build/out/ch09.exr", 512, 512, 16);
-    /* integrator NULL and max_depth -1: not given, so the scene file's (or the default) */
-    const char *integrator = NULL, *rr = "fixed", *scene_name = "cornell", *obj = NULL, *data = NULL;
-    const char *bench_csv = NULL, *walls = "on";
-    bool bench = false, wide = false;
-    float rr_probability = 0.8f, time_budget = 0.0f, target_error = 0.0f;
-    int max_depth = -1, rr_start = 3, experiment_size = 96, reference_spp = 4096, experiment_spp = 256;
-    const cli_flag extras[] = {
-        {"--integrator", CLI_STRING, &integrator, "NAME", "lecture (default), cosine or mis: the rung of the ladder", 0, 0},
-        {"--rr", CLI_STRING, &rr, "MODE",
-         "Russian roulette: fixed (default, P_RR), throughput (pbrt's), albedo (smallpt's), or off", 0, 0},
-        {"--rr-probability", CLI_FLOAT, &rr_probability, "P", "P_RR for --rr fixed (default 0.8)", 0.01, 1.0},
-        {"--rr-start", CLI_INT, &rr_start, "N",
-         "--rr throughput or albedo: the first bounce the roulette may end (default 3; pbrt-v3's is 5, smallpt's 6)",
-         0, 1000},
-        {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
-        {"--builtin", CLI_STRING, &scene_name, "NAME",
-         "cornell (default), materials (glossy metal, glass), veach (glossy plates, lights of 4 sizes), furnace, "
-         "white-furnace, glass-furnace, point-in-sphere",
-         0, 0},
-        {"--obj", CLI_STRING, &obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
-        {"--walls", CLI_STRING, &walls, "on|off",
-         "on (default): shadow rays inside the room skip its walls, which cannot block them; off: every shadow "
-         "ray meets every triangle (the same image, slower)", 0, 0},
-        {"--time-budget", CLI_FLOAT, &time_budget, "SECONDS", "progressive: passes until this much time is spent", 0.0, 1e6},
-        {"--target-error", CLI_FLOAT, &target_error, "E",
-         "progressive: passes until the estimated relative error is below E", 0.0, 10.0},
-        {"--data", CLI_DIR, &data, "DIR", "run the experiments (error against time) and write CSV into DIR", 0, 0},
-        {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 96)", 8, 1024},
-        {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached reference (default 4096)", 16, 1 << 20},
-        {"--experiment-spp", CLI_INT, &experiment_spp, "N", "largest spp of the experiments (default 256)", 1, 1 << 16},
-        {"--wide", CLI_BOOL, &wide, NULL,
-         "eight paths at a time, their rays traced eight per AVX instruction (the lecture rung, on a scene of "
-         "at most 64 triangles, diffuse, no spheres or point lights): the lecture rung's image, faster", 0, 0},
-        {"--bench", CLI_BOOL, &bench, NULL,
-         "print seconds per million camera samples on the Cornell box for every rung, 1 and 2 threads "
-         "taking turns (a square of --width pixels, --spp samples; best of 5)", 0, 0},
-        {"--bench-csv", CLI_STRING, &bench_csv, "FILE", "with --bench: also write the figures as CSV", 0, 0},
-    };
-    cli_spec spec = {"09-path-tracing",
-                     "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"
-                     "bounce, direct light by sampling the light's area, Russian roulette. Renders the Cornell\n"
-                     "box; --integrator climbs the ladder (lecture -> cosine -> mis). --time-budget or\n"
-                     "--target-error render progressively; --data DIR measures error against time.\n"
-                     "The built-in Cornell box is chapters/09-path-tracing/scenes/cornell.scene.",
-                     extras, sizeof extras / sizeof extras[0]};
-    cli_parse_or_exit(argc, argv, &spec, &opts);
-    opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
-    if (bench_csv != NULL && !bench) {
-        fprintf(stderr, "09-path-tracing: --bench-csv %s: only with --bench\ntry --help\n", bench_csv);
-        return 2;
-    }
-    if (wide && (bench || data != NULL || time_budget > 0.0f || target_error > 0.0f)) {
-        fprintf(stderr, "09-path-tracing: --wide renders one image: not with --bench (which has a row for it), "
-                        "--data, --time-budget or --target-error\ntry --help\n");
-        return 2;
-    }
+/* The chapter's own flags. */
+typedef struct {
+    cli_choice integrator, rr, builtin, accel;
+    const char *obj, *data;
+    float rr_probability, time_budget, target_error;
+    int max_depth, rr_start, experiment_size, reference_spp, experiment_spp;
+} chapter_flags;
 
-    path_tracer pt;
-    pt_scene sc;
-    char err[1024];
+/* The scene the flags name (a scene file, an OBJ file or a built-in one),
+ * its effects decided and noted, on the structure --accel asks for, and
+ * the path tracer the flags and the scene file describe. 0, or the exit
+ * status after a message. */
+static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tracer *pt)
+{
+    char err[SCENE_PATH_SIZE + 1024];
     scene_desc desc;
-    bool from_file = program_load_scene(&opts, spec.program, &desc);
-    if (from_file && (obj != NULL || data != NULL)) {
-        fprintf(stderr, "09-path-tracing: --scene does not combine with --obj or --data\n");
+    bool from_file = program_load_scene(opts, PROGRAM, &desc);
+    if (opts->quiet)
+        pt_scene_report_materials(NULL);
+    pt_integrator integrator = f->integrator.index < 0 ? PT_LECTURE : (pt_integrator)f->integrator.index;
+    int status = 0;
+    if (from_file && (f->obj != NULL || f->data != NULL)) {
+        snprintf(err, sizeof err, "--scene does not combine with --obj or --data");
+        status = 2;
+    } else if (f->integrator.index < 0 && from_file && desc.integrator[0] != '\0' &&
+               !pt_integrator_parse(desc.integrator, &integrator)) {
+        snprintf(err, sizeof err, "%s:%d:%d: unknown integrator '%s' (lecture, cosine, mis)", desc.source,
+                 desc.integrator_line, desc.integrator_column, desc.integrator);
+        status = 1;
+    } else if (from_file ? !pt_scene_from_desc(sc, &desc, PROGRAM, err, sizeof err)
+                         : f->obj != NULL && !pt_scene_load_obj(sc, f->obj, err, sizeof err)) {
+        status = 1;
+    }
+    if (status != 0) {
+        fprintf(stderr, PROGRAM ": %s\n", err);
         scene_desc_free(&desc);
-        return 2;
+        return status;
     }
-    pt_integrator chosen = PT_LECTURE;
-    if (integrator != NULL && !pt_integrator_parse(integrator, &chosen)) {
-        fprintf(stderr, "09-path-tracing: --integrator: unknown '%s' (lecture, cosine, mis)\n", integrator);
-        scene_desc_free(&desc);
-        return 2;
-    }
-    if (integrator == NULL && from_file && desc.integrator[0] != '\0' && !pt_integrator_parse(desc.integrator, &chosen)) {
-        fprintf(stderr, "09-path-tracing: %s:%d:%d: unknown integrator '%s' (lecture, cosine, mis)\n", desc.source,
-                desc.integrator_line, desc.integrator_column, desc.integrator);
-        scene_desc_free(&desc);
-        return 1;
-    }
-    if (max_depth < 0)
-        max_depth = from_file && desc.max_depth >= 0 ? desc.max_depth : 64;
-    if (strcmp(walls, "on") != 0 && strcmp(walls, "off") != 0) {
-        fprintf(stderr, "09-path-tracing: --walls: unknown '%s' (on, off)\ntry --help\n", walls);
-        scene_desc_free(&desc);
-        return 2;
-    }
-    pt_russian_roulette rr_mode;
-    if (!pt_russian_roulette_parse(rr, &rr_mode)) {
-        fprintf(stderr, "09-path-tracing: --rr: unknown '%s' (fixed, throughput, albedo, off)\n", rr);
-        scene_desc_free(&desc);
-        return 2;
-    }
-    if (from_file) {
-        bool ok = pt_scene_from_desc(&sc, &desc, spec.program, err, sizeof err);
-        if (!ok) {
-            scene_desc_free(&desc);
-            fprintf(stderr, "09-path-tracing: %s\n", err);
-            return 1;
-        }
-    } else if (!build_scene(&sc, scene_name, obj, err, sizeof err)) {
-        fprintf(stderr, "09-path-tracing: %s\n", err);
-        return obj != NULL ? 1 : 2;
-    } else {
-        pt_scene_describe(&sc, &desc);
-    }
+    if (!from_file && f->obj == NULL)
+        pt_scene_build_builtin(sc, cli_choice_name(&f->builtin));
+    if (pt_scene_has_no_light(sc, err, sizeof err))
+        fprintf(stderr, PROGRAM ": warning: %s\n", err);
+    if (!from_file)
+        pt_scene_describe(sc, &desc);
     /* The path tracer can simulate every effect; it simulates those the
      * scene (file or built-in) calls for and allows. The experiments (--data)
      * measure the integrators themselves, so they keep every effect on. */
     effects_report e = effects_analyse(&desc);
-    unsigned effects = data != NULL ? EFFECT_ALL : effects_decide(&e, EFFECT_ALL);
-    if (!opts.quiet && data == NULL)
-        effects_print(stdout, &e, spec.program);
+    if (!opts->quiet && f->data == NULL)
+        effects_print(stdout, &e, PROGRAM);
     program_note_effects(&e);
+    if (f->accel.index != 0) /* the default, chapter 06's BVH, is built already */
+        pt_scene_use_accel(sc, pt_accel_builder_named(cli_choice_name(&f->accel)), NULL);
+    program_note_accel(sc->bvh->stats.name);
+    *pt = path_tracer_defaults(sc);
+    pt->effects = f->data != NULL ? EFFECT_ALL : effects_decide(&e, EFFECT_ALL);
+    pt->integrator = integrator;
+    pt->russian_roulette = (pt_russian_roulette)f->rr.index;
+    pt->rr_probability = f->rr_probability;
+    pt->rr_start_depth = f->rr_start;
+    pt->max_depth = f->max_depth >= 0 ? f->max_depth : from_file && desc.max_depth >= 0 ? desc.max_depth : 64;
     scene_desc_free(&desc);
-    pt_scene_use_walls(&sc, strcmp(walls, "on") == 0);
-    pt = path_tracer_defaults(&sc);
-    pt.effects = effects;
-    pt.integrator = chosen;
-    pt.russian_roulette = rr_mode;
-    pt.rr_probability = rr_probability;
-    pt.rr_start_depth = rr_start;
-    pt.max_depth = max_depth;
+    return 0;
+}
 
-    int status = 0;
-    if (bench) {
-        if (!experiment_speed(opts.width, opts.spp, 5, bench_csv, err, sizeof err)) {
-            fprintf(stderr, "09-path-tracing: %s\n", err);
-            status = 1;
+/* --data: on the chosen scene a cached reference, then every rung at
+ * doubling sample counts, then (on the first scene) the Russian roulette
+ * sweep. The Cornell box, all diffuse, is where MIS gains least; by
+ * default the Veach scene, where it gains most, is measured after it. */
+static int run_experiments(const cli_options *opts, const chapter_flags *f, const path_tracer *pt)
+{
+    const char *first = f->obj != NULL ? "obj" : cli_choice_name(&f->builtin);
+    const char *names[2] = {first, "veach"};
+    int scene_count = strcmp(first, "cornell") == 0 ? 2 : 1;
+    char err[1024] = "";
+    bool ok = true;
+    for (int k = 0; k < scene_count && ok; k++) {
+        pt_scene other;
+        path_tracer experiment_pt = *pt;
+        if (k > 0) {
+            pt_scene_build_builtin(&other, names[k]);
+            experiment_pt.scene = &other;
         }
-    } else if (data != NULL) {
-        /* The experiments, on the chosen scene: a cached reference, then
-         * every rung at doubling sample counts, then (on the first scene)
-         * the Russian roulette sweep. The Cornell box, all diffuse, is
-         * where MIS gains least; by default the Veach scene, where it gains
-         * most, is measured after it. */
-        const char *names[2] = {obj ? "obj" : scene_name, "veach"};
-        int scene_count = obj == NULL && strcmp(scene_name, "cornell") == 0 ? 2 : 1;
-        for (int k = 0; k < scene_count && status == 0; k++) {
-            pt_scene other;
-            const pt_scene *scene = &sc;
-            if (k > 0) {
-                build_scene(&other, names[k], NULL, err, sizeof err);
-                scene = &other;
-            }
-            path_tracer experiment_pt = pt;
-            experiment_pt.scene = scene;
-            camera cam = pt_scene_camera(scene, experiment_size, experiment_size);
-            char reference_path[4096];
-            snprintf(reference_path, sizeof reference_path, "%s/ch09_reference_%s_%d.exr", data, names[k],
-                     experiment_size);
-            estimate_image reference;
-            printf("\n== scene %s\n", names[k]);
-            if (!experiment_reference(&experiment_pt, &cam, reference_spp, opts.threads, reference_path, &reference,
-                                      err, sizeof err) ||
-                !experiment_convergence(scene, names[k], &cam, &reference, experiment_spp, opts.threads, data, err,
-                                        sizeof err) ||
-                (k == 0 && !experiment_russian_roulette(scene, &cam, &reference, 64, opts.threads, data, err,
-                                                        sizeof err))) {
-                fprintf(stderr, "09-path-tracing: %s\n", err);
-                status = 1;
-            }
-            estimate_image_free(&reference);
-            if (k > 0)
-                pt_scene_free(&other);
-        }
-    } else if (time_budget > 0.0f || target_error > 0.0f) {
-        if (opts.explain) {
-            fprintf(stderr, "09-path-tracing: --explain explains one pixel of a plain render, not a progressive one\n");
-            pt_scene_free(&sc);
-            return 2;
-        }
-        camera cam = pt_scene_camera(&sc, opts.width, opts.height);
-        estimate_image e = render_progressive(&pt, &cam, opts.seed, opts.threads, time_budget, target_error,
-                                              opts.quiet ? NULL : stdout);
-        if (!image_write(&e.mean, opts.out, opts.exposure, err, sizeof err)) {
-            fprintf(stderr, "09-path-tracing: %s\n", err);
-            status = 1;
-        } else if (!opts.quiet) {
-            printf("09-path-tracing: %s, %ld spp in %.2f s, estimated relative error %.4f -> %s\n",
-                   pt_integrator_name(pt.integrator), e.spp, e.seconds, estimate_relative_error(&e), opts.out);
-            counters_print(stdout, &e.counters, e.seconds);
-        }
-        char counters_path[4096];
-        counters_path_for_image(opts.out, counters_path, sizeof counters_path);
-        if (status == 0 && !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
-            fprintf(stderr, "09-path-tracing: %s\n", err);
-            status = 1;
-        }
-        estimate_image_free(&e);
-    } else if (wide) {
-        /* Eight paths at a time (path_tracer_wide.h): no progress line and
-         * no --explain, which follow one path. */
-        camera cam = pt_scene_camera(&sc, opts.width, opts.height);
-        char why[128];
-        estimate_image e;
-        if (opts.explain) {
-            fprintf(stderr, "09-path-tracing: --explain follows one path, --wide eight at once: use one of them\n");
-            pt_scene_free(&sc);
-            return 2;
-        }
-        if (!path_tracer_wide_supported(&pt, why, sizeof why)) {
-            fprintf(stderr, "09-path-tracing: --wide: not for this render: %s\n", why);
-            pt_scene_free(&sc);
-            return 2;
-        }
-        render_estimate_wide(&pt, &cam, opts.spp, opts.seed, opts.threads, &e);
-        char counters_path[4096];
-        counters_path_for_image(opts.out, counters_path, sizeof counters_path);
-        if (!image_write(&e.mean, opts.out, opts.exposure, err, sizeof err) ||
-            !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
-            fprintf(stderr, "09-path-tracing: %s\n", err);
-            status = 1;
-        } else if (!opts.quiet) {
-            printf("09-path-tracing: %dx%d, %d spp, 8 paths at a time, %d threads, %.3f s -> %s\n", opts.width,
-                   opts.height, opts.spp, opts.threads, e.seconds, opts.out);
-            counters_print(stdout, &e.counters, e.seconds);
-            printf("lecture: %.3f s per million camera samples (%d threads, 8 paths at a time)\n",
-                   e.seconds / ((double)opts.width * opts.height * opts.spp) * 1e6, opts.threads);
-        }
-        estimate_image_free(&e);
-    } else {
-        camera cam = pt_scene_camera(&sc, opts.width, opts.height);
-        render_stats stats;
-        status = program_render(&opts, spec.program, path_trace_radiance, &pt, &cam, &stats);
-        if (status == 0 && !opts.quiet && !opts.explain) {
-            double samples = (double)opts.width * opts.height * opts.spp;
-            printf("%s: %.3f s per million camera samples (%d threads, %s, %s Russian roulette)\n",
-                   pt_integrator_name(pt.integrator), stats.seconds / samples * 1e6, opts.threads,
-                   pt_integrator_name(pt.integrator), rr);
-        }
+        const pt_scene *scene = experiment_pt.scene;
+        camera cam = pt_scene_camera(scene, f->experiment_size, f->experiment_size);
+        char reference_path[4096];
+        snprintf(reference_path, sizeof reference_path, "%s/ch09_reference_%s_%d.exr", f->data, names[k],
+                 f->experiment_size);
+        estimate_image reference;
+        printf("\n== scene %s\n", names[k]);
+        ok = experiment_reference(&experiment_pt, &cam, f->reference_spp, opts->threads, reference_path, &reference,
+                                  err, sizeof err) &&
+             experiment_convergence(scene, names[k], &cam, &reference, f->experiment_spp, opts->threads, f->data,
+                                    err, sizeof err) &&
+             (k > 0 || experiment_russian_roulette(scene, &cam, &reference, 64, opts->threads, f->data, err,
+                                                   sizeof err));
+        estimate_image_free(&reference);
+        if (k > 0)
+            pt_scene_free(&other);
     }
+    if (!ok)
+        fprintf(stderr, PROGRAM ": %s\n", err);
+    return ok ? 0 : 1;
+}
+
+/* --time-budget, --target-error: passes until either is reached. */
+static int render_progressively(const cli_options *opts, const chapter_flags *f, const path_tracer *pt)
+{
+    if (opts->explain) {
+        fprintf(stderr, PROGRAM ": --explain explains one pixel of a plain render, not a progressive one\n");
+        return 2;
+    }
+    char err[1024], counters_path[4096];
+    camera cam = pt_scene_camera(pt->scene, opts->width, opts->height);
+    estimate_image e = render_progressive(pt, &cam, opts->seed, opts->threads, f->time_budget, f->target_error,
+                                          opts->quiet ? NULL : stdout);
+    counters_path_for_image(opts->out, counters_path, sizeof counters_path);
+    bool ok = image_write(&e.mean, opts->out, opts->exposure, err, sizeof err) &&
+              counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err);
+    if (!ok) {
+        fprintf(stderr, PROGRAM ": %s\n", err);
+    } else if (!opts->quiet) {
+        printf(PROGRAM ": %s, %ld spp in %.2f s, estimated relative error %.4f -> %s\n",
+               pt_integrator_name(pt->integrator), e.spp, e.seconds, estimate_relative_error(&e), opts->out);
+        counters_print(stdout, &e.counters, e.seconds);
+    }
+    estimate_image_free(&e);
+    return ok ? 0 : 1;
+}
+
+/* One image, --spp samples per pixel (or the path tree of one pixel). */
+static int render(const cli_options *opts, const path_tracer *pt)
+{
+    camera cam = pt_scene_camera(pt->scene, opts->width, opts->height);
+    render_stats stats;
+    int status = program_render(opts, PROGRAM, path_trace_radiance, pt, &cam, &stats);
+    if (status == 0 && !opts->quiet && !opts->explain)
+        printf("%s: %.3f s per million camera samples (%d threads, %s Russian roulette)\n",
+               pt_integrator_name(pt->integrator),
+               stats.seconds / ((double)opts->width * opts->height * opts->spp) * 1e6, opts->threads,
+               pt_russian_roulette_name(pt->russian_roulette));
+    return status;
+}
+
+static const char *const ACCEL_NOTES[] = {"chapter 06's BVH, binned SAH (default)", "chapter 05's kd-tree",
+                                          "chapter 04's uniform grid", "chapter 03: every triangle", NULL};
+
+int main(int argc, char **argv)
+{
+    cli_options opts = cli_defaults("build/out/ch09.exr", 512, 512, 16);
+    /* --integrator and --max-depth not given (-1): the scene file's, else lecture and 64 */
+    chapter_flags f = {{PT_INTEGRATOR_NAMES, NULL, -1}, {PT_ROULETTE_NAMES, NULL, RR_FIXED},
+                       {PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {PT_ACCEL_NAMES, ACCEL_NOTES, 0},
+                       NULL, NULL, 0.8f, 0.0f, 0.0f, -1, 3, 96, 4096, 256};
+    const cli_flag extras[] = {
+        {"--integrator", CLI_CHOICE, &f.integrator, NULL, "the rung of the ladder (default lecture)", 0, 0},
+        {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed P_RR (default), pbrt's on the throughput, "
+                                          "smallpt's on the albedo, or none", 0, 0},
+        {"--rr-probability", CLI_FLOAT, &f.rr_probability, "P", "P_RR for --rr fixed (default 0.8)", 0.01, 1.0},
+        {"--rr-start", CLI_INT, &f.rr_start, "N", "--rr throughput or albedo: the first bounce the roulette may "
+                                                  "end (default 3; pbrt-v3's is 5, smallpt's 6)", 0, 1000},
+        {"--max-depth", CLI_INT, &f.max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
+        {"--builtin", CLI_CHOICE, &f.builtin, NULL, "the built-in scene (default cornell)", 0, 0},
+        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
+        {"--accel", CLI_CHOICE, &f.accel, NULL, "the structure the rays are traced through", 0, 0},
+        {"--time-budget", CLI_FLOAT, &f.time_budget, "SECONDS", "progressive: passes until this much time is spent",
+         0.0, 1e6},
+        {"--target-error", CLI_FLOAT, &f.target_error, "E",
+         "progressive: passes until the estimated relative error is below E", 0.0, 10.0},
+        {"--data", CLI_DIR, &f.data, "DIR", "run the experiments (error against time) and write CSV into DIR", 0, 0},
+        {"--experiment-size", CLI_INT, &f.experiment_size, "N", "image side of the experiments (default 96)", 8, 1024},
+        {"--reference-spp", CLI_INT, &f.reference_spp, "N", "samples of the cached reference (default 4096)", 16,
+         1 << 20},
+        {"--experiment-spp", CLI_INT, &f.experiment_spp, "N", "largest spp of the experiments (default 256)", 1,
+         1 << 16},
+    };
+    cli_spec spec = {PROGRAM,
+                     "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"
+                     "bounce, direct light by sampling the light's area, Russian roulette. Renders the Cornell\n"
+                     "box; --integrator climbs the ladder (lecture -> cosine -> mis); --accel picks the structure\n"
+                     "of chapters 03-06. --time-budget or --target-error render progressively; --data DIR\n"
+                     "measures error against time. The built-in Cornell box is chapters/09-path-tracing/scenes/\n"
+                     "cornell.scene. The same path tracer made fast: chapter 13 (13-production).",
+                     extras, sizeof extras / sizeof extras[0]};
+    cli_parse_or_exit(argc, argv, &spec, &opts);
+    opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
+    pt_scene sc;
+    path_tracer pt;
+    int status = load(&opts, &f, &sc, &pt);
+    if (status != 0)
+        return status;
+    if (f.data != NULL)
+        status = run_experiments(&opts, &f, &pt);
+    else if (f.time_budget > 0.0f || f.target_error > 0.0f)
+        status = render_progressively(&opts, &f, &pt);
+    else
+        status = render(&opts, &pt);
     pt_scene_free(&sc);
     return status;
 }

@@ -27,15 +27,17 @@ path_tracer path_tracer_defaults(const pt_scene *scene)
     return pt;
 }
 
-static const char *const integrator_names[] = {"lecture", "cosine", "mis"};
+const char *const PT_INTEGRATOR_NAMES[] = {"lecture", "cosine", "mis", NULL};
+static const char *const *const integrator_names = PT_INTEGRATOR_NAMES;
 /* in the order of pt_russian_roulette */
-static const char *const roulette_names[] = {"off", "fixed", "throughput", "albedo"};
+const char *const PT_ROULETTE_NAMES[] = {"off", "fixed", "throughput", "albedo", NULL};
+static const char *const *const roulette_names = PT_ROULETTE_NAMES;
 
 const char *pt_russian_roulette_name(pt_russian_roulette r) { return roulette_names[r]; }
 
 bool pt_russian_roulette_parse(const char *name, pt_russian_roulette *out)
 {
-    for (int i = 0; i < (int)(sizeof roulette_names / sizeof roulette_names[0]); i++)
+    for (int i = 0; roulette_names[i] != NULL; i++)
         if (strcmp(name, roulette_names[i]) == 0) {
             *out = (pt_russian_roulette)i;
             return true;
@@ -103,112 +105,88 @@ static vec3 emitted(const pt_scene *sc, const hit_record *hit)
     return hit->front_face ? m->emission : vec3_splat(0.0f);
 }
 
-/* --explain: does the shadow ray to x' skip the walls? (the same ray
- * pt_scene_visible() builds) */
-static bool shadow_inside_walls(const pt_scene *sc, const hit_record *hit, vec3 x_light, vec3 n_light)
+/* ---- lights without area ----------------------------------------------------
+ * Point lights: a delta in position, so only light sampling finds them:
+ * L_dir = f_r I cos(theta) / r^2. Not on the slide; every rung adds them. */
+static vec3 point_lights(const path_tracer *pt, const hit_record *p, vec3 wo, const pt_material *m,
+                         int explain_depth, ray_counters *counters)
 {
-    ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, x_light, n_light);
-    return pt_scene_segment_inside_walls(sc, &shadow);
+    const pt_scene *sc = pt->scene;
+    vec3 radiance = vec3_splat(0.0f);
+    for (int i = 0; i < sc->point_light_count; i++) {
+        const pt_point_light *light = &sc->point_lights[i];
+        vec3 to_light = vec3_sub(light->position, p->point);
+        float distance2 = vec3_length_squared(to_light);
+        vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
+        float cos_theta = vec3_dot(p->normal_shading, wi);
+        vec3 f = cos_theta > 0.0f ? bsdf_eval(m, p->normal_shading, wo, wi) : vec3_splat(0.0f);
+        if (vec3_is_black(f))
+            continue;
+        const vec3 no_surface = vec3_splat(0.0f); /* nothing to stop short of at a point light */
+        if ((pt->effects & EFFECT_SHADOWS) && !pt_scene_visible(sc, p, &light->position, &no_surface, counters)) {
+            explain_line(explain_depth, "point light %d: shadow ray blocked", i);
+            continue;
+        }
+        vec3 contribution = vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2);
+        radiance = vec3_add(radiance, contribution);
+        char cb[64];
+        if (explain_on())
+            explain_line(explain_depth, "point light %d: visible, cos %.4g, r^2 %.4g, adds %s", i, (double)cos_theta,
+                         (double)distance2, explain_vec3(cb, contribution));
+    }
+    return radiance;
+}
+
+/* A point x' on the lights (pt_scene_sample_light), from the path's next
+ * three numbers in a written order. */
+static bool sample_light(const pt_scene *sc, pt_random *rng, pt_light_sample *x)
+{
+    float u_pick = pt_random_float(rng), u1 = pt_random_float(rng), u2 = pt_random_float(rng);
+    return pt_scene_sample_light(sc, u_pick, u1, u2, x);
 }
 
 /* ---- direct light: sampling the light ---------------------------------------
  * The lecture's change of variables: instead of waiting for a hemisphere
  * sample to hit the light, pick a point x' on the light uniformly by area
- * (pdf = 1/A) and integrate over the light's area:
- *   L_dir = L_e(x', -wi) f_r(p, wi, wo) cos(theta) cos(theta') / |x' - p|^2 / (1/A)
- * if the shadow ray from p to x' is not blocked. With with_mis, the sample is
- * weighted against the BSDF sampling that could also have found x'. */
+ * (pdf = 1/A) and integrate over the light's area. In the solid-angle form
+ * the later rungs use (so that MIS can weigh it against BSDF sampling),
+ * pdf_light per steradian is |x' - p|^2 / (cos(theta') A):
+ *   L_dir = L_e f_r cos(theta) / pdf_light
+ * if the shadow ray from p to x' is not blocked. */
 static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, vec3 wo, const pt_material *m,
                                 bool with_mis, int explain_depth, pt_random *rng, ray_counters *counters)
 {
     const pt_scene *sc = pt->scene;
     vec3 n = hit->normal_shading;
-    vec3 radiance = vec3_splat(0.0f);
-
-    vec3 x_light, n_light;
-    int light_material;
-    float u_pick = pt_random_float(rng), u1 = pt_random_float(rng), u2 = pt_random_float(rng);
-    if (pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &n_light, &light_material)) {
-        vec3 to_light = vec3_sub(x_light, hit->point);
-        float distance2 = vec3_length_squared(to_light);
-        vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-        float cos_theta = vec3_dot(n, wi);
-        float cos_theta_light = -vec3_dot(n_light, wi);
-        /* A light seen from behind (one-sided) or below the surface adds
-         * nothing: no shadow ray needed to know it. */
-        if (!(cos_theta_light > 0.0f && cos_theta > 0.0f))
-            explain_line(explain_depth, "light sample: faces away or lies below the surface: no shadow ray");
-        if (cos_theta_light > 0.0f && cos_theta > 0.0f) {
-            vec3 f = bsdf_eval(m, n, wo, wi);
-            if (!vec3_is_black(f)) {
-                /* The shadow ray must reach the light sample itself. */
-                /* No shadow ray when the effects analysis proved nothing can
-                 * block a light (or the scene turned shadows off). */
-                bool visible = true;
-                if (pt->effects & EFFECT_SHADOWS) {
-                    visible = pt_scene_visible(sc, hit, &x_light, &n_light, counters);
-                    if (explain_on() && shadow_inside_walls(sc, hit, x_light, n_light))
-                        explain_line(explain_depth, "shadow ray inside the walls: the %d wall triangles cannot "
-                                     "block it, only the other %d are tested", sc->wall_count,
-                                     sc->occluder_triangles.count);
-                }
-                if (visible) {
-                    /* pdf 1/A per unit area is distance^2 / (cos' A) per unit solid angle
-                     * (with several lights, 1/A is the density of picking x'
-                     * among all of them: scene_pt.h) */
-                    float pdf_light = distance2 * pt_scene_emitter_pdf_area(sc, light_material) / cos_theta_light;
-                    float weight = with_mis ? power_heuristic(pdf_light, bsdf_pdf(m, n, wo, wi)) : 1.0f;
-                    vec3 le = sc->materials[light_material].emission;
-                    vec3 contribution = vec3_scale(vec3_mul(le, f), cos_theta / pdf_light * weight);
-                    radiance = vec3_add(radiance, contribution);
-                    if (explain_on()) {
-                        char xb[64], cb[64];
-                        explain_line(explain_depth, "light sample at %s: visible, pdf %.4g per sr (%.4g per unit "
-                                     "area), cos %.4g, MIS weight %.3g, adds %s", explain_vec3(xb, x_light),
-                                     (double)pdf_light, (double)pt_scene_emitter_pdf_area(sc, light_material), (double)cos_theta, (double)weight,
-                                     explain_vec3(cb, contribution));
-                    }
-                } else {
-                    char xb[64];
-                    if (explain_on())
-                        explain_line(explain_depth, "light sample at %s: shadow ray blocked", explain_vec3(xb, x_light));
-                }
-            } else if (explain_on()) {
-                explain_line(explain_depth, "light sample: BSDF is zero for it: no shadow ray");
-            }
-        }
+    vec3 radiance = point_lights(pt, hit, wo, m, explain_depth, counters);
+    pt_light_sample x;
+    if (!sample_light(sc, rng, &x))
+        return radiance;
+    vec3 to_light = vec3_sub(x.point, hit->point);
+    float distance2 = vec3_length_squared(to_light);
+    vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
+    float cos_theta = vec3_dot(n, wi), cos_theta_light = -vec3_dot(x.normal, wi);
+    /* A light seen from behind (one-sided) or below the surface adds
+     * nothing: no shadow ray needed to know it. */
+    vec3 f = cos_theta_light > 0.0f && cos_theta > 0.0f ? bsdf_eval(m, n, wo, wi) : vec3_splat(0.0f);
+    if (vec3_is_black(f)) {
+        explain_line(explain_depth, "light sample: faces away, lies below the surface or f = 0: no shadow ray");
+        return radiance;
     }
-    /* Point lights: a delta in position, so always sampled this way:
-     * L_dir = f_r I cos(theta) / r^2. */
-    for (int i = 0; i < sc->point_light_count; i++) {
-        const pt_point_light *light = &sc->point_lights[i];
-        vec3 to_light = vec3_sub(light->position, hit->point);
-        float distance2 = vec3_length_squared(to_light);
-        vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-        float cos_theta = vec3_dot(n, wi);
-        if (cos_theta <= 0.0f)
-            continue;
-        vec3 f = bsdf_eval(m, n, wo, wi);
-        if (vec3_is_black(f))
-            continue;
-        bool visible = true;
-        if (pt->effects & EFFECT_SHADOWS) {
-            const vec3 no_surface = vec3_splat(0.0f); /* nothing to stop short of at a point light */
-            visible = pt_scene_visible(sc, hit, &light->position, &no_surface, counters);
-        }
-        if (visible) {
-            vec3 contribution = vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2);
-            radiance = vec3_add(radiance, contribution);
-            char cb[64];
-            if (explain_on())
-                explain_line(explain_depth, "point light %d: %s, cos %.4g, r^2 %.4g, adds %s", i,
-                             (pt->effects & EFFECT_SHADOWS) ? "visible" : "visible without a shadow ray (effects)",
-                             (double)cos_theta, (double)distance2, explain_vec3(cb, contribution));
-        } else {
-            explain_line(explain_depth, "point light %d: shadow ray blocked", i);
-        }
+    if ((pt->effects & EFFECT_SHADOWS) && !pt_scene_visible(sc, hit, &x.point, &x.normal, counters)) {
+        explain_line(explain_depth, "light sample: shadow ray blocked");
+        return radiance;
     }
-    return radiance;
+    float pdf_light = distance2 * x.pdf_light / cos_theta_light; /* per steradian */
+    float weight = with_mis ? power_heuristic(pdf_light, bsdf_pdf(m, n, wo, wi)) : 1.0f;
+    vec3 contribution = vec3_scale(vec3_mul(x.emission, f), cos_theta / pdf_light * weight);
+    if (explain_on()) {
+        char xb[64], cb[64];
+        explain_line(explain_depth, "light sample at %s: visible, pdf %.4g per sr, cos %.4g%s%.3g, adds %s",
+                     explain_vec3(xb, x.point), (double)pdf_light, (double)cos_theta,
+                     with_mis ? ", MIS weight " : "", with_mis ? (double)weight : 0.0, explain_vec3(cb, contribution));
+    }
+    return vec3_add(radiance, contribution);
 }
 
 /* --explain: the roulette's draw and what it decided. */
@@ -231,121 +209,146 @@ static void count_continuation(ray_counters *counters, const bsdf_sample_result 
         counters->reflection_rays++;
 }
 
-/* ---- the lecture's algorithm, exactly ---------------------------------------
+/* ---- the hooks the lecture's shade() calls, one line each --------------------
+ * Is the light sample x seen from p? With the shadows effect off (nothing
+ * in the scene can block a light), without a shadow ray. */
+static bool light_visible(const path_tracer *pt, const hit_record *p, const pt_light_sample *x,
+                          ray_counters *counters)
+{
+    return !(pt->effects & EFFECT_SHADOWS) || pt_scene_visible(pt->scene, p, &x->point, &x->normal, counters);
+}
+
+/* Does the path go on from p (bounce depth + 1 to a vertex whose light
+ * sample, bounce depth + 2, still counts; the effects ask for it; the
+ * roulette lets it)? The probability P_RR it went on with, or 0 if it
+ * ends here. */
+static float path_goes_on(const path_tracer *pt, const pt_material *m, int depth, vec3 throughput, pt_random *rng)
+{
+    int indent = 2 * depth + 2; /* --explain: each bounce two steps deeper */
+    float p_rr = 1.0f;
+    if (depth + 2 > pt->max_depth) {
+        explain_line(indent, "max depth %d: no further bounce", pt->max_depth);
+        return 0.0f;
+    }
+    if (!bsdf_is_delta(m) && !continues_from(pt, m)) {
+        explain_line(indent, "no %s effect: the path ends here", m->kind == BSDF_GLOSSY ? "glossy" : "indirect");
+        return 0.0f;
+    }
+    if (!path_tracer_roulette(pt, depth, throughput, m->albedo, &p_rr))
+        return 1.0f;
+    float u_rr = pt_random_float(rng);
+    explain_roulette(pt, indent, u_rr, p_rr);
+    return u_rr < p_rr ? p_rr : 0.0f;
+}
+
+
+/* --explain: what shade() found at p, and the ray it traced on. */
+static void explain_shade(const path_tracer *pt, int depth, const char *what, vec3 l, ray r, const hit_record *q,
+                          bool hit)
+{
+    if (!explain_on())
+        return;
+    char b[64];
+    explain_line(2 * depth + 2, "%s = %s", what, explain_vec3(b, l));
+    if (r.t_max <= 0.0f)
+        return;
+    explain_ray(2 * depth + 2, "next ray", r);
+    if (hit)
+        explain_pt_hit(pt->scene, q, 2 * depth + 3);
+    else
+        explain_line(2 * depth + 3, "left the scene: the environment");
+}
+
+static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth, vec3 throughput, pt_random *rng,
+                  ray_counters *counters);
+
+/* Mirrors and glass reflect into single directions that no hemisphere
+ * sample finds and no light sample reaches: the BSDF picks the direction,
+ * and the emission the ray meets counts, since no light sample at p did. */
+static vec3 shade_delta(const path_tracer *pt, const hit_record *p, vec3 wo, int depth, vec3 throughput,
+                        pt_random *rng, ray_counters *counters)
+{
+    const pt_scene *sc = pt->scene;
+    const pt_material *m = &sc->materials[p->material_id];
+    bsdf_sample_result s;
+    float p_rr = path_goes_on(pt, m, depth, throughput, rng);
+    if (p_rr == 0.0f)
+        return vec3_splat(0.0f);
+    float u_y = pt_random_float(rng), u_x = pt_random_float(rng);
+    if (!bsdf_sample(m, p->normal_shading, wo, vec2_make(u_x, u_y), pt_random_float(rng), p->front_face, &s) ||
+        !delta_allowed(pt, &s))
+        return vec3_splat(0.0f);
+    vec3 weight = vec3_scale(s.weight, 1.0f / p_rr);
+    count_continuation(counters, &s);
+    ray r = ray_spawn(p->point, p->normal_geometric, s.wi);
+    hit_record q;
+    bool hit = pt_scene_intersect(sc, r, &q, counters);
+    explain_shade(pt, depth, s.is_transmission ? "refracted" : "reflected", weight, r, &q, hit);
+    if (!hit)
+        return vec3_mul(sc->environment, weight);
+    vec3 l_q = shade(pt, &q, vec3_neg(s.wi), depth + 1, vec3_mul(throughput, weight), rng, counters);
+    return vec3_mul(vec3_add(emitted(sc, &q), l_q), weight);
+}
+
+/* ---- the lecture's algorithm ----------------------------------------------------
  *   shade(p, wo)
- *     L_dir   = light sampled by area (above)
+ *     # Contribution from the light source
+ *     uniformly sample the light at x' (pdf_light = 1 / A)
+ *     shoot a ray from p to x'
+ *     if the ray is not blocked in the middle
+ *       L_dir = L_i * f_r * cos(theta) * cos(theta') / |x' - p|^2 / pdf_light
+ *     # Contribution from other reflectors
+ *     L_indir = 0.0
  *     test Russian roulette with probability P_RR
- *     wi      = uniform on the hemisphere, pdf = 1 / (2 pi)
- *     trace a ray from p in wi; if it hits q:
- *       L_indir = shade(q, -wi) f_r cos(theta) / pdf / P_RR
+ *     uniformly sample the hemisphere toward wi (pdf_hemi = 1 / 2pi)
+ *     trace a ray r(p, wi)
+ *     if ray r hit a non-emitting object at q
+ *       L_indir = shade(q, -wi) * f_r * cos(theta) / pdf_hemi / P_RR
  *     return L_dir + L_indir
- * shade() returns the light *reflected* at p: the emission of q was already
- * counted by light sampling at p, so it is not added again. Rays that leave
- * the scene bring the environment, which no light sample covers. Glass and
- * mirrors reflect into single directions no hemisphere sample can find; there
- * the BSDF is sampled instead, and the emission the ray then meets does
- * count. `depth` is the number of bounces before p, `throughput` the
- * product of f cos / pdf / P_RR along the path to p. */
-static vec3 shade(const path_tracer *pt, const hit_record *hit, vec3 wo, int depth, vec3 throughput, pt_random *rng,
+ * shade() returns the light *reflected* at p, so the emission of q is not
+ * added again: light sampling at p counted it. (q's own reflection is: an
+ * emitter that also reflects passes light on like any surface.) `depth` is
+ * the number of bounces before p, `throughput` the product of
+ * f_r cos / pdf / P_RR along the path to p (for --rr throughput). */
+static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth, vec3 throughput, pt_random *rng,
                   ray_counters *counters)
 {
     const pt_scene *sc = pt->scene;
-    const pt_material *m = &sc->materials[hit->material_id];
-    vec3 n = hit->normal_shading;
-    bool delta = bsdf_is_delta(m);
-
-    /* Direct light: bounce depth + 1 */
-    vec3 l_dir = vec3_splat(0.0f);
-    int indent = 2 * depth + 2; /* --explain: each bounce two steps deeper */
-    if (!delta && depth + 1 <= pt->max_depth)
-        l_dir = sample_direct_light(pt, hit, wo, m, false, indent, rng, counters);
-    if (explain_on()) {
-        char b[64];
-        explain_line(indent, "L_dir = %s", explain_vec3(b, l_dir));
+    const pt_material *m = &sc->materials[p->material_id];
+    vec3 n = p->normal_shading;
+    if (bsdf_is_delta(m)) /* a mirror or glass: not on the slide (above) */
+        return shade_delta(pt, p, wo, depth, throughput, rng, counters);
+    /* Contribution from the light source: x' uniformly on the light, pdf_light = 1 / A */
+    vec3 l_dir = point_lights(pt, p, wo, m, 2 * depth + 2, counters); /* lights without area (above) */
+    pt_light_sample x;
+    if (sample_light(sc, rng, &x)) {
+        vec3 to_light = vec3_sub(x.point, p->point);
+        float distance2 = vec3_length_squared(to_light); /* |x' - p|^2 */
+        vec3 ws = vec3_scale(to_light, 1.0f / sqrtf(distance2));
+        float cos_theta = vec3_dot(n, ws), cos_theta_x = -vec3_dot(x.normal, ws);
+        /* if the ray from p to x' is not blocked in the middle: L_i f_r cos(theta) cos(theta') / |x' - p|^2 / pdf */
+        if (cos_theta > 0.0f && cos_theta_x > 0.0f && light_visible(pt, p, &x, counters))
+            l_dir = vec3_add(l_dir, vec3_scale(vec3_mul(x.emission, bsdf_eval(m, n, wo, ws)),
+                                               cos_theta * cos_theta_x / distance2 / x.pdf_light));
     }
-    if (depth + 2 > pt->max_depth && !delta) {
-        explain_line(indent, "max depth %d: no further bounce", pt->max_depth);
+    /* Contribution from other reflectors: Russian roulette with P_RR */
+    float p_rr = path_goes_on(pt, m, depth, throughput, rng);
+    if (p_rr == 0.0f)
         return l_dir;
-    }
-    if (depth + 1 > pt->max_depth)
-        return l_dir;
-    /* Effects: a diffuse (glossy) surface continues only if the scene calls
-     * for indirect (glossy) light. */
-    if (!delta && !continues_from(pt, m)) {
-        explain_line(indent, "no %s effect: the path ends here", m->kind == BSDF_GLOSSY ? "glossy" : "indirect");
-        return l_dir;
-    }
-
-    /* Russian roulette: continue with probability P_RR, and divide what the
-     * continued path brings by P_RR, so the expectation is unchanged. (With
-     * --rr throughput the probability is q, from the path's throughput.) */
-    float p_rr = 1.0f;
-    if (path_tracer_roulette(pt, depth, throughput, m->albedo, &p_rr)) {
-        float u_rr = pt_random_float(rng);
-        explain_roulette(pt, indent, u_rr, p_rr);
-        if (u_rr >= p_rr)
-            return l_dir;
-    }
-
-    bsdf_sample_result s;
-    if (delta) {
-        /* in a written order, GCC's (see shade() below) */
-        float u_y = pt_random_float(rng), u_x = pt_random_float(rng);
-        vec2 u = vec2_make(u_x, u_y);
-        if (!bsdf_sample(m, n, wo, u, pt_random_float(rng), hit->front_face, &s))
-            return l_dir;
-        if (!delta_allowed(pt, &s)) {
-            explain_line(indent, "no %s effect: the path ends here", s.is_transmission ? "refraction" : "reflection");
-            return l_dir;
-        }
-    } else {
-        /* wi uniform on the hemisphere around n: pdf = 1 / (2 pi). The two
-         * numbers in a fixed order: C leaves the order of a call's arguments
-         * open, and GCC drew the second coordinate first, so that order is
-         * kept (the images stay as they were) and now holds for any
-         * compiler, and for path_tracer_wide.c. */
-        float u_y = pt_random_float(rng), u_x = pt_random_float(rng);
-        vec3 local = sample_uniform_hemisphere(vec2_make(u_x, u_y));
-        s.wi = frame_to_world(n, local);
-        s.pdf = uniform_hemisphere_pdf();
-        s.weight = vec3_scale(bsdf_eval(m, n, wo, s.wi), local.z / s.pdf); /* f_r cos / pdf */
-        s.is_delta = false;
-        s.is_transmission = false;
-        if (vec3_is_black(s.weight))
-            return l_dir;
-    }
-    count_continuation(counters, &s);
-    ray next = ray_spawn(hit->point, hit->normal_geometric, s.wi);
-    if (explain_on()) {
-        char label[96], w[64];
-        snprintf(label, sizeof label, "%s ray (bounce %d, pdf %.4g, f cos / pdf = %s)",
-                 !s.is_delta ? "indirect" : s.is_transmission ? "refracted" : "reflected", depth + 1, (double)s.pdf,
-                 explain_vec3(w, s.weight));
-        explain_ray(indent, label, next);
-    }
+    /* wi uniformly on the hemisphere, pdf_hemi = 1 / (2 pi) */
+    float u_y = pt_random_float(rng), u_x = pt_random_float(rng);
+    vec3 local = sample_uniform_hemisphere(vec2_make(u_x, u_y)); /* local.z = cos(theta) */
+    vec3 wi = frame_to_world(n, local);
+    vec3 f_cos_pdf = vec3_scale(bsdf_eval(m, n, wo, wi), local.z / uniform_hemisphere_pdf() / p_rr);
+    /* trace a ray r(p, wi); if it hits q: L_indir = shade(q, -wi) f_r cos(theta) / pdf_hemi / P_RR */
+    ray r = ray_spawn(p->point, p->normal_geometric, wi);
+    counters->indirect_rays++;
     hit_record q;
-    vec3 incoming;
-    if (pt_scene_intersect(sc, next, &q, counters)) {
-        if (explain_on())
-            explain_pt_hit(sc, &q, indent + 1);
-        /* the throughput to q, for --rr throughput, multiplied as
-         * path_tracer_wide.c multiplies it so both decide alike */
-        vec3 throughput_q = vec3_scale(vec3_mul(throughput, s.weight), 1.0f / p_rr);
-        incoming = shade(pt, &q, vec3_neg(s.wi), depth + 1, throughput_q, rng, counters);
-        /* Emission seen through a delta bounce was not light-sampled. */
-        if (delta)
-            incoming = vec3_add(incoming, emitted(sc, &q));
-    } else {
-        explain_line(indent + 1, "left the scene: the environment");
-        incoming = sc->environment;
-    }
-    vec3 l_indir = vec3_scale(vec3_mul(incoming, s.weight), 1.0f / p_rr);
-    if (explain_on()) {
-        char a[64], b[64], c[64];
-        explain_line(indent, "L_indir = incoming %s x f cos / pdf / P_RR = %s; L_dir + L_indir = %s",
-                     explain_vec3(a, incoming), explain_vec3(b, l_indir), explain_vec3(c, vec3_add(l_dir, l_indir)));
-    }
-    return vec3_add(l_dir, l_indir);
+    bool hit = pt_scene_intersect(sc, r, &q, counters);
+    vec3 l_q = hit ? shade(pt, &q, vec3_neg(wi), depth + 1, vec3_mul(throughput, f_cos_pdf), rng, counters)
+                   : sc->environment; /* a ray that leaves the scene brings the environment */
+    explain_shade(pt, depth, "L_dir", l_dir, r, &q, hit);
+    return vec3_add(l_dir, vec3_mul(l_q, f_cos_pdf));
 }
 
 static vec3 trace_lecture(const path_tracer *pt, ray r, pt_random *rng, ray_counters *counters)
@@ -355,15 +358,13 @@ static vec3 trace_lecture(const path_tracer *pt, ray r, pt_random *rng, ray_coun
         explain_line(1, "left the scene: the environment");
         return pt->scene->environment;
     }
-    if (explain_on()) {
-        char e[64];
+    if (explain_on())
         explain_pt_hit(pt->scene, &hit, 1);
-        explain_line(1, "emission seen directly: %s", explain_vec3(e, emitted(pt->scene, &hit)));
-    }
     /* What the eye sees directly: the emission at the first hit, plus the
-     * light reflected there. */
+     * light reflected there (bounce 1 and on). */
     vec3 wo = vec3_normalize(vec3_neg(r.direction));
-    return vec3_add(emitted(pt->scene, &hit), shade(pt, &hit, wo, 0, vec3_splat(1.0f), rng, counters));
+    vec3 reflected = pt->max_depth >= 1 ? shade(pt, &hit, wo, 0, vec3_splat(1.0f), rng, counters) : vec3_splat(0.0f);
+    return vec3_add(emitted(pt->scene, &hit), reflected);
 }
 
 /* ---- the later rungs, as a loop ---------------------------------------------

@@ -118,6 +118,9 @@ static inline float pt_random_float(pt_random *random)
  * same order path_trace_radiance draws them from its stream. */
 vec3 path_trace_radiance_from(const path_tracer *pt, ray r, pt_random *random, ray_counters *counters);
 
+/* The names, in the enums' order, NULL-terminated (for --integrator, --rr). */
+extern const char *const PT_INTEGRATOR_NAMES[];
+extern const char *const PT_ROULETTE_NAMES[];
 const char *pt_integrator_name(pt_integrator i);
 bool pt_integrator_parse(const char *name, pt_integrator *out);
 /* "off", "fixed", "throughput", "albedo": --rr's words */

@@ -1,18 +1,15 @@
 /* scene_pt.c -- the path tracer's scenes. */
-#include "scene_pt.h"
+#include "09-path-tracing/scene_pt.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "06-bvh/bvh4.h"
-#include "06-bvh/flat.h"
+#include "04-uniform-grid/grid.h"
+#include "05-kd-tree/kdtree.h"
+#include "06-bvh/bvh.h"
 #include "memory.h"
-
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
 
 void pt_scene_init(pt_scene *sc)
 {
@@ -25,10 +22,7 @@ void pt_scene_init(pt_scene *sc)
 void pt_scene_free(pt_scene *sc)
 {
     accel_destroy(sc->bvh);
-    accel_destroy(sc->occluders);
     triangle_set_free(&sc->triangles);
-    triangle_set_free(&sc->occluder_triangles);
-    free(sc->wall_planes);
     mesh_free(&sc->geometry);
     free(sc->spheres);
     free(sc->materials);
@@ -87,330 +81,51 @@ void pt_scene_add_point_light(pt_scene *sc, vec3 position, vec3 intensity)
     sc->point_lights[sc->point_light_count++] = (pt_point_light){position, intensity};
 }
 
-/* At most this many triangles: no tree (build_accel). */
-enum { FLAT_TRIANGLES_MAX = 64 };
-
-/* The one place the path tracer chooses and builds its acceleration
- * structures (of all triangles, and of the occluders); pt_scene_intersect()
- * and pt_scene_occluded() are the only places that use them. */
-static accel *build_accel(const triangle_set *set)
+/* ---- the acceleration structure ---------------------------------------------
+ * pt_scene_intersect() and pt_scene_occluded() are the only places that
+ * trace the triangles, and they do it through chapter 03's interface, so
+ * any structure of chapters 03-06 can stand here. The default is chapter
+ * 06's BVH with the binned SAH: change it, and chapter 09's counters move. */
+static accel *build_brute(const triangle_set *set, const void *context)
 {
-    /* A few dozen triangles: no tree at all, every triangle tested, eight per
-     * AVX instruction (chapter 06, flat.h). On the Cornell box (32 and 22
-     * triangles) a closest hit took 64 ns through the 4-wide BVH: the path
-     * tracer is 14 % faster with the same image, bit for bit (README,
-     * "Speed"). A flat test costs about 0.9 ns per triangle, the 4-wide
-     * BVH 50-70 ns a ray on small meshes: they cross near 64. (Eight rays
-     * at a time, for --wide, skip the runs of triangles whose box none of
-     * them meets: one level of boxes, flat.c's "Groups".) */
-    if (set->count <= FLAT_TRIANGLES_MAX)
-        return flat_build(set);
-    /* Chapter 06's 4-wide BVH: four boxes per node tested at once. Inside a
-     * room every ray meets the boxes of the walls; a binary tree visits them
-     * one level at a time, a 4-wide one in one or two nodes (README, "Speed"). */
-    return bvh4_build(set, BVH_SPLIT_SAH);
+    (void)context;
+    return brute_force_build(set);
 }
 
-/* ---- walls cast no shadows ----------------------------------------------------
- * A triangle lies in a plane. If both ends of a segment are on the same
- * side of that plane, so is every point between them (a half-space is
- * convex), and the segment cannot meet the triangle. A shadow ray is such
- * a segment, from a surface point to a point on a light. So a triangle
- * with the whole scene in front of it -- a wall of a room -- can never
- * block a shadow ray between two points of the scene: every such ray
- * needs only the other triangles (the occluders). In the Cornell box
- * that leaves the two blocks and the light, 22 of 32 triangles, and the
- * walls, whose boxes every shadow ray in the room overlaps, are not
- * visited at all.
- *
- * The scene is analysed once (find_walls); each ray is then checked
- * (pt_scene_segment_inside_walls): only a ray whose two ends are in front
- * of every wall plane skips the walls. The check, not the analysis, is
- * what makes the answer right, so a ray from anywhere (a camera outside
- * the room, a point of a moving object) still gets the right answer. */
-
-/* Vertex-against-plane tests the analysis may spend (about 0.1 s); on a
- * larger scene the triangles not yet looked at are not walls. */
-enum { WALL_TEST_BUDGET = 100000000 };
-
-/* A wall's plane, and how much its test may be off by rounding.
- *
- * The test runs in float, four planes at a time, and must never say "in
- * front" of a point that is not: the margin (slack) bounds every rounding
- * on the way, with room to spare. Two kinds of plane:
- *   - axis-aligned, the three corners sharing one coordinate exactly (the
- *     Cornell box's floor, ceiling, back and green walls): the normal is
- *     exactly +-1 on that axis and the offset that coordinate, so the
- *     distance is one subtraction, off by half a unit in the last place of
- *     |p| + |offset| along that axis at most. The slack is 2^-20 of those:
- *     a point 2^-16 from the plane x = 0 (the smallest offset ray.h moves
- *     a ray's end off a surface by) is still judged correctly.
- *   - any other (the red wall, whose quad is not quite flat): the unit
- *     normal is rounded to float, so the plane tilts by up to 2^-24 and the
- *     error grows with the distance from the triangle; the slack is 2^-19
- *     of |p| in each coordinate plus of the corners' and offset's sizes.
- * A margin too large only sends a ray down the full test, never gives a
- * wrong answer. */
-typedef struct {
-    float normal[3], offset, slack[3], slack_constant;
-} wall_plane;
-
-static const float AXIS_SLACK = 0x1.0p-20f, TILTED_SLACK = 0x1.0p-19f;
-
-/* The plane of triangle t, facing the side its normal (p1 - p0) x (p2 - p0)
- * points to; false if the triangle has no area. */
-static bool wall_plane_of(const triangle *t, wall_plane *out)
+static accel *build_grid(const triangle_set *set, const void *context)
 {
-    float corners[3][3] = {{t->p0.x, t->p0.y, t->p0.z}, {t->p1.x, t->p1.y, t->p1.z}, {t->p2.x, t->p2.y, t->p2.z}};
-    double e1[3], e2[3];
-    for (int k = 0; k < 3; k++) {
-        e1[k] = (double)corners[1][k] - corners[0][k];
-        e2[k] = (double)corners[2][k] - corners[0][k];
-    }
-    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    double length = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(length > 0.0))
-        return false;
-    memset(out, 0, sizeof *out);
-    for (int axis = 0; axis < 3; axis++) {
-        if (corners[0][axis] == corners[1][axis] && corners[0][axis] == corners[2][axis]) {
-            float sign = n[axis] > 0.0 ? 1.0f : -1.0f;
-            out->normal[axis] = sign;
-            out->offset = sign * corners[0][axis];
-            out->slack[axis] = AXIS_SLACK;
-            out->slack_constant = AXIS_SLACK * fabsf(out->offset);
-            return true;
-        }
-    }
-    double offset = 0.0, size = 0.0;
-    for (int k = 0; k < 3; k++) {
-        out->normal[k] = (float)(n[k] / length);
-        offset += (double)out->normal[k] * corners[0][k];
-        size += fabs((double)corners[0][k]) + fabs((double)corners[1][k]) + fabs((double)corners[2][k]);
-        out->slack[k] = TILTED_SLACK;
-    }
-    out->offset = (float)offset;
-    out->slack_constant = (float)(TILTED_SLACK * (size + fabs(offset)));
-    return true;
+    (void)context;
+    return grid_build(set, GRID_DEFAULT_DENSITY);
 }
 
-/* At most this many wall planes: every shadow ray tests them all, so a
- * room's six (and a few for faces that are not quite flat) pay for
- * themselves, but not the hundreds of faces of a closed sphere. */
-enum { WALL_PLANES_MAX = 8 };
-/* ... and only if the walls are at least this fraction of the scene's area. */
-static const double WALL_AREA_MIN = 0.1;
-
-/* Add w to the planes, unless it is already there (the other triangle of a
- * flat quad); false if it is not and there is no room for it. */
-static bool add_wall_plane(pt_scene *sc, const wall_plane *w)
+static accel *build_kdtree(const triangle_set *set, const void *context)
 {
-    for (int k = 0; k < sc->wall_plane_count; k++) {
-        const pt_wall_planes *g = &sc->wall_planes[k / 4];
-        int j = k % 4;
-        if (g->normal[0][j] == w->normal[0] && g->normal[1][j] == w->normal[1] && g->normal[2][j] == w->normal[2] &&
-            g->offset[j] == w->offset && g->slack_constant[j] == w->slack_constant)
-            return true; /* the other triangle of a flat quad: the same plane */
-    }
-    if (sc->wall_plane_count == WALL_PLANES_MAX)
-        return false;
-    int k = sc->wall_plane_count++;
-    if (k % 4 == 0) {
-        pt_wall_planes *g = &sc->wall_planes[sc->wall_group_count++];
-        memset(g, 0, sizeof *g);
-        for (int j = 0; j < 4; j++)
-            g->offset[j] = -1.0f;
-    }
-    pt_wall_planes *g = &sc->wall_planes[k / 4];
-    int j = k % 4;
-    for (int a = 0; a < 3; a++) {
-        g->normal[a][j] = w->normal[a];
-        g->slack[a][j] = w->slack[a];
-    }
-    g->offset[j] = w->offset;
-    g->slack_constant[j] = w->slack_constant;
-    return true;
+    (void)context;
+    return kdtree_build(set);
 }
 
-static void find_walls(pt_scene *sc)
+static accel *build_bvh(const triangle_set *set, const void *context)
 {
-    const mesh *m = &sc->geometry;
-    int n = sc->triangles.count;
-    bool *keep = memory_allocate((size_t)(n > 0 ? n : 1), sizeof *keep);
-    long budget = WALL_TEST_BUDGET;
-    sc->wall_count = 0;
-    sc->wall_plane_count = 0;
-    sc->wall_group_count = 0;
-    sc->wall_planes = aligned_alloc(64, WALL_PLANES_MAX / 4 * sizeof *sc->wall_planes);
-    if (sc->wall_planes == NULL) {
-        fprintf(stderr, "out of memory\n");
-        exit(1);
-    }
-    for (int i = 0; i < n; i++) {
-        keep[i] = true;
-        wall_plane w;
-        if (budget <= 0 || !wall_plane_of(&sc->triangles.triangles[i], &w))
-            continue;
-        /* Every vertex and sphere of the scene in front of the plane or on
-         * it (to within the slack). A misjudged vertex here would only make
-         * the walls skipped less or more often: the test of each ray's two
-         * ends decides, and it is exact. */
-        bool wall = true;
-        int v = 0;
-        for (; v < m->position_count && wall; v++) {
-            vec3 p = m->positions[v];
-            float distance = w.normal[0] * p.x + w.normal[1] * p.y + w.normal[2] * p.z - w.offset;
-            float margin = w.slack[0] * fabsf(p.x) + w.slack[1] * fabsf(p.y) + w.slack[2] * fabsf(p.z) + w.slack_constant;
-            wall = distance >= -margin;
-        }
-        budget -= v; /* most triangles of a large mesh stop at an early vertex */
-        for (int k = 0; k < sc->sphere_count && wall; k++) {
-            const pt_sphere *s = &sc->spheres[k];
-            vec3 c = s->center;
-            float distance = w.normal[0] * c.x + w.normal[1] * c.y + w.normal[2] * c.z - w.offset;
-            wall = distance >= s->radius * vec3_length(vec3_make(w.normal[0], w.normal[1], w.normal[2]));
-        }
-        if (!wall || !add_wall_plane(sc, &w))
-            continue;
-        keep[i] = false;
-        sc->wall_count++;
-    }
-    /* Walls pay when they are large: a room's walls are boxes every shadow
-     * ray in the room overlaps. A few faces of a closed sphere (eight of
-     * hundreds) are not worth testing each ray's ends against. */
-    double area = 0.0, wall_area = 0.0;
-    for (int i = 0; i < n; i++) {
-        const triangle *t = &sc->triangles.triangles[i];
-        double a = 0.5 * (double)vec3_length(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
-        area += a;
-        wall_area += keep[i] ? 0.0 : a;
-    }
-    if (sc->wall_count == 0 || wall_area < WALL_AREA_MIN * area) {
-        sc->wall_count = sc->wall_plane_count = sc->wall_group_count = 0;
-    } else {
-        triangle_set_subset(&sc->occluder_triangles, &sc->triangles, keep);
-        sc->occluders = build_accel(&sc->occluder_triangles);
-    }
-    free(keep);
+    (void)context;
+    return bvh_build(set, BVH_SPLIT_SAH);
 }
 
-/* Inline: it runs for every shadow ray, and a call (with the ray passed
- * through memory) cost as much as the test. */
-static inline bool segment_inside_walls(const pt_scene *sc, const ray *r)
+const char *const PT_ACCEL_NAMES[] = {"bvh", "kdtree", "grid", "brute", NULL};
+static const pt_accel_builder accel_builders[] = {build_bvh, build_kdtree, build_grid, build_brute};
+
+pt_accel_builder pt_accel_builder_named(const char *name)
 {
-    if (sc->wall_group_count == 0 || sc->walls_off || !(r->t_max < INFINITY))
-        return false;
-    /* The two ends, p = o + t d, rounded twice: each coordinate is off by
-     * at most 2^-23 of |o| + |t d|, which is what the slack is taken of
-     * (AXIS_SLACK is 8 times that and more). */
-    vec3 step_start = vec3_scale(r->direction, r->t_min), step_end = vec3_scale(r->direction, r->t_max);
-    vec3 start = vec3_add(r->origin, step_start), end = vec3_add(r->origin, step_end);
-    vec3 size_start = vec3_add(vec3_abs(r->origin), vec3_abs(step_start));
-    vec3 size_end = vec3_add(vec3_abs(r->origin), vec3_abs(step_end));
-    /* Four planes per step, without a branch per plane: each lane's
-     * answer is or-ed into `outside`. The SSE version does the same float
-     * operations in the same order as the loop. */
-    int outside = 0;
-#if defined(__SSE2__)
-    const __m128 p[2][3] = {{_mm_set1_ps(start.x), _mm_set1_ps(start.y), _mm_set1_ps(start.z)},
-                            {_mm_set1_ps(end.x), _mm_set1_ps(end.y), _mm_set1_ps(end.z)}};
-    const __m128 size[2][3] = {{_mm_set1_ps(size_start.x), _mm_set1_ps(size_start.y), _mm_set1_ps(size_start.z)},
-                               {_mm_set1_ps(size_end.x), _mm_set1_ps(size_end.y), _mm_set1_ps(size_end.z)}};
-    for (int g = 0; g < sc->wall_group_count; g++) {
-        const pt_wall_planes *w = &sc->wall_planes[g];
-        for (int e = 0; e < 2; e++) {
-            __m128 distance = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(w->normal[0]), p[e][0]),
-                                                    _mm_mul_ps(_mm_load_ps(w->normal[1]), p[e][1])),
-                                         _mm_mul_ps(_mm_load_ps(w->normal[2]), p[e][2]));
-            distance = _mm_sub_ps(distance, _mm_load_ps(w->offset));
-            __m128 margin = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_load_ps(w->slack[0]), size[e][0]),
-                                                  _mm_mul_ps(_mm_load_ps(w->slack[1]), size[e][1])),
-                                       _mm_mul_ps(_mm_load_ps(w->slack[2]), size[e][2]));
-            margin = _mm_add_ps(margin, _mm_load_ps(w->slack_constant));
-            outside |= _mm_movemask_ps(_mm_cmpngt_ps(distance, margin));
-        }
-    }
-#else
-    const vec3 p[2] = {start, end}, size[2] = {size_start, size_end};
-    for (int g = 0; g < sc->wall_group_count; g++) {
-        const pt_wall_planes *w = &sc->wall_planes[g];
-        for (int e = 0; e < 2; e++)
-            for (int j = 0; j < 4; j++) {
-                float distance = w->normal[0][j] * p[e].x + w->normal[1][j] * p[e].y + w->normal[2][j] * p[e].z -
-                                 w->offset[j];
-                float margin = w->slack[0][j] * size[e].x + w->slack[1][j] * size[e].y +
-                               w->slack[2][j] * size[e].z + w->slack_constant[j];
-                outside |= !(distance > margin);
-            }
-    }
-#endif
-    return outside == 0;
+    for (int i = 0; PT_ACCEL_NAMES[i] != NULL; i++)
+        if (strcmp(name, PT_ACCEL_NAMES[i]) == 0)
+            return accel_builders[i];
+    return NULL;
 }
 
-bool pt_scene_segment_inside_walls(const pt_scene *sc, const ray *r) { return segment_inside_walls(sc, r); }
-
-#if defined(__x86_64__) && defined(__GNUC__)
-/* segment_inside_walls() for eight rays, one per lane: the same float
- * operations in the same order as its SSE version, so each lane gets the
- * very answer a ray alone gets. */
-__attribute__((target("avx"))) static int segments8_inside_walls_avx(const pt_scene *sc, const flat_rays8 *rays)
+void pt_scene_use_accel(pt_scene *sc, pt_accel_builder build, const void *context)
 {
-    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-    const __m256 t_min = _mm256_load_ps(rays->t_min), t_max = _mm256_load_ps(rays->t_max);
-    __m256 p[2][3], size[2][3];
-    for (int c = 0; c < 3; c++) {
-        __m256 o = _mm256_load_ps(rays->origin[c]), d = _mm256_load_ps(rays->direction[c]);
-        __m256 step_start = _mm256_mul_ps(d, t_min), step_end = _mm256_mul_ps(d, t_max);
-        p[0][c] = _mm256_add_ps(o, step_start);
-        p[1][c] = _mm256_add_ps(o, step_end);
-        size[0][c] = _mm256_add_ps(_mm256_and_ps(o, abs_mask), _mm256_and_ps(step_start, abs_mask));
-        size[1][c] = _mm256_add_ps(_mm256_and_ps(o, abs_mask), _mm256_and_ps(step_end, abs_mask));
-    }
-    __m256 outside = _mm256_cmp_ps(t_max, _mm256_set1_ps(INFINITY), _CMP_NLT_UQ); /* an infinite ray is not inside */
-    /* the planes in use only (the SSE version also tests the unused lanes, which pass) */
-    for (int k = 0; k < sc->wall_plane_count; k++) {
-        const pt_wall_planes *w = &sc->wall_planes[k / 4];
-        const int j = k % 4;
-        const __m256 normal[3] = {_mm256_broadcast_ss(&w->normal[0][j]), _mm256_broadcast_ss(&w->normal[1][j]),
-                                  _mm256_broadcast_ss(&w->normal[2][j])};
-        const __m256 slack[3] = {_mm256_broadcast_ss(&w->slack[0][j]), _mm256_broadcast_ss(&w->slack[1][j]),
-                                 _mm256_broadcast_ss(&w->slack[2][j])};
-        for (int e = 0; e < 2; e++) {
-            __m256 distance = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(normal[0], p[e][0]),
-                                                          _mm256_mul_ps(normal[1], p[e][1])),
-                                            _mm256_mul_ps(normal[2], p[e][2]));
-            distance = _mm256_sub_ps(distance, _mm256_broadcast_ss(&w->offset[j]));
-            __m256 margin = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(slack[0], size[e][0]),
-                                                        _mm256_mul_ps(slack[1], size[e][1])),
-                                          _mm256_mul_ps(slack[2], size[e][2]));
-            margin = _mm256_add_ps(margin, _mm256_broadcast_ss(&w->slack_constant[j]));
-            outside = _mm256_or_ps(outside, _mm256_cmp_ps(distance, margin, _CMP_NGT_UQ));
-        }
-    }
-    int inside = ~_mm256_movemask_ps(outside) & 0xff;
-    _mm256_zeroupper();
-    return inside;
+    accel_destroy(sc->bvh);
+    sc->bvh = build(&sc->triangles, context);
 }
-#endif
-
-int pt_scene_segments8_inside_walls(const pt_scene *sc, const flat_rays8 *rays, int active)
-{
-    if (sc->wall_group_count == 0 || sc->walls_off)
-        return 0;
-#if defined(__x86_64__) && defined(__GNUC__)
-    if (__builtin_cpu_supports("avx"))
-        return segments8_inside_walls_avx(sc, rays) & active;
-#endif
-    int inside = 0;
-    for (int k = 0; k < FLAT_LANES; k++)
-        if ((active >> k) & 1) {
-            ray r = flat_rays8_get(rays, k);
-            inside |= segment_inside_walls(sc, &r) << k;
-        }
-    return inside;
-}
-
-void pt_scene_use_walls(pt_scene *sc, bool on) { sc->walls_off = !on; }
 
 /* How bright an emitter is, for choosing which light to sample: the mean of
  * L_e's channels (positive whenever any channel is). */
@@ -419,8 +134,7 @@ static double emitter_weight(vec3 le) { return ((double)le.x + (double)le.y + (d
 void pt_scene_finish(pt_scene *sc)
 {
     triangle_set_from_mesh(&sc->triangles, &sc->geometry);
-    sc->bvh = build_accel(&sc->triangles);
-    find_walls(sc);
+    sc->bvh = build_bvh(&sc->triangles, NULL);
     /* The emitter table: every triangle whose material emits, with the
      * running sum of powers, to pick one in proportion to its power. */
     int n = 0;
@@ -473,17 +187,11 @@ bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters
     return found;
 }
 
-/* Inline into both callers below: pt_scene_visible() builds its shadow ray
- * here and hands it on by pointer, not copied through one more call. */
-static inline bool occluded(const pt_scene *sc, const ray *r, ray_counters *counters)
+/* A shadow ray asks only whether anything is in the way (any hit). */
+static bool occluded(const pt_scene *sc, const ray *r, ray_counters *counters)
 {
-    if (segment_inside_walls(sc, r)) {
-        counters->shadow_rays_inside_walls++;
-        if (sc->occluder_triangles.count > 0 && accel_any_hit(sc->occluders, *r, counters))
-            return true;
-    } else if (sc->bvh != NULL && sc->triangles.count > 0 && accel_any_hit(sc->bvh, *r, counters)) {
+    if (sc->bvh != NULL && sc->triangles.count > 0 && accel_any_hit(sc->bvh, *r, counters))
         return true;
-    }
     hit_record ignored;
     for (int i = 0; i < sc->sphere_count; i++) {
         sphere shape = {sc->spheres[i].center, sc->spheres[i].radius};
@@ -683,6 +391,63 @@ void pt_scene_build_point_in_sphere(pt_scene *sc, float albedo, float intensity)
 
 /* ---- OBJ scenes ---------------------------------------------------------------- */
 
+/* Where the loaders say what each MTL material became (NULL: nowhere). */
+static FILE *material_report;
+static bool material_report_set;
+
+void pt_scene_report_materials(FILE *out)
+{
+    material_report = out;
+    material_report_set = true;
+}
+
+/* The MTL's shininess Ns as GGX's alpha: a Blinn-Phong lobe of exponent p
+ * is close to a microfacet lobe of alpha = sqrt(2 / (p + 2)) (Walter et al.
+ * 2007), kept within what the glossy BSDF takes. */
+static float alpha_from_shininess(float ns)
+{
+    float alpha = sqrtf(2.0f / (fmaxf(ns, 0.0f) + 2.0f));
+    return fminf(1.0f, fmaxf(0.001f, alpha));
+}
+
+pt_material pt_material_from_mtl(const mesh_material *mm, char *note, size_t note_size)
+{
+    float kd = vec3_max_component(mm->diffuse), ks = vec3_max_component(mm->specular);
+    if (mesh_material_emits(mm)) {
+        snprintf(note, note_size, "emitter, Ke %g %g %g (Kd %g %g %g as its albedo)", (double)mm->emission.x,
+                 (double)mm->emission.y, (double)mm->emission.z, (double)mm->diffuse.x, (double)mm->diffuse.y,
+                 (double)mm->diffuse.z);
+        return pt_emitter(mm->diffuse, mm->emission);
+    }
+    if (mesh_material_transparent(mm)) {
+        float ior = mm->ior > 1.0f ? mm->ior : 1.5f;
+        snprintf(note, note_size, "glass, ior %g (%s)%s", (double)ior,
+                 mm->dissolve < 1.0f ? "d < 1" : "a transparent illum", mm->ior > 1.0f ? "" : "; no Ni > 1: 1.5");
+        return pt_glass(ior);
+    }
+    if (ks > kd) {
+        float alpha = alpha_from_shininess(mm->shininess);
+        snprintf(note, note_size, "glossy GGX, F0 = Ks %g %g %g, alpha %.3g from Ns %g", (double)mm->specular.x,
+                 (double)mm->specular.y, (double)mm->specular.z, (double)alpha, (double)mm->shininess);
+        return pt_glossy(mm->specular, alpha);
+    }
+    snprintf(note, note_size, "diffuse, Kd %g %g %g%s%s", (double)mm->diffuse.x, (double)mm->diffuse.y,
+             (double)mm->diffuse.z, ks > 0.0f ? "; Ks dropped (the diffuse part is larger: no layered material here)" : "",
+             mm->ior > 1.0f ? "; Ni ignored (opaque)" : "");
+    return pt_diffuse(mm->diffuse);
+}
+
+void pt_scene_add_mtl_materials(pt_scene *sc, const mesh *m, const char *source)
+{
+    FILE *out = material_report_set ? material_report : stdout;
+    for (int i = 0; i < m->material_count; i++) {
+        char note[256];
+        pt_scene_add_material(sc, pt_material_from_mtl(&m->materials[i], note, sizeof note));
+        if (out != NULL)
+            fprintf(out, "%s: material '%s': %s\n", source, m->materials[i].name, note);
+    }
+}
+
 bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_size)
 {
     pt_scene_init(sc);
@@ -690,14 +455,8 @@ bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_siz
         pt_scene_free(sc);
         return false;
     }
-    /* Materials from the MTL colours; faces without one get a grey diffuse. */
-    for (int i = 0; i < sc->geometry.material_count; i++) {
-        const mesh_material *mm = &sc->geometry.materials[i];
-        pt_material m = pt_emitter(mm->diffuse, mm->emission);
-        if (mm->ior > 1.0f)
-            m = pt_glass(mm->ior);
-        pt_scene_add_material(sc, m);
-    }
+    /* Materials from the MTL; faces without one get a grey diffuse. */
+    pt_scene_add_mtl_materials(sc, &sc->geometry, path);
     int grey = pt_scene_add_material(sc, pt_diffuse(vec3_splat(0.7f)));
     for (int i = 0; i < sc->geometry.face_count; i++)
         if (sc->geometry.faces[i].material < 0)
@@ -717,4 +476,62 @@ bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_siz
     if (sc->emitter_count == 0 && sc->point_light_count == 0)
         sc->environment = vec3_splat(1.0f); /* nothing emits: light it with a white sky */
     return true;
+}
+
+/* ---- the built-in scenes, by name ----------------------------------------- */
+
+static void build_furnace(pt_scene *sc) { pt_scene_build_furnace(sc, 0.5f, 0.5f); }
+static void build_white_furnace(pt_scene *sc)
+{
+    pt_scene_build_white_furnace(sc, pt_diffuse(vec3_splat(0.5f)), vec3_splat(1.0f));
+}
+static void build_glass_furnace(pt_scene *sc) { pt_scene_build_white_furnace(sc, pt_glass(1.5f), vec3_splat(1.0f)); }
+static void build_point_in_sphere(pt_scene *sc) { pt_scene_build_point_in_sphere(sc, 0.5f, (float)PI); }
+
+const char *const PT_BUILTIN_SCENE_NAMES[] = {"cornell",       "materials",     "veach", "furnace",
+                                              "white-furnace", "glass-furnace", "point-in-sphere", NULL};
+const char *const PT_BUILTIN_SCENE_NOTES[] = {
+    "the Cornell box (the default)",
+    "the box with a glossy metal block and a glass sphere",
+    "glossy plates and lights of four sizes (where MIS wins)",
+    "inside a closed sphere that emits and reflects 0.5: radiance 1 everywhere",
+    "a diffuse sphere of albedo 0.5 under a uniform sky of radiance 1",
+    "a glass sphere under a uniform sky of radiance 1",
+    "a point light inside a sphere of albedo 0.5",
+    NULL,
+};
+/* in the order of PT_BUILTIN_SCENE_NAMES */
+const pt_builtin_scene PT_BUILTIN_SCENES[] = {
+    {"cornell", pt_scene_build_cornell_box},
+    {"materials", pt_scene_build_cornell_box_materials},
+    {"veach", pt_scene_build_veach},
+    {"furnace", build_furnace},
+    {"white-furnace", build_white_furnace},
+    {"glass-furnace", build_glass_furnace},
+    {"point-in-sphere", build_point_in_sphere},
+    {NULL, NULL},
+};
+
+bool pt_scene_build_builtin(pt_scene *sc, const char *name)
+{
+    for (int i = 0; PT_BUILTIN_SCENES[i].name != NULL; i++)
+        if (strcmp(name, PT_BUILTIN_SCENES[i].name) == 0) {
+            PT_BUILTIN_SCENES[i].build(sc);
+            return true;
+        }
+    return false;
+}
+
+/* ---- a warning before a render that cannot be right --------------------- */
+
+bool pt_scene_has_no_light(const pt_scene *sc, char *why, size_t why_size)
+{
+    if (sc->emitter_count > 0 || sc->point_light_count > 0 || vec3_max_component(sc->environment) > 0.0f)
+        return false;
+    int emitting_spheres = 0;
+    for (int i = 0; i < sc->sphere_count; i++)
+        emitting_spheres += vec3_max_component(sc->materials[sc->spheres[i].material].emission) > 0.0f;
+    snprintf(why, why_size, "no light: no emitting triangle, point light or background%s: the image will be black",
+             emitting_spheres > 0 ? " (only emitting spheres, which light what happens to hit them)" : "");
+    return emitting_spheres == 0;
 }

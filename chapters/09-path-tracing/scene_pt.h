@@ -18,10 +18,10 @@
 #define SCENE_PT_H
 
 #include <stdbool.h>
+#include <stdio.h>
 
 #include "01-ray-casting/shapes.h"
 #include "03-aabb-slabs/accel.h"
-#include "06-bvh/flat.h"
 #include "camera.h"
 #include "counters.h"
 #include "mesh.h"
@@ -54,30 +54,18 @@ typedef struct {
     vec3 intensity; /* I: irradiance I cos(theta) / r^2 at distance r */
 } pt_point_light;
 
-/* Four wall planes, structure of arrays (one group is tested at once): a
- * point p lies in front of plane j if
- *   normal . p - offset > slack . |p| + slack_constant
- * where the right side bounds the rounding of the left (scene_pt.c). An
- * unused lane has normal 0 and offset -1: every point is in front of it. */
-typedef struct {
-    float normal[3][4], offset[4];
-    float slack[3][4], slack_constant[4];
-} pt_wall_planes;
+/* How the scene's triangles are traced: a builder of an acceleration
+ * structure (chapter 03's interface) over them. `context` is what the
+ * builder needs besides the triangles (may be NULL). */
+typedef accel *(*pt_accel_builder)(const triangle_set *set, const void *context);
 
 typedef struct {
     mesh geometry;          /* triangles; face material = index into materials */
     triangle_set triangles; /* built by pt_scene_finish */
+    /* Every closest hit and every shadow ray of the scene's triangles goes
+     * through this one structure: chapter 06's BVH unless
+     * pt_scene_use_accel() chose another. */
     accel *bvh;
-    /* Walls cast no shadows (pt_scene_occluded): a wall is a triangle with
-     * every vertex and sphere of the scene on its front side, like the five
-     * faces of the Cornell box's room. The planes of the walls, each once,
-     * and a BVH of every other triangle (the occluders). */
-    int wall_count; /* triangles */
-    pt_wall_planes *wall_planes;
-    int wall_plane_count, wall_group_count;
-    triangle_set occluder_triangles;
-    accel *occluders; /* NULL when the scene has no walls */
-    bool walls_off;   /* pt_scene_use_walls(sc, false): every shadow ray meets every triangle */
     pt_sphere *spheres;
     int sphere_count, sphere_capacity;
     pt_material *materials;
@@ -106,8 +94,17 @@ void pt_scene_add_quad(pt_scene *sc, vec3 p0, vec3 p1, vec3 p2, vec3 p3, int mat
 void pt_scene_add_triangle(pt_scene *sc, vec3 p0, vec3 p1, vec3 p2, int material);
 void pt_scene_add_sphere(pt_scene *sc, vec3 center, float radius, int material, bool inside_out);
 void pt_scene_add_point_light(pt_scene *sc, vec3 position, vec3 intensity);
-/* Builds the BVH over the triangles and the emitter table. */
+/* Builds the BVH over the triangles (chapter 06's, binned SAH) and the
+ * emitter table. */
 void pt_scene_finish(pt_scene *sc);
+/* Trace the triangles through another structure: build(set, context)
+ * replaces the BVH (after pt_scene_finish). */
+void pt_scene_use_accel(pt_scene *sc, pt_accel_builder build, const void *context);
+/* The structures of chapters 03-06 as builders: --accel's brute, grid,
+ * kdtree and bvh (the default), by name; NULL for an unknown name. The
+ * names, NULL-terminated, for --help and messages. */
+pt_accel_builder pt_accel_builder_named(const char *name);
+extern const char *const PT_ACCEL_NAMES[];
 
 pt_material pt_diffuse(vec3 albedo);
 pt_material pt_emitter(vec3 albedo, vec3 emission);
@@ -116,39 +113,22 @@ pt_material pt_glass(float ior);
 pt_material pt_mirror(vec3 albedo);
 
 bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters);
-/* Is anything hit in (r.t_min, r.t_max)? A segment whose two ends lie in
- * front of every wall plane is tested against the occluders alone
- * (counted in counters->shadow_rays_inside_walls). */
+/* Is anything hit in (r.t_min, r.t_max)? An any-hit query of the BVH,
+ * then the spheres. */
 bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters);
 /* Can the hit point `from` see `target` (a point on a light whose normal is
  * *target_normal, or a point light: normal 0)? One shadow ray,
  * ray_spawn_to(from->point, from->normal_geometric, *target, *target_normal)
- * (ray.h), counted in counters->shadow_rays: the same answer as
- * pt_scene_occluded on that ray. The integrators ask it at every vertex, so
- * it builds the ray where it tests it, and takes its points by pointer: a
- * vec3 passed by value travels in two registers that the callee stores and
- * reloads in other widths, a stall for every shadow ray (README, "Speed"). */
+ * (ray.h), counted in counters->shadow_rays. */
 bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, const vec3 *target_normal,
                       ray_counters *counters);
-/* Do both ends of r, r(t_min) and r(t_max), lie in front of every wall
- * plane, by more than the rounding of the test? False for an infinite
- * t_max, and when the scene has no walls. */
-bool pt_scene_segment_inside_walls(const pt_scene *sc, const ray *r);
-/* The same for the lanes of `active` of eight rays (flat.h's lanes): bit k
- * is pt_scene_segment_inside_walls() of lane k, eight lanes per AVX
- * instruction where the processor has AVX. */
-int pt_scene_segments8_inside_walls(const pt_scene *sc, const flat_rays8 *rays, int active);
-/* Use the walls (the default), or not: to see what they save (--walls
- * off, --bench). The images are the same either way. */
-void pt_scene_use_walls(pt_scene *sc, bool on);
 
 /* A point on the emitting triangles, with the emitter's front normal and
  * material. Picked by power: the density per unit area at a point of an
  * emitter of radiance L_e is pt_scene_emitter_pdf_area(), mean(L_e) /
  * emitter_power -- for lights that all have the same L_e (the Cornell box)
- * that is the lecture's 1 / A. False if there are none. Inline: the
- * eight-path renderer calls it for every lane at every step, and as a call
- * (its answers handed back through memory) it took 2.4 % more time. */
+ * that is the lecture's 1 / A. False if there are none. Inline: chapter
+ * 13's renderer calls it for eight paths at every step. */
 static inline bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u2, vec3 *point,
                                            vec3 *normal, int *material)
 {
@@ -180,6 +160,25 @@ static inline bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, flo
 }
 
 float pt_scene_emitter_pdf_area(const pt_scene *sc, int material);
+
+/* Sampling the light, as the lecture writes it: a point x' on the lights
+ * with its normal n', the radiance L_e it emits, and pdf_light per unit
+ * area (1 / A for one light of area A). Every integrator that samples
+ * lights draws them here, from three uniform numbers. */
+typedef struct {
+    vec3 point, normal, emission;
+    float pdf_light;
+} pt_light_sample;
+
+static inline bool pt_scene_sample_light(const pt_scene *sc, float u_pick, float u1, float u2, pt_light_sample *x)
+{
+    int material;
+    if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x->point, &x->normal, &material))
+        return false;
+    x->emission = sc->materials[material].emission;
+    x->pdf_light = pt_scene_emitter_pdf_area(sc, material);
+    return true;
+}
 
 camera pt_scene_camera(const pt_scene *sc, int width, int height);
 
@@ -216,8 +215,32 @@ void pt_scene_build_white_furnace(pt_scene *sc, pt_material sphere_material, vec
 /* A unit sphere of albedo rho, seen from inside, with a point light of
  * intensity I at its centre: direct irradiance I everywhere. */
 void pt_scene_build_point_in_sphere(pt_scene *sc, float albedo, float intensity);
-/* An OBJ file's triangles with its MTL colours (Kd albedo, Ke emission; Ni > 1
- * makes glass), and a camera from its bounds. False with err on failure. */
+/* The built-in scenes by name (--builtin), NULL-terminated. */
+typedef struct {
+    const char *name;
+    void (*build)(pt_scene *sc);
+} pt_builtin_scene;
+extern const pt_builtin_scene PT_BUILTIN_SCENES[];
+/* The same names, NULL-terminated, and a line on each (--builtin). */
+extern const char *const PT_BUILTIN_SCENE_NAMES[];
+extern const char *const PT_BUILTIN_SCENE_NOTES[];
+/* Builds the scene named `name`; false if there is none of that name. */
+bool pt_scene_build_builtin(pt_scene *sc, const char *name);
+
+/* An MTL material as the path tracer's, as the format means it: an
+ * emitter where Ke > 0; glass where the MTL says light passes through
+ * (illum 4, 6, 7, 9 or d < 1), with Ni (1.5 without one); GGX glossy with
+ * F0 = Ks where Ks outweighs Kd, its roughness from Ns; else diffuse Kd.
+ * An Ni alone makes nothing glass: exporters write one on every material.
+ * *note receives a line saying what it became and what was dropped. */
+pt_material pt_material_from_mtl(const mesh_material *mm, char *note, size_t note_size);
+/* Adds m's materials in order, printing "SOURCE: material 'NAME': what it
+ * became" for each (to stdout, or where pt_scene_report_materials() says). */
+void pt_scene_add_mtl_materials(pt_scene *sc, const mesh *m, const char *source);
+/* Where the lines go (NULL: nowhere, e.g. for --quiet and the tests). */
+void pt_scene_report_materials(FILE *out);
+/* An OBJ file's triangles with its MTL materials (pt_material_from_mtl),
+ * and a camera from its bounds. False with err on failure. */
 bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_size);
 
 /* The scene of a scene file (scene_file.h; scene_pt_file.c): diffuse,
@@ -229,6 +252,10 @@ bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_siz
  * tracer intersects triangles and spheres only). Runs pt_scene_finish. False
  * with err ("file:line:col: ...") on failure, sc then empty. */
 bool pt_scene_from_desc(pt_scene *sc, const scene_desc *d, const char *label, char *err, size_t err_size);
+/* Would the render be black for want of light (no emitting triangle, point
+ * light, emitting sphere or background)? Then true, and why says so. */
+bool pt_scene_has_no_light(const pt_scene *sc, char *why, size_t why_size);
+
 /* The reverse: a built-in scene as a description (every triangle a shape),
  * so that the effects analysis runs on it as on a file. */
 void pt_scene_describe(const pt_scene *sc, scene_desc *d);

@@ -42,10 +42,8 @@ static bool add_mesh(pt_scene *sc, const scene_desc *d, int index, char *err, si
     int material_id = d->shapes[index].material;
     /* The MTL's materials as pt_scene_load_obj reads them. */
     int first = sc->material_count;
-    for (int i = 0; material_id < 0 && i < m.material_count; i++) {
-        const mesh_material *mm = &m.materials[i];
-        pt_scene_add_material(sc, mm->ior > 1.0f ? pt_glass(mm->ior) : pt_emitter(mm->diffuse, mm->emission));
-    }
+    if (material_id < 0)
+        pt_scene_add_mtl_materials(sc, &m, d->shapes[index].path);
     int grey = material_id >= 0 ? material_id : pt_scene_add_material(sc, pt_diffuse(vec3_splat(0.7f)));
     for (int i = 0; i < m.face_count; i++) {
         int face_material = m.faces[i].material;

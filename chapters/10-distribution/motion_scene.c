@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "06-bvh/bvh4.h"
+#include "06-bvh/bvh.h"
 #include "memory.h"
 
 void motion_scene_init(motion_scene *ms)
@@ -42,7 +42,7 @@ void motion_scene_add_mesh(motion_scene *ms, mesh *geometry, vec3 motion)
     mesh_init(geometry);
     m->motion = motion;
     triangle_set_from_mesh(&m->triangles, &m->geometry);
-    m->bvh = bvh4_build(&m->triangles, BVH_SPLIT_SAH);
+    m->bvh = bvh_build(&m->triangles, BVH_SPLIT_SAH);
     /* A translation moves every point along the same segment, so the box
      * at t = 0 united with the box at t = 1 holds the mesh at every t. */
     aabb end = {vec3_add(m->triangles.bounds.lo, motion), vec3_add(m->triangles.bounds.hi, motion)};

@@ -8,8 +8,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bvh4.h"
-#include "bvh_internal.h"
+#include "13-production/bvh4.h"
+#include "06-bvh/bvh_internal.h"
 
 #if BVH4_HAVE_SSE
 #include <immintrin.h>

@@ -1,14 +1,14 @@
 /* bvh4_build.c -- a 4-wide BVH by collapsing the binary one: every 4-wide
  * node is a binary node with some of its descendants pulled up, and every
  * leaf's triangles are copied into packets of four. */
-#include "bvh4.h"
+#include "13-production/bvh4.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
 
-#include "bvh_internal.h"
+#include "06-bvh/bvh_internal.h"
 #include "memory.h"
 #include "timer.h"
 

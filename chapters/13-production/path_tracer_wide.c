@@ -1,5 +1,5 @@
 /* path_tracer_wide.c -- eight paths at a time (path_tracer_wide.h). */
-#include "09-path-tracing/path_tracer_wide.h"
+#include "13-production/path_tracer_wide.h"
 
 #include <math.h>
 #include <omp.h>
@@ -7,7 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "06-bvh/flat.h"
+#include "13-production/fast_sincos.h"
+#include "13-production/flat.h"
+#include "13-production/walls.h"
 #include "08-monte-carlo/sampling.h"
 #include "09-path-tracing/bsdf.h"
 #include "explain.h"
@@ -15,7 +17,7 @@
 #include "stats.h"
 #include "timer.h"
 
-#include "09-path-tracing/spawn_avx.h"
+#include "13-production/spawn_avx.h"
 
 /* The lanes' arithmetic in AVX needs AVX2 for the rays' offsets
  * (spawn_avx.h); without it, lane by lane. */
@@ -38,8 +40,8 @@ bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_siz
         reason = "--explain follows one path";
     else if (sc->sphere_count > 0 || sc->point_light_count > 0)
         reason = "triangles and area lights only (no spheres, no point lights)";
-    else if (sc->triangles.count == 0 || !flat_is(sc->bvh))
-        reason = "the scene's triangles are not a flat set (more than 64)";
+    else if (sc->triangles.count == 0 || !walls_is(sc->bvh) || !flat_is(walls_all(sc->bvh)))
+        reason = "the scene's triangles are not a flat set (more than 64; pt_scene_use_accel(production_scene_accel))";
     for (int k = 0; k < sc->material_count && reason == NULL; k++)
         if (sc->materials[k].kind != BSDF_DIFFUSE)
             reason = "diffuse materials only";
@@ -175,17 +177,16 @@ static void trace_queued(row_job *job, int n)
     shadow_queue *queue = &job->queue;
     if (n <= 0)
         return;
-    /* Walls cast no shadows (scene_pt.c): a packet whose every ray lies
+    /* Walls cast no shadows (walls.h): a packet whose every ray lies
      * inside the walls is tested against the occluders alone. */
     const int active = (1 << n) - 1;
     int blocked;
-    if (job->occluders_flat && pt_scene_segments8_inside_walls(sc, &queue->rays[0], active) == active) {
+    if (job->occluders_flat && walls_segments8_inside(sc->bvh, &queue->rays[0], active) == active) {
+        const accel *occluders = walls_occluders(sc->bvh);
         job->counters->shadow_rays_inside_walls += (uint64_t)n;
-        blocked = sc->occluder_triangles.count > 0 ? flat_any_hit8_raw(sc->occluders, &queue->rays[0], active,
-                                                                       job->counters)
-                                                   : 0;
+        blocked = occluders != NULL ? flat_any_hit8_raw(occluders, &queue->rays[0], active, job->counters) : 0;
     } else {
-        blocked = flat_any_hit8_raw(sc->bvh, &queue->rays[0], active, job->counters);
+        blocked = flat_any_hit8_raw(walls_all(sc->bvh), &queue->rays[0], active, job->counters);
     }
     for (int q = 0; q < n; q++) {
         lane *l = &job->lanes[queue->lane[q]];
@@ -389,7 +390,10 @@ static int roll_bounce(lane *l, const path_tracer *pt, vertex_lanes *L, int k)
 static int bounce_math_lane(vertex_lanes *L, int k)
 {
 #define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
-    vec3 n = AT(n), local = sample_uniform_hemisphere(vec2_make(L->u_x[k], L->u_y[k]));
+    /* sample_uniform_hemisphere(), its azimuth by fast_sincos_turns() as the AVX code computes it */
+    float z = L->u_x[k], r = sqrtf(fmaxf(1.0f - z * z, 0.0f)), sin_phi, cos_phi;
+    fast_sincos_turns(L->u_y[k], &sin_phi, &cos_phi);
+    vec3 n = AT(n), local = vec3_make(r * cos_phi, r * sin_phi, z);
     vec3 wi = frame_to_world(n, local);
     /* bsdf_eval() of a diffuse surface */
     vec3 f = vec3_dot(n, wi) <= 0.0f || vec3_dot(n, AT(wo)) <= 0.0f ? vec3_splat(0.0f)
@@ -407,15 +411,15 @@ static int bounce_math_lane(vertex_lanes *L, int k)
 
 #if WIDE_HAVE_AVX
 /* The same for the lanes of `lanes`, eight per AVX instruction, operation
- * for operation: sample_uniform_hemisphere() with chapter 08's
- * sincos_turns(), frame_to_world() with vec3_basis(), bsdf_eval(). */
+ * for operation: sample_uniform_hemisphere() with fast_sincos_turns(),
+ * frame_to_world() with vec3_basis(), bsdf_eval(). */
 SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
 {
     const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), sign_bit = _mm256_set1_ps(-0.0f);
     /* sample_uniform_hemisphere: z = u_x, r = sqrt(max(0, 1 - z^2)) */
     __m256 z = _mm256_load_ps(L->u_x);
     __m256 r = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(one, _mm256_mul_ps(z, z)), zero));
-    /* sincos_turns(u_y) */
+    /* fast_sincos_turns(u_y) */
     __m256 u = _mm256_load_ps(L->u_y);
     __m256 q = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(4.0f), u),
                                                                      _mm256_set1_ps(0.5f))));
@@ -574,7 +578,7 @@ static void render_row(row_job *job)
         if (active == 0)
             return; /* every pixel written, so no shadow ray waits */
         flat_hits8 hits;
-        int hit_lanes = flat_closest_hit8_raw(sc->bvh, &L.ray, active, &hits, job->counters);
+        int hit_lanes = flat_closest_hit8_raw(walls_all(sc->bvh), &L.ray, active, &hits, job->counters);
         int material[LANES], front = 0, picked = 0;
 #if WIDE_HAVE_AVX
         if (hit_lanes != 0 && job->avx && !sc->triangles.vertex_normals)
@@ -696,9 +700,8 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
     for (int k = 0; k < pt->scene->material_count; k++)
         pdf_area[k] = pt_scene_emitter_pdf_area(pt->scene, k);
     const pt_scene *sc = pt->scene;
-    const bool occluders_flat =
-        sc->wall_group_count > 0 &&
-        (sc->occluder_triangles.count == 0 || (sc->occluders != NULL && flat_is(sc->occluders)));
+    const accel *occluders = walls_occluders(sc->bvh);
+    const bool occluders_flat = walls_found(sc->bvh) && (occluders == NULL || flat_is(occluders));
     double start = timer_seconds();
 #pragma omp parallel num_threads(threads)
     {

@@ -1,5 +1,5 @@
 /* flat.c -- every triangle, eight at a time (flat.h). */
-#include "06-bvh/flat.h"
+#include "13-production/flat.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -268,12 +268,12 @@ typedef struct {
  * vectors stay eight lanes wide. */
 #define FLAT_TARGET "avx"
 #define FLAT_NAME(name) name##_avx
-#include "06-bvh/flat_avx.inc"
+#include "13-production/flat_avx.inc"
 #undef FLAT_TARGET
 #undef FLAT_NAME
 #define FLAT_TARGET "avx,avx512f,avx512vl"
 #define FLAT_NAME(name) name##_avx512
-#include "06-bvh/flat_avx.inc"
+#include "13-production/flat_avx.inc"
 #undef FLAT_TARGET
 #undef FLAT_NAME
 #endif

@@ -1,0 +1,125 @@
+/* 13-production: chapter 09's path tracer on the production structures --
+ * the flat set or the 4-wide BVH, the walls, eight paths at a time -- and
+ * the table of what each step buys (--bench). */
+#include <stdio.h>
+#include <string.h>
+
+#include "09-path-tracing/experiments.h"
+#include "09-path-tracing/path_tracer.h"
+#include "13-production/path_tracer_wide.h"
+#include "13-production/speed.h"
+#include "13-production/walls.h"
+#include "cli.h"
+#include "effects.h"
+#include "program.h"
+
+typedef struct {
+    cli_choice builtin, walls, rr;
+    const char *obj, *bench_csv;
+    bool bench, one_path;
+    int rr_start;
+} production_flags;
+
+static const char *const ON_OFF[] = {"on", "off", NULL};
+
+/* Eight paths at a time: the lecture rung's image, by another route. */
+static int render_eight_paths(const cli_options *opts, const path_tracer *pt, const camera *cam)
+{
+    char err[1024], counters_path[4096];
+    estimate_image e;
+    render_estimate_wide(pt, cam, opts->spp, opts->seed, opts->threads, &e);
+    counters_path_for_image(opts->out, counters_path, sizeof counters_path);
+    int status = 0;
+    if (!image_write(&e.mean, opts->out, opts->exposure, err, sizeof err) ||
+        !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
+        fprintf(stderr, "13-production: %s\n", err);
+        status = 1;
+    } else if (!opts->quiet) {
+        printf("13-production: %dx%d, %d spp, 8 paths at a time, %d threads, %.3f s -> %s\n", opts->width,
+               opts->height, opts->spp, opts->threads, e.seconds, opts->out);
+        counters_print(stdout, &e.counters, e.seconds);
+        printf("%.3f s per million camera samples\n", e.seconds / ((double)opts->width * opts->height * opts->spp) * 1e6);
+    }
+    estimate_image_free(&e);
+    return status;
+}
+
+/* One image of the scene the flags name, on the production structures. */
+static int render(cli_options *opts, const production_flags *f)
+{
+    pt_scene sc;
+    char err[1024];
+    scene_desc desc;
+    bool from_file = program_load_scene(opts, "13-production", &desc);
+    if (opts->quiet)
+        pt_scene_report_materials(NULL);
+    if (from_file ? !pt_scene_from_desc(&sc, &desc, "13-production", err, sizeof err)
+                  : f->obj != NULL ? !pt_scene_load_obj(&sc, f->obj, err, sizeof err)
+                                   : !pt_scene_build_builtin(&sc, cli_choice_name(&f->builtin))) {
+        fprintf(stderr, "13-production: %s\n", err);
+        scene_desc_free(&desc);
+        return 1;
+    }
+    if (!from_file)
+        pt_scene_describe(&sc, &desc);
+    if (pt_scene_has_no_light(&sc, err, sizeof err))
+        fprintf(stderr, "13-production: warning: %s\n", err);
+    effects_report e = effects_analyse(&desc);
+    scene_desc_free(&desc);
+    bool walls = f->walls.index == 0;
+    pt_scene_use_accel(&sc, walls ? production_scene_accel : production_scene_accel_no_walls, &sc);
+    program_note_accel(sc.bvh->stats.name);
+    path_tracer pt = path_tracer_defaults(&sc);
+    pt.effects = effects_decide(&e, EFFECT_ALL);
+    pt.russian_roulette = (pt_russian_roulette)f->rr.index;
+    pt.rr_start_depth = f->rr_start;
+    camera cam = pt_scene_camera(&sc, opts->width, opts->height);
+    char why[160];
+    int status;
+    if (!f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why)) {
+        status = render_eight_paths(opts, &pt, &cam);
+    } else {
+        if (!f->one_path && !opts->quiet && !opts->explain)
+            printf("13-production: one path at a time (eight at a time: %s)\n", why);
+        status = program_render(opts, "13-production", path_trace_radiance, &pt, &cam, NULL);
+    }
+    pt_scene_free(&sc);
+    return status;
+}
+
+int main(int argc, char **argv)
+{
+    cli_options opts = cli_defaults("build/out/ch13.exr", 512, 512, 16);
+    production_flags f = {{PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {ON_OFF, NULL, 0},
+                          {PT_ROULETTE_NAMES, NULL, RR_FIXED}, NULL, NULL, false, false, 3};
+    const cli_flag extras[] = {
+        {"--builtin", CLI_CHOICE, &f.builtin, NULL, "a scene of chapter 09 (default cornell)", 0, 0},
+        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
+        {"--walls", CLI_CHOICE, &f.walls, NULL, "on (default): shadow rays inside a room skip its walls", 0, 0},
+        {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed (P_RR 0.8, default), throughput, albedo or off", 0,
+         0},
+        {"--rr-start", CLI_INT, &f.rr_start, "N", "--rr throughput or albedo: the first bounce it may end", 0, 1000},
+        {"--one-path", CLI_BOOL, &f.one_path, NULL, "one path at a time even where eight at a time could run", 0, 0},
+        {"--bench", CLI_BOOL, &f.bench, NULL, "the table of what each step buys, on the Cornell box (a square of "
+                                              "--width pixels, --spp samples; best of 5)", 0, 0},
+        {"--bench-csv", CLI_STRING, &f.bench_csv, "FILE", "with --bench: also write the table as CSV", 0, 0},
+    };
+    cli_spec spec = {"13-production",
+                     "What production renderers do: chapter 09's lecture path tracer on the flat set or the\n"
+                     "4-wide BVH, shadow rays that skip a room's walls, eight paths at a time where the scene\n"
+                     "allows (at most 64 diffuse triangles, no spheres or point lights). --bench measures each step.",
+                     extras, sizeof extras / sizeof extras[0]};
+    cli_parse_or_exit(argc, argv, &spec, &opts);
+    opts.jitter = true;
+    if (f.bench_csv != NULL && !f.bench) {
+        fprintf(stderr, "13-production: --bench-csv %s: only with --bench\ntry --help\n", f.bench_csv);
+        return 2;
+    }
+    if (!f.bench)
+        return render(&opts, &f);
+    char err[1024];
+    if (production_speed(opts.width, opts.spp, 5, f.bench_csv, err, sizeof err))
+        return 0;
+    fprintf(stderr, "13-production: %s\n", err);
+    return 1;
+}

@@ -1,0 +1,1543 @@
+/* test_ch13.c -- what production renderers do, held to the lecture's
+ * answers: the 4-wide BVH, its streams and the flat packets against brute
+ * force; the walls against the test of every triangle; offsets eight lanes
+ * at a time against ray.h; eight paths at a time against chapter 09's
+ * lecture rung, statistically. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "06-bvh/bvh.h"
+#include "08-monte-carlo/sampling.h"
+#include "09-path-tracing/experiments.h"
+#include "09-path-tracing/path_tracer.h"
+#include "13-production/bvh4.h"
+#include "13-production/fast_sincos.h"
+#include "13-production/flat.h"
+#include "13-production/path_tracer_wide.h"
+#include "13-production/spawn_avx.h"
+#include "13-production/walls.h"
+#include "render.h"
+#include "scene_file.h"
+#include "stats.h"
+#include "accel_check.h"
+#include "image_check.h"
+#include "test_support.h"
+
+static bool box_contains(aabb outer, aabb inner)
+{
+    return outer.lo.x <= inner.lo.x && outer.lo.y <= inner.lo.y && outer.lo.z <= inner.lo.z &&
+           inner.hi.x <= outer.hi.x && inner.hi.y <= outer.hi.y && inner.hi.z <= outer.hi.z;
+}
+
+static ray ray_from(float ox, float oy, float oz, float dx, float dy, float dz)
+{
+    return ray_make(vec3_make(ox, oy, oz), vec3_make(dx, dy, dz));
+}
+
+static path_tracer tracer(const pt_scene *sc, pt_integrator integrator, pt_russian_roulette rr)
+{
+    path_tracer pt = path_tracer_defaults(sc);
+    pt.integrator = integrator;
+    pt.russian_roulette = rr;
+    return pt;
+}
+
+/* Chapter 09's scene traced through the production structure, walls on or off. */
+static void use_production(pt_scene *sc, bool walls)
+{
+    pt_scene_use_accel(sc, walls ? production_scene_accel : production_scene_accel_no_walls, sc);
+}
+
+/* The walls of a scene (its structure a walls_accel). */
+static bool walls_segment_inside_of(const pt_scene *sc, const ray *r) { return walls_segment_inside(sc->bvh, r); }
+static int walls_segments8_inside_of(const pt_scene *sc, const flat_rays8 *rays, int active)
+{
+    return walls_segments8_inside(sc->bvh, rays, active);
+}
+
+static image render_mean(const path_tracer *pt, int size, int spp, uint64_t seed, ray_counters *counters)
+{
+    camera cam = pt_scene_camera(pt->scene, size, size);
+    image mean = image_make(size, size);
+    render_stats stats;
+    render_job job = {.cam = &cam, .spp = spp, .seed = test_seed(seed), .threads = 2, .quiet = true,
+                      .radiance = path_trace_radiance, .scene = pt, .jitter = true};
+    render_image(&job, &mean, &stats);
+    if (counters != NULL)
+        *counters = stats.counters;
+    return mean;
+}
+
+/* The same image, bit for bit, with the same counters. */
+static void assert_same_render(const path_tracer *a, const path_tracer *b, ray_counters *ca, ray_counters *cb)
+{
+    image ra = render_mean(a, 48, 2, 7, ca), rb = render_mean(b, 48, 2, 7, cb);
+    assert_memory_equal(ra.rgb, rb.rgb, 48 * 48 * 3 * sizeof(float));
+    image_free(&ra);
+    image_free(&rb);
+}
+
+/* A uniform point on triangle t, and the triangle's unit normal. */
+static vec3 point_on_triangle(const triangle *t, pcg32 *rng)
+{
+    float s = sqrtf(pcg32_float(rng)), u = pcg32_float(rng);
+    float b1 = (1.0f - u) * s, b2 = u * s;
+    return vec3_add(vec3_add(vec3_scale(t->p0, 1.0f - b1 - b2), vec3_scale(t->p1, b1)), vec3_scale(t->p2, b2));
+}
+
+static vec3 triangle_normal(const triangle *t)
+{
+    return vec3_normalize(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
+}
+
+static bool spheres_block(const pt_scene *sc, ray r)
+{
+    hit_record hit;
+    for (int i = 0; i < sc->sphere_count; i++) {
+        sphere shape = {sc->spheres[i].center, sc->spheres[i].radius};
+        if (sphere_intersect(&shape, r, &hit))
+            return true;
+    }
+    return false;
+}
+
+/* The answer without the walls shortcut: every triangle, every sphere. */
+static bool occluded_by_everything(const pt_scene *sc, ray r)
+{
+    ray_counters ignored = {0};
+    return (sc->triangles.count > 0 && accel_any_hit(walls_all(sc->bvh), r, &ignored)) || spheres_block(sc, r);
+}
+
+/* The Cornell box (scene 0), or the box with a glass sphere (1), on the
+ * production structure with its walls. */
+static void build_box_scene(pt_scene *sc, int scene)
+{
+    if (scene == 0)
+        pt_scene_build_cornell_box(sc);
+    else
+        pt_scene_build_cornell_box_materials(sc);
+    use_production(sc, true);
+}
+
+/* ==== the 4-wide BVH, streams and flat packets (from chapter 06's structures) ==== */
+/* ---- the 4-wide BVH ------------------------------------------------------------ */
+
+static accel *build_bvh4_sah(const triangle_set *set) { return bvh4_build(set, BVH_SPLIT_SAH); }
+static accel *build_bvh4_median(const triangle_set *set) { return bvh4_build(set, BVH_SPLIT_MEDIAN); }
+static accel *build_bvh4_sah_scalar(const triangle_set *set)
+{
+    accel *a = bvh4_build(set, BVH_SPLIT_SAH);
+    assert_true(bvh4_set_kernel(a, BVH4_KERNEL_SCALAR));
+    return a;
+}
+
+static void test_bvh4_agrees_with_brute_force(void **state)
+{
+    (void)state;
+    accel_check_all(build_bvh4_sah, 15000, "bvh4 sah");
+    accel_check_all(build_bvh4_median, 3000, "bvh4 median");
+}
+
+/* The plain C loops, the path a machine without SSE takes. */
+static void test_bvh4_scalar_kernel_agrees_with_brute_force(void **state)
+{
+    (void)state;
+    accel_check_all(build_bvh4_sah_scalar, 5000, "bvh4 sah, scalar kernel");
+}
+
+/* Walks the 4-wide tree: each child box contains the boxes below it and its
+ * triangles' boxes, empty slots come last and have the empty box, each
+ * triangle is in exactly one lane, with its own P0 and edges. */
+static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth, int *seen, int *leaves,
+                               int *nodes_seen)
+{
+    assert_true(depth < BVH4_STACK_SIZE / (BVH4_WIDTH - 1));
+    if (bvh4_is_leaf(ref)) {
+        int count = bvh4_leaf_triangles(ref), first = bvh4_leaf_first_packet(ref);
+        assert_true(count >= 1);
+        (*leaves)++;
+        for (int i = 0; i < 4 * ((count + 3) / 4); i++) {
+            int lane = 4 * first + i;
+            assert_true(lane < 4 * b->packet_count);
+            const bvh4_packet *p = &b->packets[first + i / 4];
+            int t = bvh4_lane_triangle(p->index[i % 4]);
+            if (i >= count) {
+                assert_int_equal(t, -1);
+                assert_true(p->e1[0][i % 4] == 0.0f && p->e2[2][i % 4] == 0.0f);
+                continue;
+            }
+            assert_true(t >= 0 && t < b->triangle_count);
+            seen[t]++;
+            assert_true(box_contains(box, b->base.set->boxes[t]));
+            const triangle *tri = &b->base.set->triangles[t];
+            assert_true(p->p0[0][i % 4] == tri->p0.x && p->e1[1][i % 4] == tri->p1.y - tri->p0.y &&
+                        p->e2[2][i % 4] == tri->p2.z - tri->p0.z);
+            if (p->index[i % 4] & BVH4_LANE_EXACT) { /* P0 + E1 and P0 + E2 are P1 and P2, bit for bit */
+                vec3 p0 = vec3_make(p->p0[0][i % 4], p->p0[1][i % 4], p->p0[2][i % 4]);
+                vec3 p1 = vec3_add(p0, vec3_make(p->e1[0][i % 4], p->e1[1][i % 4], p->e1[2][i % 4]));
+                vec3 p2 = vec3_add(p0, vec3_make(p->e2[0][i % 4], p->e2[1][i % 4], p->e2[2][i % 4]));
+                assert_memory_equal(&p1, &tri->p1, sizeof p1);
+                assert_memory_equal(&p2, &tri->p2, sizeof p2);
+            }
+        }
+        return;
+    }
+    assert_true(ref < (uint32_t)b->node_count);
+    (*nodes_seen)++;
+    const bvh4_node *node = &b->nodes[ref];
+    bool empty_seen = false;
+    for (int k = 0; k < BVH4_WIDTH; k++) {
+        aabb child = {vec3_make(node->bounds[0][k], node->bounds[1][k], node->bounds[2][k]),
+                      vec3_make(node->bounds[3][k], node->bounds[4][k], node->bounds[5][k])};
+        if (node->child[k] == BVH4_EMPTY) {
+            assert_true(k > 0);
+            assert_true(child.lo.x == INFINITY && child.hi.x == -INFINITY);
+            empty_seen = true;
+            continue;
+        }
+        assert_false(empty_seen); /* children first, empty slots last */
+        assert_true(box_contains(box, child));
+        check_bvh4_subtree(b, node->child[k], child, depth + 1, seen, leaves, nodes_seen);
+    }
+}
+
+static void check_bvh4_structure(const accel *a)
+{
+    const bvh4 *b = (const bvh4 *)a;
+    int n = a->set->count;
+    int *seen = calloc((size_t)n + 1, sizeof *seen);
+    int leaves = 0, nodes_seen = 0;
+    if (b->node_count > 0)
+        check_bvh4_subtree(b, 0, a->set->bounds, 0, seen, &leaves, &nodes_seen);
+    for (int t = 0; t < n; t++)
+        assert_int_equal(seen[t], 1);
+    assert_int_equal(leaves, a->stats.leaves);
+    assert_int_equal(nodes_seen, b->node_count);
+    free(seen);
+}
+
+static void test_bvh4_every_triangle_in_exactly_one_lane_and_boxes_nest(void **state)
+{
+    (void)state;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        for (int split = 0; split < 2; split++) {
+            accel *a = bvh4_build(&set, split ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN);
+            check_bvh4_structure(a);
+            accel_destroy(a);
+        }
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+}
+
+/* More coincident triangles than a leaf reference can count (255): the
+ * leaf is split into a node over smaller leaves with the same box, and the
+ * closest hit is still found, at the same t as brute force's. */
+static void test_bvh4_more_coincident_triangles_than_a_leaf_holds(void **state)
+{
+    (void)state;
+    mesh m;
+    mesh_init(&m);
+    mesh_coincident(&m, 1000);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = bvh4_build(&set, BVH_SPLIT_SAH), *brute = brute_force_build(&set);
+    check_bvh4_structure(a);
+    assert_true(((const bvh4 *)a)->node_count >= 2); /* the root, and the node splitting the leaf */
+    for (int kernel = 0; kernel < 2; kernel++) {
+        bvh4_set_kernel(a, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+        pcg32 rng = pcg32_for_pixel(6, 4);
+        int hits = 0;
+        for (int i = 0; i < 2000; i++) {
+            ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+            hit_record want, got;
+            ray_counters counters = {0};
+            bool want_hit = accel_closest_hit(brute, r, &want, &counters);
+            assert_int_equal(accel_closest_hit(a, r, &got, &counters), want_hit);
+            assert_int_equal(accel_any_hit(a, r, &counters), want_hit);
+            if (want_hit) {
+                assert_true(got.t == want.t); /* any of the coincident triangles: they tie */
+                hits++;
+            }
+        }
+        assert_true(hits > 100);
+    }
+    accel_destroy(brute);
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* A mesh of the differential test, its triangle set and its 4-wide SAH BVH. */
+static accel *bvh4_of_mesh_kind(accel_check_mesh kind, mesh *m, triangle_set *set)
+{
+    accel_check_make_mesh(m, kind);
+    triangle_set_from_mesh(set, m);
+    return bvh4_build(set, BVH_SPLIT_SAH);
+}
+
+/* The hit record of a lane marked BVH4_LANE_EXACT is made from the packet's
+ * P0, E1, E2 instead of the set's triangle: it must be the very record the
+ * set's triangle gives (point, normals, material, bit for bit), on every
+ * mesh, and both kinds of lane must occur, so that both paths are checked. */
+static void test_bvh4_hit_records_equal_the_sets(void **state)
+{
+    (void)state;
+    long exact_hits = 0, other_hits = 0;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        triangle_set set;
+        accel *a = bvh4_of_mesh_kind((accel_check_mesh)kind, &m, &set);
+        const bvh4 *b = (const bvh4 *)a;
+        bool *exact = calloc((size_t)set.count + 1, sizeof *exact);
+        for (int lane = 0; lane < 4 * b->packet_count; lane++) {
+            int32_t index = b->packets[lane / 4].index[lane % 4];
+            if (index >= 0)
+                exact[bvh4_lane_triangle(index)] = (index & BVH4_LANE_EXACT) != 0;
+        }
+        pcg32 rng = pcg32_for_pixel(6, 45 + kind);
+        for (int i = 0; i < 4000; i++) {
+            ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+            hit_record got, want;
+            ray_counters counters = {0};
+            if (!accel_closest_hit(a, r, &got, &counters))
+                continue;
+            triangle_set_fill_hit(&set, got.shape_id, r, got.t, got.u, got.v, &want);
+            if (exact[got.shape_id])
+                exact_hits++;
+            else
+                other_hits++;
+            assert_memory_equal(&got.point, &want.point, sizeof want.point);
+            assert_memory_equal(&got.normal_geometric, &want.normal_geometric, sizeof want.normal_geometric);
+            assert_memory_equal(&got.normal_shading, &want.normal_shading, sizeof want.normal_shading);
+            assert_int_equal(got.material_id, want.material_id);
+            assert_int_equal(got.front_face, want.front_face);
+        }
+        free(exact);
+        accel_destroy(a);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    print_message("bvh4 hit records: %ld from exact lanes, %ld from the set's triangles\n", exact_hits, other_hits);
+    assert_true(exact_hits > 0 && other_hits > 0);
+}
+
+/* The SSE and the scalar kernel: the same hits, the same floats, the same
+ * counters, ray by ray, on the tori field. */
+static void test_bvh4_kernels_give_identical_answers(void **state)
+{
+    (void)state;
+    if (!BVH4_HAVE_SSE)
+        skip();
+    mesh m;
+    accel_check_make_mesh(&m, MESH_TORI_FIELD);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+    pcg32 rng = pcg32_for_pixel(6, 44);
+    int hits = 0;
+    for (int i = 0; i < 20000; i++) {
+        ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+        hit_record sse_hit, scalar_hit;
+        ray_counters sse = {0}, scalar = {0};
+        assert_true(bvh4_set_kernel(a, BVH4_KERNEL_SSE));
+        bool sse_found = accel_closest_hit(a, r, &sse_hit, &sse);
+        bool sse_any = accel_any_hit(a, r, &sse);
+        bvh4_set_kernel(a, BVH4_KERNEL_SCALAR);
+        bool scalar_found = accel_closest_hit(a, r, &scalar_hit, &scalar);
+        bool scalar_any = accel_any_hit(a, r, &scalar);
+        assert_int_equal(sse_found, scalar_found);
+        assert_int_equal(sse_any, scalar_any);
+        assert_int_equal(sse.box_tests, scalar.box_tests);
+        assert_int_equal(sse.primitive_tests, scalar.primitive_tests);
+        if (sse_found) {
+            hits++;
+            assert_true(sse_hit.t == scalar_hit.t && sse_hit.u == scalar_hit.u && sse_hit.v == scalar_hit.v);
+            assert_int_equal(sse_hit.shape_id, scalar_hit.shape_id);
+        }
+    }
+    assert_true(hits > 5000);
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* The slab test of chapter 03, four boxes at once, both kernels: the IEEE
+ * cases of test_slab_test_matches_chapter_03 (zero direction components of
+ * both signs, origins exactly on a plane: 0 * inf = NaN, flat boxes), each
+ * lane the same answer and t_enter as aabb_slab_test(), bit for bit. */
+static void test_bvh4_slab_test_matches_chapter_03(void **state)
+{
+    (void)state;
+    pcg32 rng = pcg32_for_pixel(606, 4);
+    int nan_cases = 0, hits = 0;
+    for (int i = 0; i < 50000; i++) {
+        bvh4_node node;
+        memset(&node, 0, sizeof node);
+        aabb boxes[BVH4_WIDTH];
+        for (int k = 0; k < BVH4_WIDTH; k++) {
+            vec3 a = vec3_make(pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2);
+            vec3 b = vec3_make(pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2, pcg32_float(&rng) * 4 - 2);
+            boxes[k] = (aabb){vec3_min(a, b), vec3_max(a, b)};
+            if (pcg32_bounded(&rng, 5) == 0)
+                boxes[k].hi.y = boxes[k].lo.y; /* flat */
+            for (int axis = 0; axis < 3; axis++) {
+                node.bounds[axis][k] = vec3_axis(boxes[k].lo, axis);
+                node.bounds[3 + axis][k] = vec3_axis(boxes[k].hi, axis);
+            }
+        }
+        /* the origin on a plane of box 0 or 1 (alternately), direction
+         * components zero of both signs */
+        const aabb *on_box = &boxes[i % 2];
+        float o[3], d[3];
+        for (int k = 0; k < 3; k++) {
+            o[k] = pcg32_float(&rng) * 6 - 3;
+            d[k] = pcg32_float(&rng) * 2 - 1;
+            uint32_t pick = pcg32_bounded(&rng, 8);
+            if (pick == 0)
+                d[k] = 0.0f;
+            else if (pick == 1)
+                d[k] = -0.0f;
+            uint32_t on = pcg32_bounded(&rng, 6);
+            if (on == 0)
+                o[k] = vec3_axis(on_box->lo, k);
+            else if (on == 1)
+                o[k] = vec3_axis(on_box->hi, k);
+            nan_cases += d[k] == 0.0f && on < 2;
+        }
+        ray r = ray_from(o[0], o[1], o[2], d[0], d[1], d[2]);
+        r.t_max = (i % 3 == 0) ? INFINITY : 5.0f;
+        slab_ray sr = slab_ray_make(r);
+        for (int kernel = 0; kernel < 2; kernel++) {
+            float enter4[BVH4_WIDTH];
+            int mask = bvh4_slab_test(&node, r, r.t_min, r.t_max, enter4, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+            for (int k = 0; k < BVH4_WIDTH; k++) {
+                float enter03 = 0.0f, exit03 = 0.0f;
+                bool hit03 = aabb_slab_test(&boxes[k], &sr, r.t_min, r.t_max, &enter03, &exit03);
+                bool hit4 = mask >> k & 1;
+                if (hit03 != hit4 || (hit03 && enter03 != enter4[k]))
+                    fail_msg("ray %d box %d kernel %d: chapter 03 %d t_enter %g, bvh4 %d t_enter %g", i, k, kernel,
+                             hit03, (double)enter03, hit4, (double)enter4[k]);
+                hits += hit03 && kernel == 0;
+            }
+        }
+        /* an empty slot's box is missed by every ray */
+        bvh4_node empty;
+        for (int k = 0; k < BVH4_WIDTH; k++)
+            for (int axis = 0; axis < 3; axis++) {
+                empty.bounds[axis][k] = INFINITY;
+                empty.bounds[3 + axis][k] = -INFINITY;
+            }
+        float enter4[BVH4_WIDTH];
+        assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SSE), 0);
+        assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SCALAR), 0);
+    }
+    print_message("bvh4 slab tests: %d boxes, %d hit, %d axes with 0 * inf\n", 50000 * BVH4_WIDTH, hits, nan_cases);
+    assert_true(hits > 10000 && nan_cases > 3000);
+}
+
+/* The 4-lane Moller-Trumbore, both kernels, against chapter 01's
+ * triangle_intersect_barycentric(): the same hit or miss, and the same t,
+ * b1, b2 bit for bit, on rays aimed at vertices and edges (the near-ties)
+ * and with degenerate lanes (zero area, and the empty lane). */
+static void test_bvh4_triangle_test_matches_chapter_01(void **state)
+{
+    (void)state;
+    pcg32 rng = pcg32_for_pixel(607, 4);
+    int hits = 0;
+    for (int i = 0; i < 50000; i++) {
+        triangle tris[4];
+        bvh4_packet packet;
+        memset(&packet, 0, sizeof packet);
+        for (int k = 0; k < 4; k++) {
+            vec3 p[3];
+            for (int j = 0; j < 3; j++)
+                p[j] = vec3_make(pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1);
+            if (k == 3 && i % 4 == 0)
+                p[2] = p[1]; /* zero area */
+            tris[k] = (triangle){p[0], p[1], p[2]};
+            vec3 e1 = vec3_sub(p[1], p[0]), e2 = vec3_sub(p[2], p[0]);
+            for (int axis = 0; axis < 3; axis++) {
+                packet.p0[axis][k] = vec3_axis(p[0], axis);
+                packet.e1[axis][k] = vec3_axis(e1, axis);
+                packet.e2[axis][k] = vec3_axis(e2, axis);
+            }
+        }
+        bool empty_lane = i % 4 == 1; /* lane 3 left as an empty lane */
+        if (empty_lane)
+            for (int axis = 0; axis < 3; axis++)
+                packet.p0[axis][3] = packet.e1[axis][3] = packet.e2[axis][3] = 0.0f;
+        /* aim at a vertex or an edge midpoint of lane i % 3's triangle */
+        const triangle *aim = &tris[i % 3];
+        vec3 target = i % 2 ? aim->p1 : vec3_scale(vec3_add(aim->p0, aim->p2), 0.5f);
+        vec3 o = vec3_make(pcg32_float(&rng) * 6 - 3, pcg32_float(&rng) * 6 - 3, pcg32_float(&rng) * 6 - 3);
+        ray r = ray_make(o, vec3_sub(target, o));
+        float t_max = i % 5 == 0 ? 0.9f : INFINITY;
+        for (int kernel = 0; kernel < 2; kernel++) {
+            float t[4] = {0}, b1[4] = {0}, b2[4] = {0};
+            int mask = bvh4_triangle_test(&packet, r, t_max, t, b1, b2, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+            for (int k = 0; k < 4; k++) {
+                float want_t = 0.0f, want_b1 = 0.0f, want_b2 = 0.0f;
+                bool want = !(k == 3 && empty_lane) &&
+                            triangle_intersect_barycentric(&tris[k], &r, &want_t, &want_b1, &want_b2) &&
+                            want_t < t_max;
+                bool got = mask >> k & 1;
+                if (want != got || (want && (t[k] != want_t || b1[k] != want_b1 || b2[k] != want_b2)))
+                    fail_msg("case %d lane %d kernel %d: chapter 01 %d t %a, bvh4 %d t %a", i, k, kernel, want,
+                             (double)want_t, got, (double)t[k]);
+                hits += want && kernel == 0;
+            }
+        }
+    }
+    print_message("bvh4 triangle tests: 200000 lanes, %d hit\n", hits);
+    assert_true(hits > 20000);
+}
+
+static void test_bvh4_empty_set_builds_and_misses(void **state)
+{
+    (void)state;
+    mesh m;
+    mesh_init(&m);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = bvh4_build(&set, BVH_SPLIT_SAH);
+    hit_record hit;
+    ray_counters counters = {0};
+    assert_false(accel_closest_hit(a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
+    assert_false(accel_any_hit(a, ray_from(0, 0, 0, 0, 0, 1), &counters));
+    /* and a stream of rays: every one misses, none is left unanswered */
+    ray rays[3] = {ray_from(0, 0, 0, 0, 0, 1), ray_from(1, 2, 3, -1, 0, 0), ray_from(0, 0, 0, 1, 1, 1)};
+    hit_record hits[3];
+    bool found[3] = {true, true, true}, any[3] = {true, true, true};
+    bvh4_closest_hit_stream(a, rays, 3, hits, found, &counters);
+    bvh4_any_hit_stream(a, rays, 3, any, &counters);
+    for (int i = 0; i < 3; i++)
+        assert_false(found[i] || any[i]);
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* ---- no tree: every triangle, eight at a time (flat.h) -------------------------- */
+
+/* Rays on which `a` answers differently from chapter 03's brute force,
+ * which tests the triangles one by one in order: found or not, and the hit
+ * record bit for bit (t, barycentrics, point, normal, triangle, material;
+ * of equal t the lower index wins in both), the triangles tested, and any
+ * hit. Flat runs the same arithmetic, so nothing may differ, not even on
+ * the coincident and degenerate meshes where ties are everywhere. */
+static long flat_mismatches(const accel *a, const accel *brute, const mesh *m, const triangle_set *set, int rays,
+                            uint64_t seed, long *hits)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 606);
+    long wrong = 0;
+    for (int i = 0; i < rays; i++) {
+        ray r = accel_check_ray(m, set->bounds.lo, set->bounds.hi, &rng, i);
+        hit_record want, got;
+        memset(&want, 0, sizeof want);
+        memset(&got, 0, sizeof got);
+        ray_counters c_want = {0}, c_got = {0};
+        bool want_hit = accel_closest_hit(brute, r, &want, &c_want);
+        bool got_hit = accel_closest_hit(a, r, &got, &c_got);
+        bool same = want_hit == got_hit && c_want.primitive_tests == c_got.primitive_tests &&
+                    accel_any_hit(a, r, &c_got) == want_hit;
+        if (same && want_hit)
+            same = memcmp(&want, &got, sizeof want) == 0;
+        *hits += want_hit;
+        wrong += !same;
+    }
+    return wrong;
+}
+
+static void test_flat_equals_brute_force_bit_for_bit(void **state)
+{
+    (void)state;
+    const flat_kernel kernels[] = {FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR};
+    const char *names[] = {"avx with avx-512 registers", "avx", "sse", "scalar"};
+    int kernels_run = 0;
+    for (int k = 0; k < 4; k++) {
+        long hits = 0, wrong = 0;
+        bool available = flat_kernel_runs(kernels[k]);
+        for (int kind = 0; kind < MESH_KIND_COUNT && available; kind++) {
+            mesh m;
+            triangle_set set;
+            accel_check_make_mesh(&m, (accel_check_mesh)kind);
+            triangle_set_from_mesh(&set, &m);
+            accel *brute = brute_force_build(&set), *a = flat_build(&set);
+            assert_true(flat_set_kernel(a, kernels[k]));
+            /* the big meshes cost brute force's time twice: fewer rays */
+            if (available)
+                wrong += flat_mismatches(a, brute, &m, &set, set.count > 2000 ? 300 : 3000, 60 + (uint64_t)kind, &hits);
+            accel_destroy(a);
+            accel_destroy(brute);
+            triangle_set_free(&set);
+            mesh_free(&m);
+        }
+        if (!available) {
+            print_message("flat: the %s kernel does not run here\n", names[k]);
+            continue;
+        }
+        kernels_run++;
+        print_message("flat, %s kernel: %ld rays hit, %ld answers differ from brute force\n", names[k], hits, wrong);
+        assert_true(hits > 2000);
+        assert_int_equal(wrong, 0);
+    }
+    assert_true(kernels_run >= 1);
+}
+
+/* The twins: two ways to get a flat set wrong, each caught. The last block
+ * dropped (the count of blocks rounded down, a classic), and the triangle
+ * numbers of lanes 0 and 1 swapped in every block (a hit reported for the
+ * wrong triangle). */
+static void test_flat_twins_are_caught(void **state)
+{
+    (void)state;
+    mesh m;
+    triangle_set set;
+    /* the first mesh with a partial last block to drop */
+    for (int kind = 0;; kind++) {
+        assert_true(kind < MESH_KIND_COUNT);
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set_from_mesh(&set, &m);
+        if (set.count % FLAT_LANES != 0 && set.count < 2000)
+            break;
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    accel *brute = brute_force_build(&set), *a = flat_build(&set);
+    flat *f = (flat *)a;
+    long hits = 0;
+    assert_int_equal(flat_mismatches(a, brute, &m, &set, 3000, 61, &hits), 0);
+    f->block_count--;
+    long dropped = flat_mismatches(a, brute, &m, &set, 3000, 61, &hits);
+    f->block_count++;
+    for (int i = 0; i < f->block_count; i++) {
+        int32_t first = f->blocks[i].index[0];
+        f->blocks[i].index[0] = f->blocks[i].index[1];
+        f->blocks[i].index[1] = first;
+    }
+    long swapped = flat_mismatches(a, brute, &m, &set, 3000, 61, &hits);
+    print_message("flat twins: last block dropped %ld, two lanes swapped %ld of 3000 rays wrong\n", dropped, swapped);
+    assert_true(dropped > 0 && swapped > 0);
+    accel_destroy(a);
+    accel_destroy(brute);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* Eight rays at once (flat_closest_hit8, flat_any_hit8): each active lane
+ * gets the single ray's answer, bit for bit, and idle lanes are left alone.
+ * `shift` > 0 is the twin: lane k is handed ray k + shift's answer. */
+static long packet_mismatches(flat_kernel kernel, int shift, long *compared)
+{
+    long wrong = 0;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        triangle_set set;
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set_from_mesh(&set, &m);
+        if (set.count > 2000) { /* brute force on a big mesh: slow, and nothing new */
+            triangle_set_free(&set);
+            mesh_free(&m);
+            continue;
+        }
+        accel *a = flat_build(&set);
+        assert_true(flat_set_kernel(a, kernel));
+        pcg32 rng = pcg32_for_pixel(62, (uint64_t)kind);
+        for (int packet = 0; packet < 300; packet++) {
+            ray rays[FLAT_LANES];
+            for (int k = 0; k < FLAT_LANES; k++)
+                rays[k] = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, packet * FLAT_LANES + k);
+            int active = packet % 3 == 0 ? (int)(pcg32_next(&rng) & 0xFF) : 0xFF;
+            hit_record hits[FLAT_LANES];
+            bool found[FLAT_LANES], any[FLAT_LANES];
+            memset(hits, 0, sizeof hits);
+            for (int k = 0; k < FLAT_LANES; k++)
+                found[k] = any[k] = true; /* idle lanes must keep these */
+            ray_counters c = {0};
+            flat_closest_hit8(a, rays, active, hits, found, &c);
+            flat_any_hit8(a, rays, active, any, &c);
+            for (int k = 0; k < FLAT_LANES; k++) {
+                if (!((active >> k) & 1)) {
+                    wrong += !(found[k] && any[k]);
+                    continue;
+                }
+                const ray *r = &rays[(k + shift) % FLAT_LANES];
+                hit_record want;
+                memset(&want, 0, sizeof want);
+                bool want_hit = accel_closest_hit(a, *r, &want, &c);
+                bool same = found[k] == want_hit && any[k] == accel_any_hit(a, *r, &c);
+                if (same && want_hit)
+                    same = memcmp(&hits[k], &want, sizeof want) == 0;
+                wrong += !same;
+                (*compared)++;
+            }
+        }
+        accel_destroy(a);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    return wrong;
+}
+
+static void test_flat_packets_give_each_ray_its_own_answer(void **state)
+{
+    (void)state;
+    const flat_kernel kernels[] = {FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE};
+    const char *names[] = {"avx with avx-512 registers", "avx", "sse: one ray at a time"};
+    int run = 0;
+    for (int k = 0; k < 3; k++) {
+        if (!flat_kernel_runs(kernels[k])) {
+            print_message("flat packets: the %s kernel does not run here\n", names[k]);
+            continue;
+        }
+        long compared = 0, twin_compared = 0;
+        long wrong = packet_mismatches(kernels[k], 0, &compared);
+        long twin = packet_mismatches(kernels[k], 1, &twin_compared);
+        print_message("flat packets (%s): %ld rays, %ld wrong; each lane given its neighbour's answer: %ld wrong\n",
+                      names[k], compared, wrong, twin);
+        assert_true(compared > 5000);
+        assert_int_equal(wrong, 0);
+        assert_true(twin > compared / 4);
+        run++;
+    }
+    assert_true(run >= 1);
+}
+
+static void test_flat_empty_set_builds_and_misses(void **state)
+{
+    (void)state;
+    mesh m;
+    mesh_init(&m);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    accel *a = flat_build(&set);
+    hit_record hit;
+    ray_counters counters = {0};
+    const flat_kernel kernels[] = {FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR};
+    for (int k = 0; k < 4; k++) {
+        if (!flat_set_kernel(a, kernels[k]))
+            continue;
+        assert_false(accel_closest_hit(a, ray_from(0, 0, 0, 0, 0, 1), &hit, &counters));
+        assert_false(accel_any_hit(a, ray_from(0, 0, 0, 0, 0, 1), &counters));
+    }
+    assert_int_equal(counters.primitive_tests, 0);
+    accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* ---- streams: rays taking turns ------------------------------------------------- */
+
+/* Rays of one stream whose answers differ from what the same rays get one
+ * at a time: found or not, and the whole hit record (t, barycentrics, point,
+ * normals, triangle, material) bit for bit; any hit the same. */
+static long stream_mismatches(const accel *a, const ray *rays, int count, const hit_record *hits,
+                              const bool *found, const bool *any)
+{
+    long mismatches = 0;
+    for (int i = 0; i < count; i++) {
+        hit_record want;
+        ray_counters c = {0};
+        bool want_found = accel_closest_hit(a, rays[i], &want, &c);
+        bool same = want_found == found[i] && accel_any_hit(a, rays[i], &c) == any[i];
+        if (same && want_found)
+            same = want.t == hits[i].t && want.u == hits[i].u && want.v == hits[i].v &&
+                   want.shape_id == hits[i].shape_id && want.material_id == hits[i].material_id &&
+                   memcmp(&want.point, &hits[i].point, sizeof want.point) == 0 &&
+                   memcmp(&want.normal_shading, &hits[i].normal_shading, sizeof want.normal_shading) == 0;
+        mismatches += !same;
+    }
+    return mismatches;
+}
+
+/* A stream hands each ray what it would get alone, whatever the stream's
+ * length (0, fewer rays than lanes, not a multiple of them, thousands), on
+ * every mesh of the differential test and with both kernels. Half the rays
+ * are cut short before their hit, so neighbours in the stream have
+ * different answers, and a lane that kept the previous ray's closest hit
+ * (or its t_max) would be caught. The counters are those of the rays one at
+ * a time, summed. Twin: the same answers handed on to the next ray, the
+ * mistake a stream can make that a single ray cannot, are caught. */
+static void test_bvh4_stream_gives_each_ray_its_own_answer(void **state)
+{
+    (void)state;
+    enum { RAYS = 3001 };
+    static const int lengths[] = {0, 1, BVH4_STREAM_LANES - 1, BVH4_STREAM_LANES + 3, RAYS};
+    ray *rays = calloc(RAYS, sizeof *rays);
+    hit_record *hits = calloc(RAYS, sizeof *hits);
+    bool *found = calloc(RAYS, sizeof *found), *any = calloc(RAYS, sizeof *any);
+    long shifted_mismatches = 0, hit_count = 0;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        triangle_set set;
+        accel *a = bvh4_of_mesh_kind((accel_check_mesh)kind, &m, &set);
+        pcg32 rng = pcg32_for_pixel(6, 60 + kind);
+        for (int i = 0; i < RAYS; i++) {
+            rays[i] = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+            hit_record h;
+            ray_counters c = {0};
+            if (i % 2 == 1 && accel_closest_hit(a, rays[i], &h, &c))
+                rays[i].t_max = h.t * 0.5f;
+        }
+        for (int kernel = 0; kernel < 2; kernel++) {
+            if (!bvh4_set_kernel(a, kernel == 0 ? BVH4_KERNEL_SSE : BVH4_KERNEL_SCALAR))
+                continue;
+            for (size_t l = 0; l < sizeof lengths / sizeof lengths[0]; l++) {
+                int n = lengths[l];
+                ray_counters stream = {0}, alone = {0};
+                bvh4_closest_hit_stream(a, rays, n, hits, found, &stream);
+                bvh4_any_hit_stream(a, rays, n, any, &stream);
+                for (int i = 0; i < n; i++) {
+                    hit_record h;
+                    accel_closest_hit(a, rays[i], &h, &alone);
+                    accel_any_hit(a, rays[i], &alone);
+                    hit_count += found[i];
+                }
+                if (stream_mismatches(a, rays, n, hits, found, any) != 0)
+                    fail_msg("%s, kernel %d, stream of %d: answers differ from single rays",
+                             accel_check_mesh_names[kind], kernel, n);
+                assert_int_equal(stream.box_tests, alone.box_tests);
+                assert_int_equal(stream.primitive_tests, alone.primitive_tests);
+            }
+            /* the twin: every answer handed to the next ray */
+            shifted_mismatches += stream_mismatches(a, rays + 1, RAYS - 1, hits, found, any);
+        }
+        accel_destroy(a);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    print_message("streams: %ld hits; answers handed to the next ray: %ld wrong\n", hit_count, shifted_mismatches);
+    assert_true(hit_count > 1000);
+    assert_true(shifted_mismatches > 1000);
+    free(rays);
+    free(hits);
+    free(found);
+    free(any);
+}
+
+
+/* ==== walls, offsets and eight paths at a time (from chapter 09) ==== */
+static ray random_segment(const pt_scene *sc, bool on_surfaces, pcg32 *rng)
+{
+    if (on_surfaces) {
+        const triangle *a = &sc->triangles.triangles[pcg32_bounded(rng, (uint32_t)sc->triangles.count)];
+        const triangle *b = &sc->triangles.triangles[pcg32_bounded(rng, (uint32_t)sc->triangles.count)];
+        return ray_spawn_to(point_on_triangle(a, rng), triangle_normal(a), point_on_triangle(b, rng),
+                            triangle_normal(b));
+    }
+    vec3 lo = sc->triangles.bounds.lo, hi = sc->triangles.bounds.hi, size = vec3_sub(hi, lo);
+    vec3 p[2];
+    for (int k = 0; k < 2; k++)
+        p[k] = vec3_make(lo.x - 0.5f * size.x + 2.0f * size.x * pcg32_float(rng),
+                         lo.y - 0.5f * size.y + 2.0f * size.y * pcg32_float(rng),
+                         lo.z - 0.5f * size.z + 2.0f * size.z * pcg32_float(rng));
+    ray r = ray_make(p[0], vec3_sub(p[1], p[0]));
+    r.t_max = 1.0f;
+    return r;
+}
+
+/* The Cornell box's room is five faces with the whole box in front of
+ * them: walls. The light (the ceiling is behind it) and the blocks (each
+ * has the room behind its faces) are not. Four faces are flat and axis-
+ * aligned, one plane each; the red wall's published corners are not in
+ * one plane, so its two triangles have a plane each. Rendered with the
+ * walls and without them, the image is the same bit for bit. */
+static void test_the_cornell_box_has_ten_walls_that_change_no_image(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    use_production(&sc, true);
+    /* The red wall's quad: is its fourth corner off the plane of the
+     * first three? */
+    vec3 a = {552.8f, 0, 0}, b = {549.6f, 0, 559.2f}, c = {556, 548.8f, 559.2f}, d = {556, 548.8f, 0};
+    double volume = (double)vec3_dot(vec3_cross(vec3_sub(b, a), vec3_sub(c, a)), vec3_sub(d, a));
+    int expected_planes = 4 + (volume != 0.0 ? 2 : 1);
+    assert_int_equal(walls_triangle_count(sc.bvh), 10);
+    assert_int_equal(walls_plane_count(sc.bvh), expected_planes);
+    const triangle_set *occluders = walls_occluders(sc.bvh)->set;
+    assert_int_equal(occluders->count, sc.triangles.count - 10);
+    /* The room's quads are added first (pt_scene_add_cornell_room): the
+     * occluders are exactly the triangles after them, in order. */
+    for (int i = 0; i < occluders->count; i++)
+        assert_memory_equal(&occluders->triangles[i], &sc.triangles.triangles[10 + i], sizeof(triangle));
+
+    /* The walls change no answer: the render with them and without them
+     * is the same, bit for bit; with them nearly every shadow ray skips
+     * them, without them none does. */
+    {
+        path_tracer with = tracer(&sc, PT_LECTURE, RR_FIXED);
+        pt_scene without_walls;
+        pt_scene_build_cornell_box(&without_walls);
+        use_production(&without_walls, false);
+        path_tracer without = tracer(&without_walls, PT_LECTURE, RR_FIXED);
+        ray_counters c_with, c_without;
+        assert_same_render(&with, &without, &c_with, &c_without);
+        assert_true(c_with.shadow_rays_inside_walls >= c_with.shadow_rays * 99 / 100);
+        assert_int_equal(c_without.shadow_rays_inside_walls, 0);
+        assert_true(c_without.primitive_tests > c_with.primitive_tests);
+        pt_scene_free(&without_walls);
+    }
+    pt_scene_free(&sc);
+
+    /* A closed sphere of triangles has every face a wall, but hundreds of
+     * small ones do not pay (scene_pt.c): none are used. */
+    pt_scene_build_furnace(&sc, 0.5f, 0.5f);
+    use_production(&sc, true);
+    assert_int_equal(walls_triangle_count(sc.bvh), 0);
+    assert_false(walls_found(sc.bvh));
+    pt_scene_free(&sc);
+}
+
+/* The Cornell box (scene 0), or the box with a glass sphere (1). */
+static void test_walls_skipped_only_where_they_cannot_block(void **state)
+{
+    (void)state;
+    enum { SEGMENTS = 20000 };
+    for (int scene = 0; scene < 2; scene++) {
+        pt_scene sc;
+        build_box_scene(&sc, scene);
+        pcg32 rng = pcg32_for_pixel(test_seed(91), (uint64_t)scene);
+        for (int kind = 0; kind < 2; kind++) {
+            bool on_surfaces = kind == 0;
+            ray_counters c = {0};
+            int wrong = 0, wrong_twin = 0, blocked = 0;
+            for (int i = 0; i < SEGMENTS; i++) {
+                ray r = random_segment(&sc, on_surfaces, &rng);
+                bool truth = occluded_by_everything(&sc, r);
+                blocked += truth;
+                wrong += pt_scene_occluded(&sc, r, &c) != truth;
+                /* the twin: is the start alone in front of every wall? */
+                ray start_only = r;
+                start_only.t_max = r.t_min;
+                ray_counters ignored = {0};
+                bool twin = walls_segment_inside(sc.bvh, &start_only)
+                                ? accel_any_hit(walls_occluders(sc.bvh), r, &ignored) || spheres_block(&sc, r)
+                                : truth;
+                wrong_twin += twin != truth;
+            }
+            assert_int_equal(wrong, 0);
+            assert_true(blocked > 0 && blocked < SEGMENTS);
+            if (on_surfaces) {
+                /* every surface point, moved off its surface into the room,
+                 * is in front of every wall: nearly all rays skip them */
+                assert_true(c.shadow_rays_inside_walls >= (uint64_t)(0.99 * SEGMENTS));
+            } else {
+                assert_true(c.shadow_rays_inside_walls > 0 && c.shadow_rays_inside_walls < SEGMENTS);
+                assert_true(wrong_twin > 0);
+            }
+        }
+        pt_scene_free(&sc);
+    }
+}
+
+/* pt_scene_visible() is the shadow ray ray_spawn_to() builds, tested: from
+ * random surface points to random points on other surfaces (as light
+ * samples) and to points in the room (as point lights, normal 0), it
+ * answers as the whole tree and every sphere do on that ray, and counts
+ * one shadow ray per call. The twin, a shadow ray that ends exactly on the
+ * target's surface instead of just before it (the far end not offset),
+ * is often blocked by that surface itself (2,337 and 2,851 of the 15,000
+ * pairs on surfaces answer wrongly), and the same comparison catches it. */
+static long double exact_distance(const triangle *t, vec3 p)
+{
+    long double e1[3] = {(long double)t->p1.x - t->p0.x, (long double)t->p1.y - t->p0.y, (long double)t->p1.z - t->p0.z};
+    long double e2[3] = {(long double)t->p2.x - t->p0.x, (long double)t->p2.y - t->p0.y, (long double)t->p2.z - t->p0.z};
+    long double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    long double q[3] = {(long double)p.x - t->p0.x, (long double)p.y - t->p0.y, (long double)p.z - t->p0.z};
+    return (n[0] * q[0] + n[1] * q[1] + n[2] * q[2]) / sqrtl(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+/* How many points near the walls does the float test call "in front of
+ * every wall" when, exactly, one is on or behind a wall? */
+static int points_misjudged(const pt_scene *sc, int points, uint64_t seed, int *judged_inside)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    int misjudged = 0;
+    *judged_inside = 0;
+    for (int i = 0; i < points; i++) {
+        /* a point on a random wall, moved along its normal by +-2^-k of
+         * the room's size, k from 6 to 40 (log-uniform): from well inside
+         * to far below a float's resolution, both sides */
+        const triangle *wall = &sc->triangles.triangles[pcg32_bounded(&rng, 10)];
+        float step = ldexpf(560.0f, -6 - (int)pcg32_bounded(&rng, 35)) * (pcg32_float(&rng) < 0.5f ? -1.0f : 1.0f);
+        vec3 p = vec3_add(point_on_triangle(wall, &rng), vec3_scale(triangle_normal(wall), step));
+        ray at_p = ray_make(p, vec3_make(0, 1, 0));
+        at_p.t_max = 0.0f; /* both ends at p */
+        if (!walls_segment_inside_of(sc, &at_p))
+            continue;
+        (*judged_inside)++;
+        bool behind = false;
+        for (int w = 0; w < 10; w++)
+            behind |= exact_distance(&sc->triangles.triangles[w], p) <= 0.0L;
+        misjudged += behind;
+    }
+    return misjudged;
+}
+
+/* The float test of a point against the walls never says "in front" of a
+ * point that is exactly on or behind one: its slack bounds the rounding
+ * (scene_pt.c). Points at every distance from 2^-6 to 2^-40 of the room's
+ * size, on both sides of every wall. And it is not so cautious that it
+ * refuses the rays it is for: a point 2^-16 in front of the wall x = 0 (the
+ * least ray.h moves a ray's end off a surface) is in front. The twin: with
+ * no slack, points just behind the red wall, whose normal was rounded to
+ * float, are called in front. */
+static void test_wall_test_is_never_fooled_by_rounding(void **state)
+{
+    (void)state;
+    enum { POINTS = 200000 };
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    use_production(&sc, true);
+    int inside = 0;
+    assert_int_equal(points_misjudged(&sc, POINTS, test_seed(92), &inside), 0);
+    assert_true(inside > POINTS / 4); /* about half the points are in front of all walls */
+
+    ray near_green = ray_make(vec3_make(0x1.0p-16f, 274.0f, 280.0f), vec3_make(0, 1, 0));
+    near_green.t_max = 0.0f;
+    assert_true(walls_segment_inside_of(&sc, &near_green));
+    near_green.origin.x = 0.0f; /* on the wall: not in front */
+    assert_false(walls_segment_inside_of(&sc, &near_green));
+
+    /* the twin */
+    walls_drop_slack(sc.bvh);
+    assert_true(points_misjudged(&sc, POINTS, test_seed(92), &inside) > 0);
+    pt_scene_free(&sc);
+}
+
+/* A point on a random wall of the Cornell box, moved along its normal by
+ * +-2^-k of the room's size, k from 6 to 40: where the wall test's answer
+ * turns on its rounding. */
+static vec3 point_near_a_wall(const pt_scene *sc, pcg32 *rng)
+{
+    const triangle *wall = &sc->triangles.triangles[pcg32_bounded(rng, 10)];
+    float step = ldexpf(560.0f, -6 - (int)pcg32_bounded(rng, 35)) * (pcg32_float(rng) < 0.5f ? -1.0f : 1.0f);
+    return vec3_add(point_on_triangle(wall, rng), vec3_scale(triangle_normal(wall), step));
+}
+
+/* Lanes of eight-ray packets whose answer from
+ * walls_segments8_inside_of() is not walls_segment_inside_of()
+ * of `truth` for the same ray alone: segments between two points near the
+ * walls (as a shadow ray runs), some of them infinite or starting past
+ * their origin, in packets with random lanes on. Counts the lanes found
+ * inside. */
+static long wall_lanes_misjudged(const pt_scene *sc, const pt_scene *truth, uint64_t seed, long *inside)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    long wrong = 0;
+    *inside = 0;
+    for (int packet = 0; packet < 20000; packet++) {
+        flat_rays8 rays;
+        ray alone[FLAT_LANES];
+        for (int k = 0; k < FLAT_LANES; k++) {
+            vec3 from = point_near_a_wall(sc, &rng), to = point_near_a_wall(sc, &rng);
+            alone[k] = ray_make(from, vec3_sub(to, from));
+            alone[k].t_max = 1.0f;
+            uint32_t kind = pcg32_bounded(&rng, 8);
+            if (kind == 0)
+                alone[k].t_max = INFINITY;
+            else if (kind == 1)
+                alone[k].t_min = pcg32_float(&rng);
+            flat_rays8_set(&rays, k, alone[k]);
+        }
+        int active = (int)pcg32_bounded(&rng, 256);
+        int got = walls_segments8_inside_of(sc, &rays, active);
+        for (int k = 0; k < FLAT_LANES; k++) {
+            bool expected = ((active >> k) & 1) && walls_segment_inside_of(truth, &alone[k]);
+            wrong += ((got >> k) & 1) != expected;
+            *inside += expected;
+        }
+    }
+    return wrong;
+}
+
+/* Eight rays' wall test (the wide renderer's shadow packets) gives each
+ * lane the answer of the one-ray test, bit for bit: the same operations
+ * in the same order. Its twin, the eight-ray test without the slack that
+ * bounds the rounding, differs on these segments. */
+static void test_eight_rays_wall_test_is_the_one_ray_test(void **state)
+{
+    (void)state;
+    pt_scene sc, sloppy;
+    pt_scene_build_cornell_box(&sc);
+    use_production(&sc, true);
+    pt_scene_build_cornell_box(&sloppy);
+    use_production(&sloppy, true);
+    long inside = 0;
+    long wrong = wall_lanes_misjudged(&sc, &sc, test_seed(93), &inside);
+    print_message("eight rays' wall test: %ld of %d lanes differ from the one-ray test, %ld inside\n", wrong,
+                  20000 * FLAT_LANES, inside);
+    assert_int_equal(wrong, 0);
+    /* both answers are common: each end is in front of all walls about
+     * half the time, a lane is on half the time (5 946 inside seen) */
+    assert_true(inside > 2000);
+    assert_true(inside < 20000 * FLAT_LANES / 4);
+    walls_drop_slack(sloppy.bvh);
+    long twin = wall_lanes_misjudged(&sloppy, &sc, test_seed(93), &inside);
+    print_message("twin, without the slack: %ld lanes differ\n", twin);
+    assert_true(twin > 0);
+    pt_scene_free(&sc);
+    pt_scene_free(&sloppy);
+}
+
+/* ---- eight rays past the boxes of flat.c's groups ---------------------------------- */
+
+/* How far outside its triangle's box a hit point o + t d may lie and still
+ * be a true hit: rounding puts it a few ulps of the room (about 1e-4 mm)
+ * away, unless the ray nearly lies in the triangle's plane, where t itself
+ * means little; a meaningless "hit" of a ray in the plane lies hundreds of
+ * millimetres away. A thousandth of the scene's size is far from both. */
+static const float TRUE_HIT_REACH = 1e-3f;
+/* The lanes that may differ from the ray alone are the rays in a
+ * triangle's plane within rounding: rare (3 of 28 079 seen). A box test
+ * that went wrong on more than that share would be hiding behind them. */
+static const double IN_PLANE_SHARE_MAX = 1e-3;
+/* The boxes must skip something: at most this share of the triangle tests
+ * a packet would make with no boxes (74 % seen). */
+static const double TESTED_SHARE_MAX = 0.9;
+/* The twin must be caught plainly: more lanes than this lose a true hit
+ * (1 113 seen). */
+static const long TWIN_LANES_MIN = 100;
+
+/* Is point p inside triangle `index`'s box, grown by TRUE_HIT_REACH of the
+ * scene's size? */
+static bool inside_triangle_box(const triangle_set *set, int index, vec3 p)
+{
+    aabb box = set->boxes[index];
+    float grow = TRUE_HIT_REACH * vec3_max_component(aabb_extent(set->bounds));
+    const float at[3] = {p.x, p.y, p.z}, lo[3] = {box.lo.x, box.lo.y, box.lo.z}, hi[3] = {box.hi.x, box.hi.y, box.hi.z};
+    for (int axis = 0; axis < 3; axis++)
+        if (!(at[axis] >= lo[axis] - grow && at[axis] <= hi[axis] + grow))
+            return false;
+    return true;
+}
+
+/* Packets whose rays run along the Cornell box's triangles, where a box
+ * test and the triangle test are likeliest to disagree: each ray passes
+ * through a random point of a triangle, in the triangle's plane or tilted
+ * out of it by 10^-7 to 10^-2 radians, starting on the triangle or up to
+ * two room sizes back along its line, its origin on the plane or 2^-16 off
+ * it. Each lane is compared with the ray alone (flat.c, "Groups").
+ *
+ * A ray in a triangle's plane, within rounding, is where Moller-Trumbore
+ * means nothing: its determinant is rounding noise, and it may report a
+ * "hit" hundreds of units from the triangle. A packet whose rays all miss
+ * that triangle's box skips it and gives the true nearest hit instead. So
+ * a lane may differ from the ray alone only there: where the lone ray's
+ * hit point o + t d lies outside its triangle's box. Returns
+ * the lanes that differ otherwise (*differ counts all that differ); counts
+ * the hits and the triangles the packets tested. */
+static long wall_packets_mismatched(const pt_scene *sc, uint64_t seed, long *differ, long *hits, uint64_t *tested,
+                                    long *lanes)
+{
+    static const float tilts[] = {0.0f, 1e-7f, 1e-6f, 1e-5f, 1e-4f, 1e-3f, 1e-2f};
+    static const float backs[] = {0.0f, 1.0f, 10.0f, 100.0f, 1000.0f};
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    const triangle_set *set = &sc->triangles;
+    long wrong = 0;
+    for (int packet = 0; packet < 4000; packet++) {
+        ray rays[FLAT_LANES];
+        for (int k = 0; k < FLAT_LANES; k++) {
+            const triangle *tri = &set->triangles[pcg32_bounded(&rng, (uint32_t)set->count)];
+            float a = pcg32_float(&rng), b = pcg32_float(&rng);
+            if (a + b > 1.0f) {
+                a = 1.0f - a;
+                b = 1.0f - b;
+            }
+            vec3 e1 = vec3_sub(tri->p1, tri->p0), e2 = vec3_sub(tri->p2, tri->p0);
+            vec3 point = vec3_add(tri->p0, vec3_add(vec3_scale(e1, a), vec3_scale(e2, b)));
+            vec3 normal = triangle_unit_normal(tri);
+            float angle = 6.2831853f * pcg32_float(&rng);
+            vec3 along = vec3_normalize(vec3_add(vec3_scale(vec3_normalize(e1), cosf(angle)),
+                                                 vec3_scale(vec3_normalize(vec3_cross(normal, e1)), sinf(angle))));
+            float tilt = tilts[pcg32_bounded(&rng, 7)] * (pcg32_next(&rng) & 1 ? 1.0f : -1.0f);
+            vec3 direction = vec3_normalize(vec3_add(along, vec3_scale(normal, tilt)));
+            vec3 origin = vec3_sub(point, vec3_scale(direction, backs[pcg32_bounded(&rng, 5)]));
+            uint32_t off = pcg32_bounded(&rng, 3);
+            if (off > 0)
+                origin = vec3_add(origin, vec3_scale(normal, off == 1 ? 0x1.0p-16f : -0x1.0p-16f));
+            rays[k] = ray_make(origin, direction);
+        }
+        int active = packet % 4 == 0 ? (int)(pcg32_next(&rng) & 0xFF) : 0xFF;
+        hit_record got[FLAT_LANES];
+        bool found[FLAT_LANES], any[FLAT_LANES];
+        memset(got, 0, sizeof got);
+        ray_counters c = {0};
+        flat_closest_hit8(walls_all(sc->bvh), rays, active, got, found, &c);
+        flat_any_hit8(walls_all(sc->bvh), rays, active, any, &c);
+        *tested += c.primitive_tests;
+        for (int k = 0; k < FLAT_LANES; k++) {
+            if (!((active >> k) & 1))
+                continue;
+            hit_record want;
+            memset(&want, 0, sizeof want);
+            ray_counters alone = {0};
+            bool want_hit = accel_closest_hit(walls_all(sc->bvh), rays[k], &want, &alone);
+            bool want_any = accel_any_hit(walls_all(sc->bvh), rays[k], &alone);
+            bool same = found[k] == want_hit && any[k] == want_any;
+            if (same && want_hit)
+                same = memcmp(&got[k], &want, sizeof want) == 0;
+            *differ += !same;
+            *hits += want_hit;
+            (*lanes)++;
+            /* differing is allowed only where the lone ray's hit is outside its box */
+            if (!same && !(want_hit && !inside_triangle_box(set, want.shape_id, ray_at(rays[k], want.t))))
+                wrong++;
+        }
+    }
+    return wrong;
+}
+
+/* The packets skip the groups none of their rays meet, and still give each
+ * ray its own answer wherever that answer is a point of its triangle's box.
+ * They test fewer than all 32 triangles per ray (the boxes do skip). The
+ * twin: boxes shrunk by twice their padding, so that they no longer hold
+ * their triangles, lose true hits. */
+static void test_packets_along_the_walls_match_single_rays(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    use_production(&sc, true);
+    assert_true(flat_is(walls_all(sc.bvh)));
+    flat *f = (flat *)walls_all(sc.bvh);
+    if (!flat_kernel_runs(FLAT_KERNEL_AVX)) {
+        pt_scene_free(&sc);
+        skip(); /* the packets are rays one at a time: nothing to compare */
+    }
+    long hits = 0, lanes = 0, differ = 0;
+    uint64_t tested = 0;
+    long wrong = wall_packets_mismatched(&sc, test_seed(94), &differ, &hits, &tested, &lanes);
+    /* closest and any hit per lane: 2 * 32 triangles per lane if nothing were skipped */
+    double share = (double)tested / (2.0 * (double)lanes * (double)sc.triangles.count);
+    print_message("packets along the walls: %ld lanes, %ld hits; %ld differ from one ray alone, %ld of them where "
+                  "the lone ray's hit is inside its box; %d groups, %.0f %% of the triangles tested\n",
+                  lanes, hits, differ, wrong, f->group_count, 100.0 * share);
+    assert_int_equal(wrong, 0);
+    assert_true(differ < IN_PLANE_SHARE_MAX * (double)lanes);
+    assert_true(hits > lanes / 2); /* most rays are aimed at a triangle: the test is not about misses */
+    assert_true(f->group_count > 1 && share < TESTED_SHARE_MAX);
+
+    /* the twin: each box shrunk by twice GROUP_PAD of the scene's size */
+    aabb s = sc.triangles.bounds;
+    vec3 extent = aabb_extent(s), far = vec3_max(vec3_abs(s.lo), vec3_abs(s.hi));
+    float shrink = 0x1.0p-9f * (vec3_max_component(extent) + vec3_max_component(far));
+    for (int g = 0; g < f->group_count; g++)
+        for (int axis = 0; axis < 3; axis++) {
+            f->groups[g].lo[axis] += shrink;
+            f->groups[g].hi[axis] -= shrink;
+        }
+    long twin_differ = 0, twin = wall_packets_mismatched(&sc, test_seed(94), &twin_differ, &hits, &tested, &lanes);
+    print_message("boxes shrunk inside their triangles: %ld lanes differ where the lone ray's hit is inside its box\n",
+                  twin);
+    assert_true(twin > TWIN_LANES_MIN);
+    pt_scene_free(&sc);
+}
+
+/* ---- eight paths at a time (path_tracer_wide.c) ----------------------------------- */
+
+/* Eight paths at a time is the lecture rung by another route: its image
+ * must agree with chapter 09's (the lecture rung, on chapter 06's BVH) in
+ * distribution, for the lecture's roulette and the three deeper ones the
+ * speed table compares (pbrt's, smallpt's, none), by the image-level
+ * statistics of tests/image_check.h. Its own guarantees hold bit for bit:
+ * the same image at 1 and 2 threads, and with the lanes' arithmetic in AVX
+ * or lane by lane. The twin: the wide renderer with every albedo 10 % low
+ * is caught by the same comparison. */
+enum { WIDE_SIZE = 12, WIDE_SPP = 512, WIDE_IMAGES = 5 };
+
+static image_check wide_against_chapter_09(const path_tracer *wide_pt, const path_tracer *lecture_pt, uint64_t seed)
+{
+    camera cam = pt_scene_camera(wide_pt->scene, WIDE_SIZE, WIDE_SIZE);
+    estimate_image wide, lecture = render_estimate(lecture_pt, &cam, WIDE_SPP, test_seed(seed), 2);
+    assert_true(render_estimate_wide(wide_pt, &cam, WIDE_SPP, test_seed(seed + 1), 2, &wide));
+    image_check c = check_agree(&wide.mean, &wide.standard_error, &lecture.mean, &lecture.standard_error);
+    estimate_image_free(&wide);
+    estimate_image_free(&lecture);
+    return c;
+}
+
+static void test_eight_paths_agree_with_chapter_09(void **state)
+{
+    (void)state;
+    pt_scene prod, lecture;
+    pt_scene_build_cornell_box(&prod);
+    use_production(&prod, true);
+    pt_scene_build_cornell_box(&lecture); /* chapter 06's BVH, as chapter 09 renders */
+    static const struct {
+        pt_russian_roulette rr;
+        int start, max_depth;
+        const char *label;
+    } roulettes[] = {{RR_FIXED, 0, 64, "P_RR 0.8"},
+                     {RR_THROUGHPUT, RR_START_PBRT, 64, "throughput from 5"},
+                     {RR_ALBEDO, RR_START_SMALLPT, 64, "albedo from 6"},
+                     {RR_OFF, 0, 50, "none, depth 50"}};
+    for (int k = 0; k < 4; k++) {
+        path_tracer w = tracer(&prod, PT_LECTURE, roulettes[k].rr), l = tracer(&lecture, PT_LECTURE, roulettes[k].rr);
+        w.max_depth = l.max_depth = roulettes[k].max_depth;
+        if (roulettes[k].start > 0)
+            w.rr_start_depth = l.rr_start_depth = roulettes[k].start;
+        assert_image_check(wide_against_chapter_09(&w, &l, 131 + 2 * (uint64_t)k), WIDE_IMAGES, roulettes[k].label);
+    }
+    /* the twin: every albedo 10 % low, eight paths at a time */
+    for (int m = 0; m < prod.material_count; m++)
+        prod.materials[m].albedo = vec3_scale(prod.materials[m].albedo, 0.90f);
+    path_tracer w = tracer(&prod, PT_LECTURE, RR_FIXED), l = tracer(&lecture, PT_LECTURE, RR_FIXED);
+    image_check twin = wide_against_chapter_09(&w, &l, 141);
+    print_message("twin, albedo 10 %% low: p = %.3g (image mean z = %.1f, chi-square %.0f on %d)\n", twin.p, twin.z,
+                  twin.chi2, twin.dof);
+    assert_true(twin.p < image_check_alpha(WIDE_IMAGES));
+    pt_scene_free(&prod);
+    pt_scene_free(&lecture);
+}
+
+static void test_eight_paths_same_bits_for_threads_and_lanes(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    use_production(&sc, true);
+    camera cam = pt_scene_camera(&sc, 24, 24);
+    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+    estimate_image one, two, lanes;
+    assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 1, &one));
+    assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 2, &two));
+    path_tracer_wide_use_avx(false); /* the lanes' arithmetic one lane at a time */
+    assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 1, &lanes));
+    path_tracer_wide_use_avx(true);
+    assert_memory_equal(one.mean.rgb, two.mean.rgb, sizeof(float) * 3 * 24 * 24);
+    assert_memory_equal(one.standard_error.rgb, two.standard_error.rgb, sizeof(float) * 3 * 24 * 24);
+    assert_memory_equal(one.mean.rgb, lanes.mean.rgb, sizeof(float) * 3 * 24 * 24);
+    /* and what it refuses: another rung, or a scene on chapter 06's BVH */
+    pt.integrator = PT_MIS;
+    assert_false(path_tracer_wide_supported(&pt, NULL, 0));
+    pt_scene lecture;
+    pt_scene_build_cornell_box(&lecture);
+    path_tracer on_bvh = tracer(&lecture, PT_LECTURE, RR_FIXED);
+    assert_false(path_tracer_wide_supported(&on_bvh, NULL, 0));
+    estimate_image_free(&one);
+    estimate_image_free(&two);
+    estimate_image_free(&lanes);
+    pt_scene_free(&lecture);
+    pt_scene_free(&sc);
+}
+
+/* ---- spawn_avx.h: ray.h's offsets, eight lanes at a time -----------------
+ * ray_spawn8() and ray_spawn_to8() against ray_spawn() and ray_spawn_to(),
+ * bit for bit, on points whose coordinates are the hard cases of ray.h's
+ * offset: exactly 0 and -0, just under and at 1/32 (where the fixed offset
+ * hands over to ulps), small and large, of either sign; normals facing
+ * either way. The twin is a reference that forgets to pull the shadow ray's
+ * far end off the light: the same comparison must see it. */
+#if SPAWN_HAVE_AVX2
+/* The coordinates where ray.h's offset changes how it works (these are
+ * inputs, not tolerances): zero of both signs, where the fixed 2^-16 is
+ * used; the largest float below ORIGIN_NEAR_ZERO (1/32) and 1/32 itself,
+ * either side of the hand-over to ulps; a small and a unit value of each
+ * sign; the Cornell box's middle and its ceiling's height; and 5e6, whose
+ * ulp is 0.5, so 256 of them are 128 units. */
+static const float SPAWN_HARD_COORDINATES[] = {0.0f,    -0.0f, 0x1.fffffep-6f, -0x1.fffffep-6f, 0x1.0p-5f,
+                                               -0x1.0p-5f, 1e-3f, -1e-3f, 1.0f, -1.0f,
+                                               278.0f,  -278.0f, 548.8f, 5e6f, -5e6f};
+enum { SPAWN_HARD_COUNT = sizeof SPAWN_HARD_COORDINATES / sizeof SPAWN_HARD_COORDINATES[0] };
+
+/* One of the hard coordinates three times in four, else anywhere in the
+ * Cornell box's span around 0. */
+static float hard_coordinate(pcg32 *rng)
+{
+    uint32_t pick = pcg32_next(rng) % 20;
+    if (pick < SPAWN_HARD_COUNT)
+        return SPAWN_HARD_COORDINATES[pick];
+    return (pcg32_float(rng) - 0.5f) * 1200.0f;
+}
+
+static vec3 hard_point(pcg32 *rng) { return vec3_make(hard_coordinate(rng), hard_coordinate(rng), hard_coordinate(rng)); }
+
+static vec3 random_direction(pcg32 *rng)
+{
+    return sample_uniform_sphere(vec2_make(pcg32_float(rng), pcg32_float(rng)));
+}
+
+static bool same_bits(vec3 a, vec3 b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+static ray spawn_to_without_far_end(vec3 point, vec3 n, vec3 target, vec3 target_normal)
+{
+    (void)target_normal;
+    vec3 side = vec3_dot(vec3_sub(target, point), n) < 0.0f ? vec3_neg(n) : n;
+    vec3 origin = ray_offset_origin(point, side);
+    return ray_make(origin, vec3_sub(target, origin));
+}
+
+typedef ray (*spawn_to_fn)(vec3 point, vec3 n, vec3 target, vec3 target_normal);
+
+/* Rays whose spawned origin or shadow ray differs from the reference's in
+ * any bit, of `batches` batches of eight. */
+SPAWN_TARGET static long spawns_apart(spawn_to_fn reference, int batches, uint64_t seed)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    long apart = 0;
+    for (int b = 0; b < batches; b++) {
+        _Alignas(32) float in[5][3][8];
+        vec3 v[5][8];
+        for (int k = 0; k < 8; k++) {
+            v[0][k] = hard_point(&rng);       /* point */
+            v[1][k] = random_direction(&rng); /* its normal */
+            v[2][k] = random_direction(&rng); /* a direction to leave in */
+            v[3][k] = hard_point(&rng);       /* a target */
+            v[4][k] = random_direction(&rng); /* its normal */
+            for (int a = 0; a < 5; a++) {
+                in[a][0][k] = v[a][k].x;
+                in[a][1][k] = v[a][k].y;
+                in[a][2][k] = v[a][k].z;
+            }
+        }
+        __m256 m[5][3], origin[3], shadow_origin[3], shadow_direction[3];
+        for (int a = 0; a < 5; a++)
+            for (int c = 0; c < 3; c++)
+                m[a][c] = _mm256_load_ps(in[a][c]);
+        ray_spawn8(m[0], m[1], m[2], origin);
+        ray_spawn_to8(m[0], m[1], m[3], m[4], shadow_origin, shadow_direction);
+        _Alignas(32) float out[3][3][8];
+        for (int c = 0; c < 3; c++) {
+            _mm256_store_ps(out[0][c], origin[c]);
+            _mm256_store_ps(out[1][c], shadow_origin[c]);
+            _mm256_store_ps(out[2][c], shadow_direction[c]);
+        }
+        for (int k = 0; k < 8; k++) {
+            ray spawned = ray_spawn(v[0][k], v[1][k], v[2][k]);
+            ray shadow = reference(v[0][k], v[1][k], v[3][k], v[4][k]);
+            bool same = same_bits(spawned.origin, vec3_make(out[0][0][k], out[0][1][k], out[0][2][k])) &&
+                        same_bits(shadow.origin, vec3_make(out[1][0][k], out[1][1][k], out[1][2][k])) &&
+                        same_bits(shadow.direction, vec3_make(out[2][0][k], out[2][1][k], out[2][2][k]));
+            apart += !same;
+        }
+    }
+    _mm256_zeroupper();
+    return apart;
+}
+#endif
+
+static void test_spawn_avx_is_ray_h_bit_for_bit(void **state)
+{
+    (void)state;
+#if SPAWN_HAVE_AVX2
+    if (!__builtin_cpu_supports("avx2")) {
+        print_message("no AVX2 here: the vector code never runs, so nothing to compare\n");
+        skip();
+    }
+    enum { BATCHES = 20000 };
+    long apart = spawns_apart(ray_spawn_to, BATCHES, test_seed(93));
+    print_message("spawn_avx.h: %ld of %d rays differ from ray.h's in any bit\n", apart, 8 * BATCHES);
+    assert_int_equal(apart, 0);
+    long twin = spawns_apart(spawn_to_without_far_end, BATCHES, test_seed(93));
+    print_message("twin (the far end not pulled off the light): %ld of %d differ\n", twin, 8 * BATCHES);
+    assert_true(twin > 8 * BATCHES / 2);
+#else
+    print_message("not an x86-64 build: the vector code is not compiled, so nothing to compare\n");
+    skip();
+#endif
+}
+
+
+/* ---- sin and cos of an angle in turns ----------------------------------------
+ * fast_sincos_turns(u) against sin and cos of 2 pi u in double: within
+ * FAST_SINCOS_TURNS_ULPS units in the last place (the fit's 2.1, measured
+ * over every float in [0, 1), plus rounding headroom), on every 101st float
+ * in [0, 1], and exactly 0 and +-1 at the quarter turns. The twin negates
+ * the cosine in the third quarter and must fail the same check. */
+enum { FAST_SINCOS_TURNS_ULPS = 3 };
+
+typedef void (*sincos_fn)(float u, float *s, float *c);
+
+static void sincos_quarter_two_wrong(float u, float *s, float *c)
+{
+    fast_sincos_turns(u, s, c);
+    if (u > 0.375f && u < 0.625f)
+        *c = -*c;
+}
+
+/* in units of the float spacing at the exact value */
+static double ulps_from(float got, double exact)
+{
+    double spacing = nextafterf(fabsf((float)exact), INFINITY) - fabsf((float)exact);
+    return fabs((double)got - exact) / spacing;
+}
+
+/* The largest error in ulps over the floats checked; 1e30 for a wrong
+ * quarter turn. */
+static double sincos_worst_ulps(sincos_fn f)
+{
+    double worst = 0.0;
+    for (uint32_t bits = 0; bits <= 0x3f800000u; bits += 101) {
+        float u;
+        memcpy(&u, &bits, sizeof u);
+        float s, c;
+        f(u, &s, &c);
+        double turns = 4.0 * u;
+        if (turns == floor(turns)) { /* a quarter turn: exact values */
+            int q = (int)turns;
+            float want_s = q == 1 ? 1.0f : q == 3 ? -1.0f : 0.0f;
+            float want_c = q == 0 || q == 4 ? 1.0f : q == 2 ? -1.0f : 0.0f;
+            if (s != want_s || c != want_c)
+                return 1e30;
+            continue;
+        }
+        worst = fmax(worst, fmax(ulps_from(s, sin(2.0 * PI * u)), ulps_from(c, cos(2.0 * PI * u))));
+    }
+    return worst;
+}
+
+static void test_fast_sincos_turns_is_within_a_few_ulps(void **state)
+{
+    (void)state;
+    double worst = sincos_worst_ulps(fast_sincos_turns);
+    print_message("fast_sincos_turns: at most %.2f ulp from sin and cos of 2 pi u\n", worst);
+    assert_true(worst <= FAST_SINCOS_TURNS_ULPS);
+    double twin = sincos_worst_ulps(sincos_quarter_two_wrong);
+    print_message("twin (cosine negated in the third quarter): %.3g ulp\n", twin);
+    assert_true(twin > FAST_SINCOS_TURNS_ULPS);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_bvh4_agrees_with_brute_force),
+        cmocka_unit_test(test_bvh4_scalar_kernel_agrees_with_brute_force),
+        cmocka_unit_test(test_bvh4_every_triangle_in_exactly_one_lane_and_boxes_nest),
+        cmocka_unit_test(test_bvh4_more_coincident_triangles_than_a_leaf_holds),
+        cmocka_unit_test(test_bvh4_hit_records_equal_the_sets),
+        cmocka_unit_test(test_bvh4_kernels_give_identical_answers),
+        cmocka_unit_test(test_bvh4_slab_test_matches_chapter_03),
+        cmocka_unit_test(test_bvh4_triangle_test_matches_chapter_01),
+        cmocka_unit_test(test_bvh4_empty_set_builds_and_misses),
+        cmocka_unit_test(test_flat_equals_brute_force_bit_for_bit),
+        cmocka_unit_test(test_flat_twins_are_caught),
+        cmocka_unit_test(test_flat_packets_give_each_ray_its_own_answer),
+        cmocka_unit_test(test_flat_empty_set_builds_and_misses),
+        cmocka_unit_test(test_bvh4_stream_gives_each_ray_its_own_answer),
+        cmocka_unit_test(test_the_cornell_box_has_ten_walls_that_change_no_image),
+        cmocka_unit_test(test_walls_skipped_only_where_they_cannot_block),
+        cmocka_unit_test(test_wall_test_is_never_fooled_by_rounding),
+        cmocka_unit_test(test_eight_rays_wall_test_is_the_one_ray_test),
+        cmocka_unit_test(test_packets_along_the_walls_match_single_rays),
+        cmocka_unit_test(test_eight_paths_agree_with_chapter_09),
+        cmocka_unit_test(test_eight_paths_same_bits_for_threads_and_lanes),
+        cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
+        cmocka_unit_test(test_fast_sincos_turns_is_within_a_few_ulps),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,53 @@
+# make bench: the acceleration structures timed beside Embree, and the path
+# tracer, also on Embree's kernels (figures and CSV under build/data/).
+
+.PHONY: bench bench-deps
+
+# The Embree harness lives in ../shared/anchors (beside this repository); it
+# is built here, never copied in. Embree itself comes from Debian.
+SHARED ?= ../shared
+BENCH_SIZES ?= 1024 10240 102400 1048576
+BENCH_REPS ?= 3
+comma := ,
+empty :=
+space := $(empty) $(empty)
+
+$(BUILD)/bin/bench_accel: $(BUILD)/obj/tests/bench_accel.o $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+
+$(BUILD)/bin/embree_bench: $(SHARED)/anchors/embree_bench.c | bench-deps
+	@mkdir -p $(dir $@)
+	$(CC) -O2 -std=c99 -Wall $< -o $@ -lembree3 -lm
+
+# Chapter 09's path tracer with its rays traced by Embree beside ours
+# (tests/bench_pt_embree.c): built only here, and only where Embree's
+# header is installed (`make bench-deps`).
+EMBREE_HEADER := $(wildcard /usr/include/embree3/rtcore.h)
+$(BUILD)/bin/bench_pt_embree: $(BUILD)/obj/tests/bench_pt_embree.o $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -lembree3 -o $@
+
+# Embree and ours, one after the other, on the same machine in one run; then
+# the path tracer's seconds per million camera samples (chapter 09), and the
+# same path tracer on Embree's kernels.
+bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/09-path-tracing
+	@mkdir -p $(BUILD)/data
+	@if [ -f $(SHARED)/anchors/embree_bench.c ]; then \
+	  $(MAKE) --no-print-directory $(BUILD)/bin/embree_bench && \
+	  rm -f $(BUILD)/data/embree.txt && \
+	  for n in $(BENCH_SIZES); do \
+	    $(BUILD)/bin/embree_bench embree $$n medium 1 $(BENCH_REPS) | tee -a $(BUILD)/data/embree.txt; \
+	  done; \
+	else echo "no $(SHARED)/anchors/embree_bench.c: timing without Embree"; fi
+	$(BUILD)/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS) \
+	  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv $(if $(wildcard $(SHARED)/anchors/embree_bench.c),--embree $(BUILD)/data/embree.txt)
+	$(BUILD)/bin/09-path-tracing --bench --width 256 --spp 16 --bench-csv $(BUILD)/data/ch09_speed.csv --out $(BUILD)/data/ch09.exr
+	@if [ -n "$(EMBREE_HEADER)" ]; then \
+	  $(MAKE) --no-print-directory $(BUILD)/bin/bench_pt_embree && \
+	  echo "$(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data" && \
+	  $(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data; \
+	else echo "no Embree header (make bench-deps): the path tracer on Embree skipped"; fi
+
+bench-deps:
+	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="libembree-dev"

@@ -1,0 +1,123 @@
+# make test and the other checks: the sanitizers, the random tests over many
+# seeds, fused multiply-add, the 8-wide BVH, valgrind, fuzzing.
+
+.PHONY: test sanitize test-seeds fp-contract-leaks test-bvh8 valgrind valgrind-deps fuzz fuzz-deps
+
+# Runs every suite even when one fails, then the checks that are scripts:
+# the programs fed bad input (tests/bad_input.sh) and the hard-case catalog
+# naming only tests that exist (tests/check_catalog.sh). One summary line.
+test: $(TESTS) $(PROGRAMS)
+	@passed=0; failed=0; bad=""; \
+	for t in $(TESTS); do \
+	  echo "== $$t"; \
+	  $$t > $$t.log 2>&1; status=$$?; cat $$t.log; \
+	  p=$$(sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' $$t.log | tail -1); \
+	  f=$$(sed -n 's/^\[  FAILED  \] \([0-9]*\) test.*/\1/p' $$t.log | tail -1); \
+	  passed=$$((passed + $${p:-0})); failed=$$((failed + $${f:-0})); \
+	  if [ $$status -ne 0 ]; then bad="$$bad $$t"; [ -n "$$f" ] || failed=$$((failed + 1)); fi; \
+	done; \
+	for s in $(TEST_SCRIPTS); do \
+	  echo "== $$s"; \
+	  if $$s $(BUILD); then passed=$$((passed + 1)); else failed=$$((failed + 1)); bad="$$bad $$s"; fi; \
+	done; \
+	echo; echo "$$passed passed, $$failed failed"; \
+	if [ -n "$$bad" ]; then echo "failing suites:$$bad"; exit 1; fi
+
+# Checks that are shell scripts, each given the build directory.
+TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh)
+
+# Every random test (those that take their seed from test_seed() in
+# tests/test_support.h) over SEEDS other seeds, JOBS at a time: how many of
+# the runs fail, per test. Not part of `make test` (about 40 minutes on
+# two busy cores for 200 seeds).
+SEEDS ?= 200
+JOBS ?= 2
+SEED_TESTS ?= .
+test-seeds: $(TESTS)
+	@tests/test_seeds.sh $(BUILD) $(SEEDS) $(JOBS) '$(SEED_TESTS)'
+
+# The same suites built with AddressSanitizer and UndefinedBehaviorSanitizer,
+# in a build directory of their own. Any report fails the run.
+sanitize:
+	@$(MAKE) --no-print-directory test BUILD=$(BUILD)/sanitize OPT=-O1 \
+	  SANITIZE_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
+
+# What -ffp-contract=off protects: chapter 01's leak test built once more with
+# fused multiply-add allowed and available (-mfma -ffp-contract=fast), in a
+# build directory of its own. The watertight test's edge functions a*b - c*d
+# then round differently for the two triangles of an edge, and rays leak.
+# Reports the counts; its exit status is the leak test's (expected to fail).
+fp-contract-leaks:
+	@grep -q -w fma /proc/cpuinfo || { echo "this CPU has no FMA instructions: nothing to show"; exit 0; }
+	@$(MAKE) --no-print-directory BUILD=$(BUILD)/fp-contract CFLAGS="$(OPT) -g -mfma -ffp-contract=fast" \
+	  $(BUILD)/fp-contract/tests/test_ch01 >/dev/null
+	@echo "chapter 01 built with -mfma -ffp-contract=fast:"
+	@TEST_FILTER='test_watertight_triangles*' $(BUILD)/fp-contract/tests/test_ch01 | grep -E 'leak|OK|FAILED'
+
+# The wide BVH with 8 children per node instead of 4 (BVH4_WIDTH, bvh4.h):
+# its suite, BVH8_SUITE (the chapter that has bvh4.h), built in a build
+# directory of its own, so that the other width keeps working. Compare
+# speeds with $(BUILD)/bvh8/bin/bench_accel beside $(BUILD)/bin/bench_accel.
+BVH8_SUITE ?= test_ch06
+test-bvh8:
+	@$(MAKE) --no-print-directory BUILD=$(BUILD)/bvh8 CFLAGS="$(OPT) -g -DBVH4_WIDTH=8" \
+	  $(BUILD)/bvh8/tests/$(BVH8_SUITE) $(BUILD)/bvh8/bin/bench_accel >/dev/null
+	@$(BUILD)/bvh8/tests/$(BVH8_SUITE)
+
+# One small render of every chapter program under valgrind: no invalid reads
+# or writes, no definite leaks. (OpenMP's thread pool keeps its stacks until
+# exit, which valgrind calls "possibly lost"; those are not ours.)
+# Each chapter's own flags keep its run short: small procedural meshes (04-06),
+# few furnace bounces (07), the quick experiment (08), one sample (09).
+VALGRIND_ARGS_01 :=
+VALGRIND_ARGS_02 :=
+VALGRIND_ARGS_03 :=
+VALGRIND_ARGS_04 := --triangles 1024 --probe-rays 100
+VALGRIND_ARGS_05 := --triangles 1024
+VALGRIND_ARGS_06 := --triangles 1024
+VALGRIND_ARGS_07 := --bounces 3
+VALGRIND_ARGS_08 := --quick --runs 8 --max-log2n 6
+VALGRIND_ARGS_09 := --spp 1 --max-depth 4
+VALGRIND_ARGS_10 := --spp 1 --max-depth 2 --light-samples 1 --glossy-samples 2
+VALGRIND_ARGS_11 := --spp 1 --max-depth 3
+VALGRIND_ARGS_12 := --spp 2 --max-depth 3 --bootstrap 1000 --chains 8
+valgrind: $(PROGRAMS) | valgrind-deps
+	@mkdir -p $(BUILD)/valgrind
+	@for c in $(CHAPTERS); do \
+	  n=$${c%%-*}; \
+	  case $$n in 01) a="$(VALGRIND_ARGS_01)";; 02) a="$(VALGRIND_ARGS_02)";; 03) a="$(VALGRIND_ARGS_03)";; \
+	    04) a="$(VALGRIND_ARGS_04)";; 05) a="$(VALGRIND_ARGS_05)";; 06) a="$(VALGRIND_ARGS_06)";; \
+	    07) a="$(VALGRIND_ARGS_07)";; 08) a="$(VALGRIND_ARGS_08)";; 09) a="$(VALGRIND_ARGS_09)";; \
+	    10) a="$(VALGRIND_ARGS_10)";; 11) a="$(VALGRIND_ARGS_11)";; 12) a="$(VALGRIND_ARGS_12)";; *) a="";; esac; \
+	  echo "valgrind $(BUILD)/bin/$$c $$a"; \
+	  valgrind -q --error-exitcode=1 --leak-check=full --errors-for-leak-kinds=definite --show-possibly-lost=no \
+	    $(BUILD)/bin/$$c --width 32 --height 24 --threads 2 --quiet $$a --out $(BUILD)/valgrind/$$c.exr || exit 1; \
+	done; echo "valgrind: no errors and no definite leaks in $(words $(CHAPTERS)) programs"
+
+valgrind-deps:
+	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="valgrind"
+
+# One libFuzzer target per parser (tests/fuzz_NAME.c), built with clang and
+# the address and undefined-behaviour sanitizers, run for FUZZ_SECONDS each
+# from the seed corpus tests/fuzz/NAME/.
+FUZZ_SECONDS ?= 30
+FUZZ_TARGETS := $(patsubst tests/fuzz_%.c,%,$(sort $(wildcard tests/fuzz_*.c)))
+
+$(BUILD)/fuzz/fuzz_%: tests/fuzz_%.c $(COMMON_SRC) | fuzz-deps
+	@mkdir -p $(dir $@)
+	clang -std=c11 -D_DEFAULT_SOURCE -g -O1 -ffp-contract=off -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
+	  $(CPPFLAGS) $^ -o $@ $(LDLIBS)
+
+fuzz: $(foreach t,$(FUZZ_TARGETS),$(BUILD)/fuzz/fuzz_$(t))
+	@for t in $(FUZZ_TARGETS); do \
+	  mkdir -p $(BUILD)/fuzz/corpus_$$t; \
+	  echo "fuzzing $$t for $(FUZZ_SECONDS) s (seed corpus tests/fuzz/$$t/)"; \
+	  $(BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 \
+	    $(BUILD)/fuzz/corpus_$$t tests/fuzz/$$t > $(BUILD)/fuzz/$$t.log 2>&1 \
+	    || { tail -40 $(BUILD)/fuzz/$$t.log; echo "fuzz_$$t FOUND A CRASH (input saved in the current directory)"; exit 1; }; \
+	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(BUILD)/fuzz/$$t.log); \
+	  echo "fuzz_$$t: $$runs inputs, no crash"; \
+	done
+
+fuzz-deps:
+	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="clang libclang-rt-14-dev"

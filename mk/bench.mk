@@ -49,5 +49,5 @@ bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/09-path-tracing
 	  $(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data; \
 	else echo "no Embree header (make bench-deps): the path tracer on Embree skipped"; fi
 
-bench-deps:
+bench-deps: deps
 	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="libembree-dev"

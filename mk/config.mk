@@ -21,6 +21,9 @@ DEBIAN_PACKAGES := gcc make libcmocka-dev libopenexr-dev libstb-dev gnuplot-nox
 
 .PHONY: deps
 # Installs what is missing, by Debian package name, and says what it installed.
+# The targets that need more (docs-deps, bench-deps, valgrind-deps, fuzz-deps)
+# run it again with their packages, after this one: two apt-get at once
+# (make -j) would fail on dpkg's lock.
 deps:
 	@if ! command -v dpkg-query >/dev/null 2>&1; then \
 	  echo "note: not a Debian system; make sure these are installed: $(DEBIAN_PACKAGES)"; exit 0; fi; \

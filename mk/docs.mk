@@ -87,5 +87,5 @@ test-docs: docs | docs-deps
 	  file://$(abspath $(DOCS))/index.html 2>> $(DOCS_TEST)/chromium.log
 	@echo "test-docs: every page checked; screenshot of the index: $(DOCS)/index-screenshot.png"
 
-docs-deps:
+docs-deps: deps
 	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="pandoc chromium"

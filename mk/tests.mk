@@ -81,20 +81,17 @@ VALGRIND_ARGS_09 := --spp 1 --max-depth 4
 VALGRIND_ARGS_10 := --spp 1 --max-depth 2 --light-samples 1 --glossy-samples 2
 VALGRIND_ARGS_11 := --spp 1 --max-depth 3
 VALGRIND_ARGS_12 := --spp 2 --max-depth 3 --bootstrap 1000 --chains 8
+# A chapter without VALGRIND_ARGS_NN runs with the common flags only.
 valgrind: $(PROGRAMS) | valgrind-deps
 	@mkdir -p $(BUILD)/valgrind
-	@for c in $(CHAPTERS); do \
-	  n=$${c%%-*}; \
-	  case $$n in 01) a="$(VALGRIND_ARGS_01)";; 02) a="$(VALGRIND_ARGS_02)";; 03) a="$(VALGRIND_ARGS_03)";; \
-	    04) a="$(VALGRIND_ARGS_04)";; 05) a="$(VALGRIND_ARGS_05)";; 06) a="$(VALGRIND_ARGS_06)";; \
-	    07) a="$(VALGRIND_ARGS_07)";; 08) a="$(VALGRIND_ARGS_08)";; 09) a="$(VALGRIND_ARGS_09)";; \
-	    10) a="$(VALGRIND_ARGS_10)";; 11) a="$(VALGRIND_ARGS_11)";; 12) a="$(VALGRIND_ARGS_12)";; *) a="";; esac; \
-	  echo "valgrind $(BUILD)/bin/$$c $$a"; \
+	@$(foreach c,$(CHAPTERS),\
+	  echo "valgrind $(BUILD)/bin/$(c) $(VALGRIND_ARGS_$(call chapter_number,$(c)))" && \
 	  valgrind -q --error-exitcode=1 --leak-check=full --errors-for-leak-kinds=definite --show-possibly-lost=no \
-	    $(BUILD)/bin/$$c --width 32 --height 24 --threads 2 --quiet $$a --out $(BUILD)/valgrind/$$c.exr || exit 1; \
-	done; echo "valgrind: no errors and no definite leaks in $(words $(CHAPTERS)) programs"
+	    $(BUILD)/bin/$(c) --width 32 --height 24 --threads 2 --quiet $(VALGRIND_ARGS_$(call chapter_number,$(c))) \
+	    --out $(BUILD)/valgrind/$(c).exr && ) \
+	echo "valgrind: no errors and no definite leaks in $(words $(CHAPTERS)) programs"
 
-valgrind-deps:
+valgrind-deps: deps
 	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="valgrind"
 
 # One libFuzzer target per parser (tests/fuzz_NAME.c), built with clang and
@@ -119,5 +116,5 @@ fuzz: $(foreach t,$(FUZZ_TARGETS),$(BUILD)/fuzz/fuzz_$(t))
 	  echo "fuzz_$$t: $$runs inputs, no crash"; \
 	done
 
-fuzz-deps:
+fuzz-deps: deps
 	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="clang libclang-rt-14-dev"

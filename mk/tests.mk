@@ -3,28 +3,45 @@
 
 .PHONY: test sanitize test-seeds fp-contract-leaks test-bvh8 valgrind valgrind-deps fuzz fuzz-deps
 
-# Runs every suite even when one fails, then the checks that are scripts:
-# the programs fed bad input (tests/bad_input.sh) and the hard-case catalog
-# naming only tests that exist (tests/check_catalog.sh). One summary line.
-test: $(TESTS) $(PROGRAMS)
+# Every suite, and every check that is a script, is a target of its own,
+# run-NAME: it writes the output to $(BUILD)/tests/NAME.log and the exit
+# status to NAME.status, and always succeeds, so that a failing suite stops
+# none of the others and make -j runs them side by side. `make test` waits
+# for all of them, then prints each log in a fixed order (suites, then
+# scripts), adds up the counts and prints one summary line; it fails if
+# anything failed. The scripts take the build directory: the programs fed
+# bad input (tests/bad_input.sh), the hard-case catalog naming only tests
+# that exist (tests/check_catalog.sh).
+TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh)
+SUITE_RUNS := $(patsubst $(BUILD)/tests/%,run-%,$(TESTS))
+SCRIPT_RUNS := $(patsubst tests/%.sh,run-%,$(TEST_SCRIPTS))
+.PHONY: $(SUITE_RUNS) $(SCRIPT_RUNS)
+
+# The scripts first: bad_input.sh takes longest, and the suites run beside it.
+test: $(SCRIPT_RUNS) $(SUITE_RUNS)
 	@passed=0; failed=0; bad=""; \
 	for t in $(TESTS); do \
-	  echo "== $$t"; \
-	  $$t > $$t.log 2>&1; status=$$?; cat $$t.log; \
+	  echo "== $$t"; cat $$t.log; status=$$(cat $$t.status 2>/dev/null); \
 	  p=$$(sed -n 's/^\[  PASSED  \] \([0-9]*\) test.*/\1/p' $$t.log | tail -1); \
 	  f=$$(sed -n 's/^\[  FAILED  \] \([0-9]*\) test.*/\1/p' $$t.log | tail -1); \
 	  passed=$$((passed + $${p:-0})); failed=$$((failed + $${f:-0})); \
-	  if [ $$status -ne 0 ]; then bad="$$bad $$t"; [ -n "$$f" ] || failed=$$((failed + 1)); fi; \
+	  if [ "$$status" != 0 ]; then bad="$$bad $$t"; [ -n "$$f" ] || failed=$$((failed + 1)); fi; \
 	done; \
 	for s in $(TEST_SCRIPTS); do \
-	  echo "== $$s"; \
-	  if $$s $(BUILD); then passed=$$((passed + 1)); else failed=$$((failed + 1)); bad="$$bad $$s"; fi; \
+	  n=$$(basename $$s .sh); echo "== $$s"; cat $(BUILD)/tests/$$n.log; \
+	  if [ "$$(cat $(BUILD)/tests/$$n.status 2>/dev/null)" = 0 ]; then passed=$$((passed + 1)); \
+	  else failed=$$((failed + 1)); bad="$$bad $$s"; fi; \
 	done; \
 	echo; echo "$$passed passed, $$failed failed"; \
 	if [ -n "$$bad" ]; then echo "failing suites:$$bad"; exit 1; fi
 
-# Checks that are shell scripts, each given the build directory.
-TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh)
+$(SUITE_RUNS): run-%: $(BUILD)/tests/%
+	@$< > $<.log 2>&1; echo $$? > $<.status
+
+run-bad_input: $(PROGRAMS)
+$(SCRIPT_RUNS): run-%: tests/%.sh
+	@mkdir -p $(BUILD)/tests
+	@$< $(BUILD) > $(BUILD)/tests/$*.log 2>&1; echo $$? > $(BUILD)/tests/$*.status
 
 # Every random test (those that take their seed from test_seed() in
 # tests/test_support.h) over SEEDS other seeds, JOBS at a time: how many of

@@ -11,8 +11,9 @@
 # scripts), adds up the counts and prints one summary line; it fails if
 # anything failed. The scripts take the build directory: the programs fed
 # bad input (tests/bad_input.sh), the hard-case catalog naming only tests
-# that exist (tests/check_catalog.sh).
-TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh)
+# that exist (tests/check_catalog.sh), each chapter including only common/
+# and the chapters before it (tests/check_layering.sh).
+TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh) tests/check_layering.sh
 SUITE_RUNS := $(patsubst $(BUILD)/tests/%,run-%,$(TESTS))
 SCRIPT_RUNS := $(patsubst tests/%.sh,run-%,$(TEST_SCRIPTS))
 .PHONY: $(SUITE_RUNS) $(SCRIPT_RUNS)

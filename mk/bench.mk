@@ -30,24 +30,29 @@ $(BUILD)/bin/bench_pt_embree: $(BUILD)/obj/tests/bench_pt_embree.o $(ALL_LIBS)
 
 # Embree and ours, one after the other, on the same machine in one run; then
 # the path tracer's seconds per million camera samples (chapter 09), and the
-# same path tracer on Embree's kernels.
-bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/09-path-tracing
+# same path tracer on Embree's kernels. The Embree programs are built only
+# where their sources (EMBREE_HARNESS) and header (EMBREE_HEADER) are; as
+# prerequisites, not by a make inside the recipe, which make -n would run.
+EMBREE_HARNESS := $(wildcard $(SHARED)/anchors/embree_bench.c)
+bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/09-path-tracing \
+       $(if $(EMBREE_HARNESS),$(BUILD)/bin/embree_bench) $(if $(EMBREE_HEADER),$(BUILD)/bin/bench_pt_embree)
 	@mkdir -p $(BUILD)/data
-	@if [ -f $(SHARED)/anchors/embree_bench.c ]; then \
-	  $(MAKE) --no-print-directory $(BUILD)/bin/embree_bench && \
-	  rm -f $(BUILD)/data/embree.txt && \
-	  for n in $(BENCH_SIZES); do \
-	    $(BUILD)/bin/embree_bench embree $$n medium 1 $(BENCH_REPS) | tee -a $(BUILD)/data/embree.txt; \
-	  done; \
-	else echo "no $(SHARED)/anchors/embree_bench.c: timing without Embree"; fi
+ifneq ($(EMBREE_HARNESS),)
+	@rm -f $(BUILD)/data/embree.txt
+	@for n in $(BENCH_SIZES); do \
+	  $(BUILD)/bin/embree_bench embree $$n medium 1 $(BENCH_REPS) | tee -a $(BUILD)/data/embree.txt; \
+	done
+else
+	@echo "no $(SHARED)/anchors/embree_bench.c: timing without Embree"
+endif
 	$(BUILD)/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS) \
-	  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv $(if $(wildcard $(SHARED)/anchors/embree_bench.c),--embree $(BUILD)/data/embree.txt)
+	  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv $(if $(EMBREE_HARNESS),--embree $(BUILD)/data/embree.txt)
 	$(BUILD)/bin/09-path-tracing --bench --width 256 --spp 16 --bench-csv $(BUILD)/data/ch09_speed.csv --out $(BUILD)/data/ch09.exr
-	@if [ -n "$(EMBREE_HEADER)" ]; then \
-	  $(MAKE) --no-print-directory $(BUILD)/bin/bench_pt_embree && \
-	  echo "$(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data" && \
-	  $(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data; \
-	else echo "no Embree header (make bench-deps): the path tracer on Embree skipped"; fi
+ifneq ($(EMBREE_HEADER),)
+	$(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data
+else
+	@echo "no Embree header (make bench-deps): the path tracer on Embree skipped"
+endif
 
 bench-deps: deps
 	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="libembree-dev"

@@ -121,7 +121,8 @@ check_file() {
 self_test() {
     local t
     t=$(mktemp -d "${TMPDIR:-/tmp}/check_layering.XXXXXX")
-    trap 'rm -rf "$t"' RETURN
+    self_test_dir=$t
+    trap 'rm -rf "$self_test_dir"' EXIT
     mkdir -p "$t/common" "$t/chapters/01-first" "$t/chapters/02-second" "$t/tests" "$t/docs/figures"
     printf '%s\n' '#include <stdio.h>' '#include "vec.h"' > "$t/common/vec.h"
     printf '%s\n' '#include "vec.h"' '#include "02-second/b.h" // BAD common/ includes no chapter' > "$t/common/util.c"

@@ -1,10 +1,10 @@
 /* 01-ray-casting: render chapter 01's scene by ray casting (lecture 13). */
 #include <stdio.h>
 
+#include "01-ray-casting/ray_casting.h"
 #include "cli.h"
 #include "effects.h"
 #include "program.h"
-#include "ray_casting.h"
 
 int main(int argc, char **argv)
 {

@@ -1,4 +1,4 @@
-#include "ray_casting.h"
+#include "01-ray-casting/ray_casting.h"
 
 #include "explain.h"
 

@@ -1,5 +1,5 @@
 /* shapes.c -- lecture 13: the ray r(t) = o + t d meets a surface. */
-#include "shapes.h"
+#include "01-ray-casting/shapes.h"
 
 /* ---- Ray-sphere: solve |o + t d - c|^2 - R^2 = 0 --------------------------
  * The lecture's quadratic a t^2 + b t + c = 0 with a = d.d, b = 2 (o-c).d,

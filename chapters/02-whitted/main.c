@@ -1,10 +1,10 @@
 /* 02-whitted: render chapter 02's scene by Whitted-style ray tracing (lecture 13). */
 #include <stdio.h>
 
+#include "02-whitted/whitted.h"
 #include "cli.h"
 #include "effects.h"
 #include "program.h"
-#include "whitted.h"
 
 static const int DEFAULT_MAX_DEPTH = 5;
 

@@ -6,7 +6,7 @@
  * added at the hit. At diffuse surfaces the recursion stops and the shadow
  * rays of chapter 01 decide which lights are seen.
  */
-#include "whitted.h"
+#include "02-whitted/whitted.h"
 
 #include <stdio.h>
 

@@ -1,5 +1,5 @@
 /* accel.c -- the triangle set every structure is built over, and brute force. */
-#include "accel.h"
+#include "03-aabb-slabs/accel.h"
 
 #include <stdlib.h>
 

@@ -7,7 +7,7 @@
  * depth), many paths per pixel; light from the emitters is sampled directly
  * at every bounce, and rays that bounce on to hit an emitter do not count its
  * emission again. */
-#include "path_tracer.h"
+#include "09-path-tracing/path_tracer.h"
 
 #include <string.h>
 

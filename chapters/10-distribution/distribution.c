@@ -1,6 +1,6 @@
 /* distribution.c -- Cook's distribution ray tracing, in the shape of
  * chapter 02's recursion. */
-#include "distribution.h"
+#include "10-distribution/distribution.h"
 
 #include "02-whitted/whitted.h"
 #include "09-path-tracing/bsdf.h"

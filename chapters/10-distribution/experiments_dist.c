@@ -1,6 +1,6 @@
 /* experiments_dist.c -- rays per bounce against samples per pixel, at equal
  * time (experiments_dist.h). */
-#include "experiments_dist.h"
+#include "10-distribution/experiments_dist.h"
 
 #include <errno.h>
 #include <math.h>

@@ -1,5 +1,5 @@
 /* motion_scene.c -- moving spheres and meshes over the shutter interval. */
-#include "motion_scene.h"
+#include "10-distribution/motion_scene.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,6 +1,6 @@
 /* bdpt_experiments.c -- equal-time error: chapter 09's best path tracer
  * against bidirectional path tracing (see bdpt_experiments.h). */
-#include "bdpt_experiments.h"
+#include "11-bidirectional/bdpt_experiments.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,6 +1,6 @@
 /* mlt_experiments.c -- equal-time error of Metropolis and path tracing, and
  * start-up bias (see mlt_experiments.h). */
-#include "mlt_experiments.h"
+#include "12-metropolis/mlt_experiments.h"
 
 #include <errno.h>
 #include <math.h>

@@ -177,9 +177,35 @@ static bool set_float(const cli_flag *f, const char *value, char *err, size_t er
     return false;
 }
 
+/* "X,Y,Z": three numbers within [min, max], nothing else. */
+static bool set_vec3(const cli_flag *f, const char *value, char *err, size_t err_size)
+{
+    float c[3];
+    char part[64];
+    const char *p = value;
+    for (int k = 0; k < 3; k++) {
+        const char *end = k < 2 ? strchr(p, ',') : p + strlen(p);
+        if (end == NULL || end - p >= (long)sizeof part)
+            break;
+        snprintf(part, sizeof part, "%.*s", (int)(end - p), p);
+        if (!parse_float(part, f->min, f->max, &c[k]))
+            break;
+        if (k == 2) {
+            *(vec3 *)f->value = vec3_make(c[0], c[1], c[2]);
+            return true;
+        }
+        p = end + 1;
+    }
+    snprintf(err, err_size, "%s: expected three numbers X,Y,Z from %g to %g, got '%s'", f->name, f->min, f->max,
+             value);
+    return false;
+}
+
 static bool set_extra(const cli_flag *f, const char *value, char *err, size_t err_size)
 {
     switch (f->kind) {
+    case CLI_VEC3:
+        return set_vec3(f, value, err, err_size);
     case CLI_INT:
         return set_int(f, value, err, err_size);
     case CLI_FLOAT:
@@ -342,6 +368,7 @@ static void flag_usage(const cli_flag *f, char *out, size_t size)
                           : f->kind == CLI_STRING ? "TEXT"
                           : f->kind == CLI_DIR    ? "DIR"
                           : f->kind == CLI_CHOICE ? "NAME"
+                          : f->kind == CLI_VEC3   ? "X,Y,Z"
                                                   : "";
     snprintf(out + n, size - (size_t)n, "%s", metavar);
 }

@@ -50,6 +50,9 @@ deps:
 	[ -z "$$missing" ] && exit 0; \
 	sudo=""; [ "$$(id -u)" = 0 ] || sudo=sudo; \
 	echo "installing Debian packages:$$missing"; \
-	$$sudo apt-get update -qq && \
-	DEBIAN_FRONTEND=noninteractive $$sudo apt-get install -y -qq --no-install-recommends $$missing >/dev/null && \
-	echo "installed:$$missing"
+	if $$sudo apt-get update && \
+	   DEBIAN_FRONTEND=noninteractive $$sudo apt-get install -y --no-install-recommends $$missing; then \
+	  echo "installed:$$missing"; \
+	else \
+	  echo "make deps: apt-get failed (its messages are above); install by hand:$$missing" >&2; exit 1; \
+	fi

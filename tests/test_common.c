@@ -715,10 +715,45 @@ static void test_splat_film_drops_nonfinite_and_ignores_points_outside(void **st
     splat_film_free(&film);
 }
 
+/* --eye, --target and --fov (CLI_CAMERA_FLAGS) read three numbers X,Y,Z
+ * and a field of view, refuse anything else naming the flag, and replace
+ * only the parts given: with none the camera is the scene's, bit for bit;
+ * with an eye alone the view keeps its direction. */
+static void test_camera_flags_override_the_scenes_camera(void **state)
+{
+    (void)state;
+    camera_override view = CAMERA_NOT_OVERRIDDEN;
+    const cli_flag extras[] = {CLI_CAMERA_FLAGS(view)};
+    cli_spec spec = {"test", "camera flags", extras, 3};
+    cli_options o = cli_defaults("out.exr", 8, 8, 1);
+    char err[512];
+    char *good[] = {"test", "--eye", "1,2,3", "--fov", "30"};
+    assert_int_equal(cli_parse(5, good, &spec, &o, err, sizeof err), CLI_OK);
+    assert_true(view.eye.x == 1.0f && view.eye.y == 2.0f && view.eye.z == 3.0f);
+    assert_true(isnan(view.target.x) && view.vertical_fov_degrees == 30.0f);
+    const char *bad[] = {"1,2", "1,2,3,4", "1,,3", "a,b,c", "1,2,nan", "", "1e9,0,0"};
+    for (int k = 0; k < 7; k++) {
+        char *argv[] = {"test", "--eye", (char *)bad[k]};
+        assert_int_equal(cli_parse(3, argv, &spec, &o, err, sizeof err), CLI_ERROR);
+        assert_non_null(strstr(err, "--eye"));
+    }
+    camera scene = camera_look_at(vec3_make(0, 1, 5), vec3_make(0, 1, 0), vec3_make(0, 1, 0), 40.0f, 8, 6);
+    camera_override none = CAMERA_NOT_OVERRIDDEN;
+    camera same = camera_overridden(&scene, &none);
+    assert_memory_equal(&same, &scene, sizeof scene);
+    camera_override eye_only = CAMERA_NOT_OVERRIDDEN;
+    eye_only.eye = vec3_make(3, 1, 5);
+    camera moved = camera_overridden(&scene, &eye_only);
+    assert_true(moved.eye.x == 3.0f);
+    assert_true(vec3_length(vec3_sub(moved.forward, scene.forward)) < 1e-6f);
+    assert_true(fabsf(moved.half_height - scene.half_height) < 1e-6f); /* the field of view kept */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pcg32_matches_reference_output),
+        cmocka_unit_test(test_camera_flags_override_the_scenes_camera),
         cmocka_unit_test(test_pcg32_float_is_in_unit_interval_and_uniform),
         cmocka_unit_test(test_pcg32_pixel_streams_differ),
         cmocka_unit_test(test_pcg32_bounded_stays_in_range),

@@ -65,6 +65,7 @@ typedef struct {
     int triangles, probe_rays;
     float density, heatmap_max;
     bool heatmap;
+    camera_override view; /* --eye, --target, --fov */
 } grid_flags;
 
 /* Builds the grid over the mesh the flags ask for, prints what it looks
@@ -86,6 +87,7 @@ static int run(cli_options *opts, const char *program, const grid_flags *f)
 
     accel_view view = {a, f->heatmap, f->heatmap_max};
     camera cam = accel_input_camera(&in, set.bounds, opts->width, opts->height);
+    cam = camera_overridden(&cam, &f->view);
     render_stats stats;
     int status = program_render(opts, program, accel_view_radiance, &view, &cam, &stats);
     if (status == 0 && !opts->quiet) {
@@ -102,7 +104,8 @@ static int run(cli_options *opts, const char *program, const grid_flags *f)
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch04.exr", 640, 480, 1);
-    grid_flags f = {{accel_mesh_names, NULL, 0}, NULL, 102400, 10000, GRID_DEFAULT_DENSITY, 200.0f, false};
+    grid_flags f = {{accel_mesh_names, NULL, 0}, NULL, 102400, 10000, GRID_DEFAULT_DENSITY, 200.0f, false,
+                    CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--density", CLI_FLOAT, &f.density, "C", "cells per triangle: #cells = C * #triangles (default 27)", 1e-3,
          1e6},
@@ -112,6 +115,7 @@ int main(int argc, char **argv)
         {"--triangles", CLI_INT, &f.triangles, "N", "tori field size: 1024, 10240, 102400 (default) or 1048576", 1,
          1048576},
         {"--obj", CLI_STRING, &f.obj_path, "FILE", "load a Wavefront OBJ file instead", 0, 0},
+        CLI_CAMERA_FLAGS(f.view),
         {"--heatmap", CLI_BOOL, &f.heatmap, NULL, "show the cost of each ray: cells visited + triangles tested", 0, 0},
         {"--heatmap-max", CLI_FLOAT, &f.heatmap_max, "COST", "the cost shown as white (default 200)", 1, 1e7},
         {"--probe-rays", CLI_INT, &f.probe_rays, "N",

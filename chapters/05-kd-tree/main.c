@@ -54,6 +54,7 @@ typedef struct {
     bool heatmap, run_bench;
     float heatmap_max;
     kdtree_options options;
+    camera_override view; /* --eye, --target, --fov */
 } kd_flags;
 
 /* Builds the tree over the mesh the flags ask for, prints its figures,
@@ -73,6 +74,7 @@ static int run(cli_options *opts, const char *program, const kd_flags *f)
 
     accel_view view = {a, f->heatmap, f->heatmap_max};
     camera cam = accel_input_camera(&in, set.bounds, opts->width, opts->height);
+    cam = camera_overridden(&cam, &f->view);
     render_stats stats;
     int status = program_render(opts, program, accel_view_radiance, &view, &cam, &stats);
     if (status == 0 && !opts->quiet)
@@ -90,13 +92,15 @@ static int run(cli_options *opts, const char *program, const kd_flags *f)
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch05.exr", 640, 480, 1);
-    kd_flags f = {{accel_mesh_names, NULL, 0}, NULL, 102400, false, false, 120.0f, kdtree_default_options()};
+    kd_flags f = {{accel_mesh_names, NULL, 0}, NULL, 102400, false, false, 120.0f, kdtree_default_options(),
+                  CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--mesh", CLI_CHOICE, &f.mesh, NULL,
          "the procedural mesh (default tori); stadium: a dense sphere (the teapot) in a huge sparse stadium", 0, 0},
         {"--triangles", CLI_INT, &f.triangles, "N", "tori field size: 1024, 10240, 102400 (default) or 1048576", 1,
          1048576},
         {"--obj", CLI_STRING, &f.obj_path, "FILE", "load a Wavefront OBJ file instead", 0, 0},
+        CLI_CAMERA_FLAGS(f.view),
         {"--heatmap", CLI_BOOL, &f.heatmap, NULL, "show the cost of each ray: nodes visited + triangles tested", 0, 0},
         {"--heatmap-max", CLI_FLOAT, &f.heatmap_max, "COST", "the cost shown as white (default 120)", 1, 1e6},
         {"--traversal-cost", CLI_FLOAT, &f.options.traversal_cost, "X", "the SAH's C_traverse (default 2)", 0.001,

@@ -18,6 +18,7 @@ typedef struct {
     const char *obj, *data;
     float rr_probability, time_budget, target_error;
     int max_depth, rr_start, experiment_size, reference_spp, experiment_spp;
+    camera_override view; /* --eye, --target, --fov */
 } chapter_flags;
 
 /* The scene the flags name (a scene file, an OBJ file or a built-in one),
@@ -52,6 +53,7 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     }
     if (!from_file && f->obj == NULL)
         pt_scene_build_builtin(sc, cli_choice_name(&f->builtin));
+    camera_override_apply(&f->view, &sc->eye, &sc->target, &sc->vertical_fov_degrees);
     if (pt_scene_has_no_light(sc, err, sizeof err))
         fprintf(stderr, PROGRAM ": warning: %s\n", err);
     if (!from_file)
@@ -165,7 +167,7 @@ int main(int argc, char **argv)
     /* --integrator and --max-depth not given (-1): the scene file's, else lecture and 64 */
     chapter_flags f = {{PT_INTEGRATOR_NAMES, NULL, -1}, {PT_ROULETTE_NAMES, NULL, RR_FIXED},
                        {PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {PT_ACCEL_NAMES, ACCEL_NOTES, 0},
-                       NULL, NULL, 0.8f, 0.0f, 0.0f, -1, 3, 96, 4096, 256};
+                       NULL, NULL, 0.8f, 0.0f, 0.0f, -1, 3, 96, 4096, 256, CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--integrator", CLI_CHOICE, &f.integrator, NULL, "the rung of the ladder (default lecture)", 0, 0},
         {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed P_RR (default), pbrt's on the throughput, "
@@ -175,7 +177,8 @@ int main(int argc, char **argv)
                                                   "end (default 3; pbrt-v3's is 5, smallpt's 6)", 0, 1000},
         {"--max-depth", CLI_INT, &f.max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
         {"--builtin", CLI_CHOICE, &f.builtin, NULL, "the built-in scene (default cornell)", 0, 0},
-        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
+        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file with its MTL materials instead", 0, 0},
+        CLI_CAMERA_FLAGS(f.view),
         {"--accel", CLI_CHOICE, &f.accel, NULL, "the structure the rays are traced through", 0, 0},
         {"--time-budget", CLI_FLOAT, &f.time_budget, "SECONDS", "progressive: passes until this much time is spent",
          0.0, 1e6},

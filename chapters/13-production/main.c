@@ -18,6 +18,7 @@ typedef struct {
     const char *obj, *bench_csv;
     bool bench, one_path;
     int rr_start;
+    camera_override view; /* --eye, --target, --fov */
 } production_flags;
 
 static const char *const ON_OFF[] = {"on", "off", NULL};
@@ -62,6 +63,7 @@ static int render(cli_options *opts, const production_flags *f)
     }
     if (!from_file)
         pt_scene_describe(&sc, &desc);
+    camera_override_apply(&f->view, &sc.eye, &sc.target, &sc.vertical_fov_degrees);
     if (pt_scene_has_no_light(&sc, err, sizeof err))
         fprintf(stderr, "13-production: warning: %s\n", err);
     effects_report e = effects_analyse(&desc);
@@ -91,10 +93,11 @@ int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch13.exr", 512, 512, 16);
     production_flags f = {{PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {ON_OFF, NULL, 0},
-                          {PT_ROULETTE_NAMES, NULL, RR_FIXED}, NULL, NULL, false, false, 3};
+                          {PT_ROULETTE_NAMES, NULL, RR_FIXED}, NULL, NULL, false, false, 3, CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--builtin", CLI_CHOICE, &f.builtin, NULL, "a scene of chapter 09 (default cornell)", 0, 0},
-        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
+        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file with its MTL materials instead", 0, 0},
+        CLI_CAMERA_FLAGS(f.view),
         {"--walls", CLI_CHOICE, &f.walls, NULL, "on (default): shadow rays inside a room skip its walls", 0, 0},
         {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed (P_RR 0.8, default), throughput, albedo or off", 0,
          0},

@@ -3,6 +3,7 @@
 
 #include "counters.h"
 #include "input_file.h"
+#include "run_record.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -437,6 +438,7 @@ void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options 
         fprintf(stderr, "%s: %s\n(try '%s --help')\n", spec->program, err, spec->program);
         exit(2);
     }
+    run_record_command(argc, argv, opts);
     /* Inputs are bounded, and none may be a file this run writes. */
     input_file_set_mesh_limit((uint64_t)opts->max_input_mb << 20);
     char sidecar[PATH_MAX];

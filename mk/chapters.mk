@@ -16,7 +16,23 @@ $(BUILD)/obj/%.o: %.c | deps
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(CPPFLAGS) -c $< -o $@
 
-$(COMMON_LIB): $(call obj,$(COMMON_SRC))
+# The project's version (git describe) as a C string, for the records every
+# program writes beside its image (common/program.c). The file is rewritten
+# only when the version changes, so a build after a commit relinks, and a
+# build without one compiles nothing. Outside a git checkout: "unknown".
+VERSION_SRC := $(BUILD)/gen/version.c
+.PHONY: version-check
+$(VERSION_SRC): version-check
+	@mkdir -p $(dir $@)
+	@v=$$(git describe --always --dirty 2>/dev/null || echo unknown); \
+	printf '/* made by mk/chapters.mk */\nconst char *const PROJECT_VERSION = "%s";\n' "$$v" > $@.tmp; \
+	if cmp -s $@.tmp $@; then rm -f $@.tmp; else mv $@.tmp $@; fi
+
+$(BUILD)/obj/$(BUILD)/gen/version.o: $(VERSION_SRC) | deps
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(CPPFLAGS) -c $< -o $@
+
+$(COMMON_LIB): $(call obj,$(COMMON_SRC)) $(BUILD)/obj/$(BUILD)/gen/version.o
 	@mkdir -p $(dir $@)
 	@rm -f $@
 	ar rcs $@ $^

@@ -23,6 +23,7 @@
 #include "rng.h"
 #include "splat_film.h"
 #include "stats.h"
+#include "run_record.h"
 #include "test_support.h"
 
 /* ---- PCG32 ---------------------------------------------------------------- */
@@ -749,10 +750,47 @@ static void test_camera_flags_override_the_scenes_camera(void **state)
     assert_true(fabsf(moved.half_height - scene.half_height) < 1e-6f); /* the field of view kept */
 }
 
+/* The record a counters file carries: the command line (an argument with a
+ * space quoted, so the line pastes back), the version, the seed, the size
+ * and the notes, as valid JSON strings (a quote in a note escaped). */
+static void test_counters_file_records_the_run(void **state)
+{
+    (void)state;
+    cli_options o = cli_defaults("out.exr", 16, 8, 4);
+    o.seed = 42;
+    char *argv[] = {"prog", "--seed", "42", "--scene", "my scene.scene"};
+    o.scene = argv[4];
+    run_record_command(5, argv, &o);
+    run_record_note("integrator", "mis");
+    run_record_note("odd", "say \"hi\"");
+    char path[] = "/tmp/test_record.XXXXXX", json[256], err[256], text[8192];
+    int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    close(fd);
+    snprintf(json, sizeof json, "%s.json", path);
+    ray_counters c = {0};
+    assert_true(counters_write_json(json, &c, 1.0, NULL, err, sizeof err));
+    FILE *f = fopen(json, "r");
+    assert_non_null(f);
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    text[n] = '\0';
+    fclose(f);
+    assert_non_null(strstr(text, "\"command\": \"prog --seed 42 --scene 'my scene.scene'\""));
+    assert_non_null(strstr(text, "\"version\": \""));
+    assert_non_null(strstr(text, "\"seed\": 42"));
+    assert_non_null(strstr(text, "\"width\": 16"));
+    assert_non_null(strstr(text, "\"scene\": \"my scene.scene\""));
+    assert_non_null(strstr(text, "\"integrator\": \"mis\""));
+    assert_non_null(strstr(text, "\"odd\": \"say \\\"hi\\\"\""));
+    remove(json);
+    remove(path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pcg32_matches_reference_output),
+        cmocka_unit_test(test_counters_file_records_the_run),
         cmocka_unit_test(test_camera_flags_override_the_scenes_camera),
         cmocka_unit_test(test_pcg32_float_is_in_unit_interval_and_uniform),
         cmocka_unit_test(test_pcg32_pixel_streams_differ),

@@ -135,7 +135,9 @@ static bool render_floor(const cli_options *opts)
     floor_draw(&img, E, E_max, scale);
     double seconds = timer_seconds() - start;
     char err[IMAGE_ERROR_SIZE];
-    bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err);
+    ray_counters none = {0}; /* quadrature, not rays: the record is the run's */
+    bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err) &&
+              program_write_record(opts, PROGRAM, &none, seconds, err, sizeof err);
     if (!ok)
         fprintf(stderr, "%s: %s\n", PROGRAM, err);
     else if (!opts->quiet)

@@ -15,6 +15,7 @@
 #include "08-monte-carlo/estimators.h"
 #include "atomic_file.h"
 #include "cli.h"
+#include "program.h"
 #include "image.h"
 #include "memory.h"
 #include "progress.h"
@@ -225,7 +226,9 @@ static bool write_picture(const cli_options *opts, const char *program)
     }
     draw_point_sets(&img, opts->seed);
     char err[IMAGE_ERROR_SIZE];
-    bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err);
+    ray_counters none = {0}; /* points drawn, not rays traced: the record is the run's */
+    bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err) &&
+              program_write_record(opts, program, &none, 0.0, err, sizeof err);
     if (!ok)
         fprintf(stderr, "%s: %s\n", program, err);
     else if (!opts->quiet)

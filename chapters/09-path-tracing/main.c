@@ -9,6 +9,7 @@
 #include "cli.h"
 #include "effects.h"
 #include "program.h"
+#include "run_record.h"
 
 #define PROGRAM "09-path-tracing"
 
@@ -75,6 +76,11 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     pt->rr_probability = f->rr_probability;
     pt->rr_start_depth = f->rr_start;
     pt->max_depth = f->max_depth >= 0 ? f->max_depth : from_file && desc.max_depth >= 0 ? desc.max_depth : 64;
+    char depth[32];
+    snprintf(depth, sizeof depth, "%d", pt->max_depth);
+    run_record_note("integrator", pt_integrator_name(pt->integrator));
+    run_record_note("russian_roulette", pt_russian_roulette_name(pt->russian_roulette));
+    run_record_note("max_depth", depth);
     scene_desc_free(&desc);
     return 0;
 }

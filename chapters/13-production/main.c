@@ -12,6 +12,7 @@
 #include "cli.h"
 #include "effects.h"
 #include "program.h"
+#include "run_record.h"
 
 typedef struct {
     cli_choice builtin, walls, rr;
@@ -78,11 +79,14 @@ static int render(cli_options *opts, const production_flags *f)
     camera cam = pt_scene_camera(&sc, opts->width, opts->height);
     char why[160];
     int status;
+    run_record_note("russian_roulette", pt_russian_roulette_name(pt.russian_roulette));
     if (!f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why)) {
+        run_record_note("integrator", "lecture, eight paths at a time");
         status = render_eight_paths(opts, &pt, &cam);
     } else {
         if (!f->one_path && !opts->quiet && !opts->explain)
             printf("13-production: one path at a time (eight at a time: %s)\n", why);
+        run_record_note("integrator", "lecture, one path at a time");
         status = program_render(opts, "13-production", path_trace_radiance, &pt, &cam, NULL);
     }
     pt_scene_free(&sc);

@@ -407,8 +407,8 @@ void cli_print_help(const cli_spec *spec, const cli_options *d)
     printf("                   (default %s)\n", d->out);
     printf("  --exposure X     preview brightness in stops, 2^X (default %g)\n", (double)d->exposure);
     printf("  --scene FILE     render a scene file instead of the built-in scene (docs/scene-format.md)\n");
-    printf("  --explain X,Y    print the path tree of pixel (X, Y) -- every ray, hit, light sample and\n");
-    printf("                   Russian roulette decision -- instead of rendering the image\n");
+    if (spec->explain != NULL)
+        printf("  --explain X,Y    instead of rendering, print for pixel (X, Y) %s\n", spec->explain);
     printf("  --max-input-mb N the largest OBJ or MTL file read, in MB of 2^20 bytes (default %d)\n", d->max_input_mb);
     printf("  --quiet          no progress line and no report\n");
     printf("  --help           this text\n");

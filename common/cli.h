@@ -88,6 +88,10 @@ typedef struct {
     const char *summary; /* what the program shows, for --help */
     const cli_flag *extras;
     int extra_count;
+    /* What --explain X,Y prints in this program, for --help (NULL: it has
+     * nothing to explain per pixel, --help does not offer the flag, and
+     * the program says why if it is given). */
+    const char *explain;
 } cli_spec;
 
 typedef enum { CLI_OK, CLI_HELP, CLI_ERROR } cli_status;

@@ -360,7 +360,7 @@ static cli_status parse(int argc, char **argv, cli_options *opts, char *err)
 {
     static int max_depth = 5;
     static const cli_flag extras[] = {{"--max-depth", CLI_INT, &max_depth, "N", "recursion limit", 0, 64}};
-    cli_spec spec = {"test", "a test", extras, 1};
+    cli_spec spec = {"test", "a test", extras, 1, "the path of a pixel"};
     *opts = cli_defaults("/tmp/out.exr", 64, 32, 1);
     return cli_parse(argc, argv, &spec, opts, err, 512);
 }
@@ -434,7 +434,7 @@ static void test_cli_rejects_nan_and_inf_for_an_unranged_float(void **state)
     (void)state;
     static float scale = 1.0f;
     static const cli_flag extras[] = {{"--scale", CLI_FLOAT, &scale, "X", "any finite number", 0, 0}};
-    cli_spec spec = {"test", "a test", extras, 1};
+    cli_spec spec = {"test", "a test", extras, 1, "the path of a pixel"};
     const char *bad[] = {"inf", "-inf", "infinity", "nan", "1e999", "0x1p2000", ""};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         char err[512] = "";
@@ -458,7 +458,7 @@ static void test_cli_checks_a_directory_flag_at_once(void **state)
     (void)state;
     static const char *data = NULL;
     static const cli_flag extras[] = {{"--data", CLI_DIR, &data, "DIR", "where the CSV goes", 0, 0}};
-    cli_spec spec = {"test", "a test", extras, 1};
+    cli_spec spec = {"test", "a test", extras, 1, "the path of a pixel"};
     const char *bad[][2] = {{"/nonexistent-dir", "does not exist"}, {"/etc/passwd", "is not a directory"}, {"", "--data"}};
     for (int i = 0; i < 3; i++) {
         char err[512] = "";
@@ -493,7 +493,7 @@ static const char *const RUNG_NAMES[] = {"lecture", "cosine", "mis", NULL};
 static cli_status parse_choice(int argc, char **argv, cli_choice *choice, char *err, size_t err_size)
 {
     const cli_flag extras[] = {{"--integrator", CLI_CHOICE, choice, NULL, "the rung", 0, 0}};
-    cli_spec spec = {"test", "a test", extras, 1};
+    cli_spec spec = {"test", "a test", extras, 1, "the path of a pixel"};
     cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
     return cli_parse(argc, argv, &spec, &o, err, err_size);
 }
@@ -555,7 +555,7 @@ static void test_cli_choice_bad_value_exits_with_status_2(void **state)
         dup2(pipe_fds[1], 2);
         cli_choice rung = {RUNG_NAMES, NULL, 0};
         const cli_flag extras[] = {{"--integrator", CLI_CHOICE, &rung, NULL, "the rung", 0, 0}};
-        cli_spec spec = {"prog", "a test", extras, 1};
+        cli_spec spec = {"prog", "a test", extras, 1, "the path of a pixel"};
         cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
         char *argv[] = {"prog", "--integrator", "fast", NULL};
         cli_parse_or_exit(3, argv, &spec, &o);
@@ -611,7 +611,7 @@ static void test_cli_choice_help_lists_the_choices(void **state)
         {"--noted", CLI_CHOICE, &noted, NULL, "the rung, noted", 0, 0},
         {"--named", CLI_CHOICE, &named, "RUNG", "the rung, named", 0, 0},
     };
-    cli_spec spec = {"test", "a test", extras, 3};
+    cli_spec spec = {"test", "a test", extras, 3, "the path of a pixel"};
     char help[8192];
     help_text(&spec, help, sizeof help);
     expect_in_help(help, "\n  --plain lecture|cosine|mis the rung\n");
@@ -725,7 +725,7 @@ static void test_camera_flags_override_the_scenes_camera(void **state)
     (void)state;
     camera_override view = CAMERA_NOT_OVERRIDDEN;
     const cli_flag extras[] = {CLI_CAMERA_FLAGS(view)};
-    cli_spec spec = {"test", "camera flags", extras, 3};
+    cli_spec spec = {"test", "camera flags", extras, 3, "the path of a pixel"};
     cli_options o = cli_defaults("out.exr", 8, 8, 1);
     char err[512];
     char *good[] = {"test", "--eye", "1,2,3", "--fov", "30"};

@@ -191,7 +191,7 @@ int main(int argc, char **argv)
                      "triangles inside. Prints the box and triangle tests per ray. The built-in scene is\n"
                      "chapters/03-aabb-slabs/scenes/default.scene; with --scene, each triangle, quad or mesh\n"
                      "statement gets one box (the tori field one per torus).",
-                     extras, 2};
+                     extras, 2, "its camera ray (the boxes and triangles it is tested against)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
 
     mesh m;

@@ -127,7 +127,7 @@ int main(int argc, char **argv)
                      "each ray through the cells it pierces (3D-DDA) and test only the objects stored there.\n"
                      "Prints the grid's resolution, empty cells, the fullest cell, and tests per ray.\n"
                      "--mesh stadium shows the teapot in a stadium, where a uniform grid fails.",
-                     extras, (int)(sizeof extras / sizeof extras[0])};
+                     extras, (int)(sizeof extras / sizeof extras[0]), "its camera ray (the cells it visits and the triangles it tests)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     return run(&opts, spec.program, &f);
 }

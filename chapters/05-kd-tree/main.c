@@ -118,7 +118,7 @@ int main(int argc, char **argv)
                      "triangle that straddles the plane goes to both sides. A ray walks the cells it crosses\n"
                      "front to back and stops at the first cell holding a hit inside it. Prints the tree's\n"
                      "figures, the node and triangle tests per ray, and build time against tracing time.",
-                     extras, (int)(sizeof extras / sizeof extras[0])};
+                     extras, (int)(sizeof extras / sizeof extras[0]), "its camera ray (the nodes it visits and the triangles it tests)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     return run(&opts, spec.program, &f);
 }

@@ -90,7 +90,7 @@ int main(int argc, char **argv)
                      "the longest axis at the median object; --split sah where the surface area heuristic says.\n"
                      "Prints the tree's figures and the box and triangle tests per ray. (Wider nodes, as\n"
                      "production kernels use: chapter 13.)",
-                     extras, (int)(sizeof extras / sizeof extras[0])};
+                     extras, (int)(sizeof extras / sizeof extras[0]), "its camera ray (the nodes it visits and the triangles it tests)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     accel_input in;
     int status = accel_input_load(&in, &opts, spec.program, cli_choice_name(&f.mesh), f.obj, f.triangles, 7);

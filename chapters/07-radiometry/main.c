@@ -205,7 +205,7 @@ int main(int argc, char **argv)
                      "The picture is the irradiance on a floor under a square area light, in false colour.\n"
                      "--scene FILE instead prints the irradiance at the camera's target from the scene's lights,\n"
                      "closed form against quadrature, and writes no image.",
-                     extras, 3};
+                     extras, 3, NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     if (opts.explain) {
         fprintf(stderr, "%s: --explain: this chapter traces no rays, so there is no path to explain\n", PROGRAM);

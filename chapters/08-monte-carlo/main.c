@@ -283,7 +283,7 @@ int main(int argc, char **argv)
                      "integrals with known values, with independent, jittered, importance-sampled and\n"
                      "Owen-scrambled Sobol samples; RMSE, time and efficiency for N = 1 .. 2^16. The picture\n"
                      "shows 256 points of each point set on the square and warped onto the disk.",
-                     extras, 4};
+                     extras, 4, NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     /* The shared flags --scene and --explain have nothing to act on here:
      * this chapter integrates four functions with known integrals, not a

@@ -204,7 +204,7 @@ int main(int argc, char **argv)
                      "of chapters 03-06. --time-budget or --target-error render progressively; --data DIR\n"
                      "measures error against time. The built-in Cornell box is chapters/09-path-tracing/scenes/\n"
                      "cornell.scene. The same path tracer made fast: chapter 13 (13-production).",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
     pt_scene sc;

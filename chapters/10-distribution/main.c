@@ -137,7 +137,7 @@ int main(int argc, char **argv)
                      "room with a glossy plate, mirror and glass spheres, a moving sphere and a rising cube;\n"
                      "--scene FILE renders a chapter 09 scene file (nothing moves). --data DIR measures noise\n"
                      "against time for N rays per bounce against N samples per pixel.",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], "the ray tree (every ray, hit and light sample, with its time and lens point)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.stratify = true; /* Cook's jittered pixel samples */
 

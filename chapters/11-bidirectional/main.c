@@ -242,7 +242,7 @@ int main(int argc, char **argv)
                      "joined in every way (s light vertices, t camera vertices), each join weighted by multiple\n"
                      "importance sampling. --strategy S,T renders one strategy; --data DIR measures error against\n"
                      "CPU time beside chapter 09's path tracer. Diffuse and glossy surfaces, emitting triangles.",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     if (f.data != NULL)
         return run_experiments(&f, opts.threads, spec.program);

@@ -185,7 +185,7 @@ int main(int argc, char **argv)
                      "path's luminance f over b = E[f]. --spp is mutations per pixel; b is estimated from\n"
                      "--bootstrap paths. Uses chapter 09's path tracer (MIS, Russian roulette on throughput).\n"
                      "--data DIR measures error against time against chapter 09's path tracer and chapter 11's BDPT.",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     if (opts.explain) {
         fprintf(stderr, "%s: --explain is not supported (a chain has no per-pixel paths; try "

@@ -115,7 +115,7 @@ int main(int argc, char **argv)
                      "What production renderers do: chapter 09's lecture path tracer on the flat set or the\n"
                      "4-wide BVH, shadow rays that skip a room's walls, eight paths at a time where the scene\n"
                      "allows (at most 64 diffuse triangles, no spheres or point lights). --bench measures each step.",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision, one path at a time)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.jitter = true;
     if (f.bench_csv != NULL && !f.bench) {

@@ -61,6 +61,12 @@ static void merge_estimates(estimate_image *a, const estimate_image *b)
     counters_add(&a->counters, &b->counters);
 }
 
+/* The per-pixel variance is trusted from this many samples on: from n
+ * samples of a normal variable the sample variance is off by a factor
+ * sqrt(2 / (n - 1)), a third at 16 (and more for a path tracer's skewed
+ * samples, where the first few often all miss the light and read 0). */
+enum { PROGRESSIVE_TRUSTED_SPP = 16 };
+
 estimate_image progressive_render(radiance_fn radiance, const void *scene, const camera *cam, uint64_t seed,
                                   int threads, double seconds, double target_error, FILE *log)
 {
@@ -71,11 +77,13 @@ estimate_image progressive_render(radiance_fn radiance, const void *scene, const
     estimate_image total = estimate_render(radiance, scene, cam, 2, seed, threads);
     for (int pass = 1;; pass++) {
         double elapsed = timer_seconds() - start, error = estimate_relative_error(&total);
+        bool trusted = total.spp >= PROGRESSIVE_TRUSTED_SPP;
         if (log != NULL)
-            fprintf(log, "pass %2d: %6ld spp, %8.2f s, estimated relative error %.4f\n", pass, total.spp, elapsed, error);
+            fprintf(log, "pass %2d: %6ld spp, %8.2f s, estimated relative error %.4f%s\n", pass, total.spp, elapsed,
+                    error, trusted ? "" : " (not trusted below 16 spp)");
         if (seconds <= 0.0 && target_error <= 0.0)
             break; /* nothing to wait for */
-        if (target_error > 0.0 && error <= target_error) {
+        if (target_error > 0.0 && trusted && error <= target_error) {
             if (log != NULL)
                 fprintf(log, "reached the target error %.4f\n", target_error);
             break;

@@ -44,7 +44,8 @@ double estimate_relative_error(const estimate_image *e);
 
 /* Renders passes of 2, 2, 4, 8, ... samples per pixel (each with its own
  * seed), merging them, until `seconds` have passed or the estimated relative
- * error is below `target_error` (either may be 0: not used; both 0, one
+ * error is below `target_error`, judged only from 16 samples per pixel on,
+ * where the per-pixel variance can be trusted (either may be 0: not used; both 0, one
  * pass). Prints one line per pass to `log` (if not NULL). */
 estimate_image progressive_render(radiance_fn radiance, const void *scene, const camera *cam, uint64_t seed,
                                   int threads, double seconds, double target_error, FILE *log);

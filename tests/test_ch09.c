@@ -364,9 +364,10 @@ static void test_lights_are_picked_by_power(void **state)
     int small_picks = 0;
     for (int i = 0; i < PICKS; i++) {
         vec3 point, normal;
+        float point_error;
         int material = -1; /* set if a light is found, which the assert checks */
         assert_true(pt_scene_sample_emitter(&sc, pcg32_float(&rng), pcg32_float(&rng), pcg32_float(&rng), &point,
-                                            &normal, &material));
+                                            &point_error, &normal, &material));
         small_picks += material == 1;
         assert_true(normal.y < -0.999f); /* the front faces down */
     }
@@ -761,19 +762,22 @@ static void test_visible_is_the_shadow_ray_it_builds(void **state)
             hit_record from = {0};
             from.point = point_on_triangle(a, &rng);
             from.normal_geometric = triangle_normal(a);
+            from.point_error = triangle_point_error(a, from.point, from.normal_geometric);
             bool point_light = i % 4 == 3;
             vec3 target = point_on_triangle(b, &rng), target_normal = triangle_normal(b);
+            float target_error = triangle_point_error(b, target, target_normal);
             if (point_light) { /* a point inside the room, no surface */
                 target = vec3_lerp(target, vec3_make(278, 274, 280), 0.5f);
                 target_normal = vec3_splat(0.0f);
+                target_error = 0.0f;
             }
             bool truth = !occluded_by_everything(
-                &sc, ray_spawn_to(from.point, from.normal_geometric, target, target_normal));
+                &sc, ray_spawn_to(from.point, from.point_error, from.normal_geometric, target, target_error, target_normal));
             blocked += !truth;
-            wrong += pt_scene_visible(&sc, &from, &target, &target_normal, &c) != truth;
+            wrong += pt_scene_visible(&sc, &from, &target, target_error, &target_normal, &c) != truth;
             calls++;
             if (!point_light) {
-                ray twin = ray_spawn_to(from.point, from.normal_geometric, target, vec3_splat(0.0f));
+                ray twin = ray_spawn_to(from.point, from.point_error, from.normal_geometric, target, 0.0f, vec3_splat(0.0f));
                 wrong_twin += !occluded_by_everything(&sc, twin) != truth;
             }
         }

@@ -204,10 +204,11 @@ static bool occluded(const pt_scene *sc, const ray *r, ray_counters *counters)
 
 bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters) { return occluded(sc, &r, counters); }
 
-bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, const vec3 *target_normal,
-                      ray_counters *counters)
+bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, float target_error,
+                      const vec3 *target_normal, ray_counters *counters)
 {
-    ray shadow = ray_spawn_to(from->point, from->normal_geometric, *target, *target_normal);
+    ray shadow = ray_spawn_to(from->point, from->point_error, from->normal_geometric, *target, target_error,
+                              *target_normal);
     counters->shadow_rays++;
     return !occluded(sc, &shadow, counters);
 }

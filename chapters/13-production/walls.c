@@ -87,12 +87,16 @@ enum { WALL_TEST_BUDGET = 100000000 };
  *     exactly +-1 on that axis and the offset that coordinate, so the
  *     distance is one subtraction, off by half a unit in the last place of
  *     |p| + |offset| along that axis at most. The slack is 2^-20 of those:
- *     a point 2^-16 from the plane x = 0 (the smallest offset ray.h moves
- *     a ray's end off a surface by) is still judged correctly.
+ *     a point 2^-16 from the plane x = 0 is still judged correctly, and
+ *     so is a ray's end ray.h moved off such a wall (by at least 64
+ *     roundings of the wall's size, 2^-18 of it: twice the slack of the
+ *     back wall, the farthest from 0 for its size).
  *   - any other (the red wall, whose quad is not quite flat): the unit
  *     normal is rounded to float, so the plane tilts by up to 2^-24 and the
  *     error grows with the distance from the triangle; the slack is 2^-19
  *     of |p| in each coordinate plus of the corners' and offset's sizes.
+ *     That is more than ray.h moves a ray's end off such a wall (9.5e-3
+ *     against 2.2e-3 on the red wall): rays from it take the full test.
  * A margin too large only sends a ray down the full test, never gives a
  * wrong answer. */
 typedef struct {

@@ -84,9 +84,9 @@ static inline vec3 ray_at(ray r, float t) { return vec3_add(r.origin, vec3_scale
  * Both are relative to the geometry itself, so the offset scales with it,
  * from 1e-7 to 1e6, and grows with the distance from the origin only as
  * much as one rounding there does: a sphere of radius 1 at 1e5 is left
- * 4 u |p| = 0.024 off its surface (a fixed number of ulps of every
- * coordinate would be 2 there, beyond its far side), a box 1e-4 across
- * near 0 about 4e-10 (a fixed 2^-16 would be 15 % of it).
+ * about 2 u |p| = 0.012 off its surface (256 ulps of every coordinate
+ * would be 2 there, beyond its far side), a box 1e-4 across near 0 about
+ * 4e-10 (a fixed 2^-16 would be 15 % of it).
  *
  * These are static inline: every path vertex spawns one or two rays, and a
  * call into another file per ray cost more than the offset itself. */
@@ -94,10 +94,16 @@ static inline vec3 ray_at(ray r, float t) { return vec3_add(r.origin, vec3_scale
 /* u: a rounding to nearest moves a float by at most this times its magnitude. */
 static const float RAY_FLOAT_ROUNDING = 0x1.0p-24f;
 /* Roundings of the point's own coordinates the offset covers: the hit
- * point's last rounding and the offset origin's, 2, doubled (measured on
- * random triangles and spheres as in tests/test_ch01.c: with 1, 735 of 2.3
- * million spawned rays re-hit their surface; with 1.5, none). */
-static const float OFFSET_POINT_ROUNDINGS = 4.0f;
+ * point's last rounding and the offset origin's, each at most u |x| (half a
+ * float step, and u |x| is between half a step and a whole one). A bound,
+ * so no margin on top (measured on random triangles and spheres as in
+ * tests/test_ch01.c: with 1, 735 of 2.3 million spawned rays re-hit their
+ * surface; with 1.5, none). Far out a margin shows: at 1e5 a step is
+ * 0.0078, and 4 roundings, 3 steps, were 4 % of the Cornell box scaled to
+ * 0.55 there; rays from its walls ignored the floor within t_min, and its
+ * corners darkened (tests/test_ch09.c: chi-square 414 on 256 pixels
+ * against the box moved back to 0, 302 with 2). */
+static const float OFFSET_POINT_ROUNDINGS = 2.0f;
 /* Roundings of the primitive's size the offset covers: the hit point's
  * inner arithmetic (about 3) and the intersection tests' from a nearby
  * origin. Measured on random triangles, Moller-Trumbore and the watertight
@@ -186,8 +192,8 @@ static inline ray ray_spawn_to(vec3 point, float point_error, vec3 n, vec3 targe
 /* ---- what float can place: objects too small for where they are ---------
  * Floats are spaced in proportion to their magnitude: at 1e5 one step is
  * 2^-7 = 0.0078. An object only a few steps across there has its corners
- * rounded by a good part of its size, and the offsets above (4 roundings of
- * its coordinates: up to 7 steps, 4 for a face along an axis) are a good
+ * rounded by a good part of its size, and the offsets above (2 roundings of
+ * its coordinates: up to 3.5 steps, 2 for a face along an axis) are a good
  * part of it too. No offset fixes that; moving the scene near the origin
  * does. The programs say so before rendering (pt_scene_check_scale). */
 
@@ -196,8 +202,8 @@ static inline float ray_float_step(float magnitude) { return nextafterf(magnitud
 
 /* An object must be at least this many float steps (at the magnitude of
  * its coordinates) across: its corners are then placed within 1/128 of
- * its size, and rays leave it at most about a tenth of its size off its
- * surface. Fewer, and its shading and shadows visibly change. */
+ * its size, and rays leave it at most about a twentieth of its size off
+ * its surface. Fewer, and its shading and shadows visibly change. */
 static const float RAY_MIN_STEPS_ACROSS = 64.0f;
 
 /* Is an object `extent` across (its largest dimension), whose coordinates

@@ -395,7 +395,7 @@ static void test_sphere_tracing_grazing_ray(void **state)
 
 /* ---- leaving a surface: offsets at every scale and distance ----------------
  * ray.h moves a spawned ray off its surface by the hit point's error bound
- * (ray_point_error: 4 roundings of its coordinates across the surface, 64
+ * (ray_point_error: 2 roundings of its coordinates across the surface, 64
  * of the primitive's size). The tests below place objects 1e-7 to 1e6
  * across, from the origin out to 1e5 from it, wherever float can still
  * place them (ray_too_small_for_position); their twins keep the offsets
@@ -519,6 +519,7 @@ typedef enum {
     OFFSET_BOUND,      /* ray_spawn: the hit's error bound */
     OFFSET_NONE,       /* the twin: the bare hit point */
     OFFSET_POINT_ONLY, /* the twin: the bound without its size term */
+    OFFSET_SIZE_ONLY,  /* the twin: the bound without its coordinate term */
 } offset_kind;
 
 typedef struct {
@@ -593,6 +594,8 @@ static ray leave(const hit_record *hit, vec3 direction, offset_kind kind)
     float error = hit->point_error;
     if (kind == OFFSET_POINT_ONLY)
         error = ray_point_error(hit->point, hit->normal_geometric, 0.0f);
+    if (kind == OFFSET_SIZE_ONLY)
+        error = hit->point_error - ray_point_error(hit->point, hit->normal_geometric, 0.0f);
     return ray_spawn(hit->point, error, hit->normal_geometric, direction);
 }
 
@@ -683,6 +686,19 @@ static void test_offset_without_the_size_term_rehits(void **state)
     for (int s = 0; s < PLACE_SIZE_COUNT; s++)
         total += count_self_hits(s, 0, OFFSET_POINT_ONLY, 200).self_hits;
     print_message("offset without its size term: %ld rays hit their own surface\n", total);
+    assert_true(total > 100);
+}
+
+static void test_offset_without_the_coordinate_term_rehits(void **state)
+{
+    (void)state;
+    /* The twin: the size term alone does not cover the hit point's own
+     * rounding, which grows with its distance from the origin: objects
+     * 1000 of their sizes out re-hit. */
+    long total = 0;
+    for (int s = 0; s < PLACE_SIZE_COUNT; s++)
+        total += count_self_hits(s, 3, OFFSET_SIZE_ONLY, 200).self_hits;
+    print_message("offset without its coordinate term: %ld rays hit their own surface\n", total);
     assert_true(total > 100);
 }
 
@@ -1427,6 +1443,7 @@ int main(void)
         cmocka_unit_test(test_spawned_rays_never_rehit_their_surface),
         cmocka_unit_test(test_unoffset_rays_do_rehit_their_surface),
         cmocka_unit_test(test_offset_without_the_size_term_rehits),
+        cmocka_unit_test(test_offset_without_the_coordinate_term_rehits),
         cmocka_unit_test(test_points_inside_a_closed_box_see_each_other),
         cmocka_unit_test(test_fixed_offset_near_zero_blocks_points_inside_a_small_box),
         cmocka_unit_test(test_rays_from_a_point_on_an_edge_do_not_stop_on_the_other_face),

@@ -200,15 +200,15 @@ static void test_offset_origin_moves_to_the_normal_side_at_every_scale(void **st
                 float error = ray_point_error(p, n, scales[s]);
                 vec3 q = ray_offset_origin(p, error, n);
                 /* Strictly on the side n points to, by at least half the
-                 * bound (the origin's own rounding takes at most a quarter:
-                 * the bound holds 4 roundings of the coordinates), in double. */
+                 * bound (the origin's own rounding takes at most one of the
+                 * 2 roundings of the coordinates it holds), in double. */
                 double moved = ((double)q.x - p.x) * n.x + ((double)q.y - p.y) * n.y + ((double)q.z - p.z) * n.z;
                 assert_true(moved > 0.0);
                 assert_true(moved >= 0.5 * error);
-                /* ... and by little: the bound is 4 roundings of the
-                 * coordinates (at most 4 sqrt(3) u |p|, 4.2e-7 |p|) and 64
+                /* ... and by little: the bound is 2 roundings of the
+                 * coordinates (at most 2 sqrt(3) u |p|, 2.1e-7 |p|) and 64
                  * of the size (3.8e-6 of it). */
-                assert_true(error < 4e-6f * scales[s] + 4.2e-7f * vec3_max_component(vec3_abs(p)));
+                assert_true(error < 4e-6f * scales[s] + 2.1e-7f * vec3_max_component(vec3_abs(p)));
             }
         }
     }

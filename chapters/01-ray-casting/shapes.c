@@ -243,7 +243,7 @@ static const int IMPLICIT_MAX_STEPS = 1024;
  * reflected ray): its first hit only counts once it has got farther away,
  * or it would find the surface it starts on. 40x the tolerance is well above
  * the ray offset of ray.h (ray_point_error: 64 roundings of the size, 4e-6
- * relative, and 4 of the coordinates). */
+ * relative, and 2 of the coordinates). */
 static const float IMPLICIT_LEAVING_DISTANCE = 40.0f * 1e-6f;
 
 float implicit_torus_value(const implicit_torus *torus, vec3 p)

@@ -162,6 +162,32 @@ void pt_scene_finish(pt_scene *sc)
     }
 }
 
+static vec3 transformed(vec3 p, float scale, vec3 offset) { return vec3_add(vec3_scale(p, scale), offset); }
+
+void pt_scene_transform(pt_scene *sc, float scale, vec3 offset)
+{
+    for (int i = 0; i < sc->geometry.position_count; i++)
+        sc->geometry.positions[i] = transformed(sc->geometry.positions[i], scale, offset);
+    for (int i = 0; i < sc->sphere_count; i++) {
+        sc->spheres[i].center = transformed(sc->spheres[i].center, scale, offset);
+        sc->spheres[i].radius *= scale;
+    }
+    for (int i = 0; i < sc->point_light_count; i++) {
+        sc->point_lights[i].position = transformed(sc->point_lights[i].position, scale, offset);
+        sc->point_lights[i].intensity = vec3_scale(sc->point_lights[i].intensity, scale * scale);
+    }
+    sc->eye = transformed(sc->eye, scale, offset);
+    sc->target = transformed(sc->target, scale, offset);
+    /* what pt_scene_finish builds, built again from the moved points */
+    accel_destroy(sc->bvh);
+    sc->bvh = NULL;
+    triangle_set_free(&sc->triangles);
+    free(sc->emitters);
+    free(sc->emitter_normals);
+    free(sc->emitter_cdf);
+    pt_scene_finish(sc);
+}
+
 /* ---- intersection ---------------------------------------------------------- */
 
 bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters)

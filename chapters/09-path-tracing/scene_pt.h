@@ -99,6 +99,13 @@ void pt_scene_finish(pt_scene *sc);
 /* Trace the triangles through another structure: build(set, context)
  * replaces the BVH (after pt_scene_finish). */
 void pt_scene_use_accel(pt_scene *sc, pt_accel_builder build, const void *context);
+/* Every point of a finished scene p -> scale p + offset (vertices, spheres'
+ * centres and radii, point lights, the camera's eye and target), point
+ * lights' intensities times scale^2 (so that the irradiance I / r^2 stays),
+ * then rebuilt as pt_scene_finish builds it (chapter 06's BVH). The same
+ * picture at another scale and place, as far as float can hold it: how the
+ * tests put the Cornell box at 1e-7 or far from the origin. */
+void pt_scene_transform(pt_scene *sc, float scale, vec3 offset);
 /* The structures of chapters 03-06 as builders: --accel's brute, grid,
  * kdtree and bvh (the default), by name; NULL for an unknown name. The
  * names, NULL-terminated, for --help and messages. */

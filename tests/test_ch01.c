@@ -414,7 +414,8 @@ static vec3 random_unit(pcg32 *rng)
 /* A point on triangle tri at barycentrics (b1, b2), as a hit computes it. */
 static vec3 triangle_point(const triangle *tri, float b1, float b2)
 {
-    return vec3_add(tri->p0, vec3_add(vec3_scale(vec3_sub(tri->p1, tri->p0), b1), vec3_scale(vec3_sub(tri->p2, tri->p0), b2)));
+    vec3 e1 = vec3_sub(tri->p1, tri->p0), e2 = vec3_sub(tri->p2, tri->p0);
+    return vec3_add(tri->p0, vec3_add(vec3_scale(e1, b1), vec3_scale(e2, b2)));
 }
 
 /* Uniform barycentrics (b1, b2) inside a triangle. */
@@ -433,7 +434,8 @@ static void random_barycentrics(pcg32 *rng, float *b1, float *b2)
 static bool either_test_hits(const triangle *tri, ray r)
 {
     float t, b1, b2;
-    return triangle_intersect_barycentric(tri, &r, &t, &b1, &b2) || triangle_intersect_watertight(tri, &r, &t, &b1, &b2);
+    return triangle_intersect_barycentric(tri, &r, &t, &b1, &b2) ||
+           triangle_intersect_watertight(tri, &r, &t, &b1, &b2);
 }
 
 /* ---- the offsets ray.h had before: the twins' wrong implementation ---------
@@ -474,7 +476,9 @@ static ray fixed_spawn_to(vec3 point, vec3 n, vec3 target, vec3 target_normal, b
     vec3 to_target = vec3_sub(target, point);
     vec3 side = vec3_dot(to_target, n) < 0.0f ? vec3_neg(n) : n;
     vec3 origin = fixed_offset_origin(point, side);
-    vec3 target_side = vec3_dot(vec3_sub(origin, target), target_normal) < 0.0f ? vec3_neg(target_normal) : target_normal;
+    vec3 target_side = target_normal;
+    if (vec3_dot(vec3_sub(origin, target), target_normal) < 0.0f)
+        target_side = vec3_neg(target_normal);
     vec3 end = fixed_offset_origin(target, target_side);
     float minimum = vec3_length(to_target) * (FIXED_OFFSET_ULPS * 0x1.0p-24f);
     if (by_length && vec3_dot(vec3_sub(end, target), target_side) < minimum)
@@ -622,7 +626,8 @@ static self_hit_count count_self_hits(int size_index, int distance_index, offset
                 random_barycentrics(&rng, &b1, &b2);
                 target = triangle_point(&tri, b1, b2);
             }
-            vec3 origin = vec3_add(target, vec3_scale(random_unit(&rng), size * powf(10.0f, 0.3f + 3.0f * pcg32_float(&rng))));
+            float away = size * powf(10.0f, 0.3f + 3.0f * pcg32_float(&rng));
+            vec3 origin = vec3_add(target, vec3_scale(random_unit(&rng), away));
             ray in = ray_make(origin, vec3_normalize(vec3_sub(target, origin)));
             hit_record hit;
             float t, b1, b2;
@@ -787,7 +792,8 @@ static void build_box(pcg32 *rng, vec3 centre, float size, int k, triangle tris[
 
 typedef ray (*spawn_to_fn)(vec3 point, float point_error, vec3 n, vec3 target, float target_error, vec3 target_normal);
 
-static ray fixed_spawn_to_as_ray_h(vec3 point, float point_error, vec3 n, vec3 target, float target_error, vec3 target_normal)
+static ray fixed_spawn_to_as_ray_h(vec3 point, float point_error, vec3 n, vec3 target, float target_error,
+                                   vec3 target_normal)
 {
     (void)point_error;
     (void)target_error;
@@ -885,7 +891,8 @@ static void test_fixed_offset_near_zero_blocks_points_inside_a_small_box(void **
     /* The twin: the old fixed 2^-16 near 0 moves points of a box 1e-4
      * across (its big faces 1e-5 apart) through the opposite face. */
     box_count c = count_box_blocks(1, 0, true, 400);
-    print_message("fixed offset, box 1e-4 across at 0: %ld of %ld shadow rays blocked, %ld of %ld nearest hits skipped\n",
+    print_message("fixed offset, box 1e-4 across at 0: %ld of %ld shadow rays blocked, "
+                  "%ld of %ld nearest hits skipped\n",
                   c.blocked, c.pairs, c.missed, c.aimed);
     assert_true(c.blocked > c.pairs / 100);
     assert_true(c.missed > c.aimed / 100);
@@ -1030,7 +1037,8 @@ static int count_false_shadows_at_zero(float wall, float far, far_end_kind far_e
         random_barycentrics(&rng, &b1, &b2);
         vec3 on_wall = triangle_point(&wall_tri, b1, b2);
         float wall_error = triangle_point_error(&wall_tri, on_wall, n_wall);
-        vec3 on_light = vec3_make(far * (0.4f + 0.2f * pcg32_float(&rng)), far * 0.99f, far * (0.4f + 0.2f * pcg32_float(&rng)));
+        float lx = 0.4f + 0.2f * pcg32_float(&rng), lz = 0.4f + 0.2f * pcg32_float(&rng);
+        vec3 on_light = vec3_make(far * lx, far * 0.99f, far * lz);
         float light_error = ray_point_error(on_light, n_light, 0.1f * far); /* a light a tenth of `far` across */
         ray to_wall;
         if (far_end == FAR_END_COORDINATES) {
@@ -1045,8 +1053,9 @@ static int count_false_shadows_at_zero(float wall, float far, far_end_kind far_e
         false_shadows += either_test_hits(&wall_tri, to_wall);
         if (far_end != FAR_END_RAY_H)
             continue;
-        false_shadows += either_test_hits(&wall_tri, ray_spawn_to(on_wall, wall_error, n_wall, on_light, light_error, n_light));
-        false_shadows += either_test_hits(&wall_tri, ray_spawn(on_wall, wall_error, n_wall, vec3_sub(on_light, on_wall)));
+        ray from_wall = ray_spawn_to(on_wall, wall_error, n_wall, on_light, light_error, n_light);
+        ray leaving = ray_spawn(on_wall, wall_error, n_wall, vec3_sub(on_light, on_wall));
+        false_shadows += either_test_hits(&wall_tri, from_wall) + either_test_hits(&wall_tri, leaving);
     }
     return false_shadows;
 }
@@ -1126,7 +1135,8 @@ static refraction_count count_refraction(int size_index, int distance_index, boo
         sphere s = {random_centre(&rng, distance, k), size};
         for (int i = 0; i < 64; i++) {
             vec3 target = vec3_add(s.center, vec3_scale(random_unit(&rng), 0.99f * size));
-            vec3 origin = vec3_add(target, vec3_scale(random_unit(&rng), size * powf(10.0f, 0.3f + 3.0f * pcg32_float(&rng))));
+            float away = size * powf(10.0f, 0.3f + 3.0f * pcg32_float(&rng));
+            vec3 origin = vec3_add(target, vec3_scale(random_unit(&rng), away));
             ray in = ray_make(origin, vec3_normalize(vec3_sub(target, origin)));
             hit_record hit, far_side;
             vec3 t;
@@ -1178,7 +1188,8 @@ static void test_fixed_ulp_offset_starts_refracted_rays_beyond_a_far_sphere(void
      * sphere's diameter: the origin lands about where the ray through the
      * centre leaves, not on the refracted ray's way. */
     refraction_count c = count_refraction(2, 4, true, 200);
-    print_message("fixed offset, radius 1 at 1e5: of %ld refracted rays %ld start outside the sphere, %ld miss its far side\n",
+    print_message("fixed offset, radius 1 at 1e5: of %ld refracted rays %ld start outside the sphere, "
+                  "%ld miss its far side\n",
                   c.rays, c.outside, c.wrong);
     assert_true(c.wrong > c.rays / 10);
 }

@@ -771,13 +771,15 @@ static void test_visible_is_the_shadow_ray_it_builds(void **state)
                 target_normal = vec3_splat(0.0f);
                 target_error = 0.0f;
             }
-            bool truth = !occluded_by_everything(
-                &sc, ray_spawn_to(from.point, from.point_error, from.normal_geometric, target, target_error, target_normal));
+            ray shadow = ray_spawn_to(from.point, from.point_error, from.normal_geometric, target, target_error,
+                                      target_normal);
+            bool truth = !occluded_by_everything(&sc, shadow);
             blocked += !truth;
             wrong += pt_scene_visible(&sc, &from, &target, target_error, &target_normal, &c) != truth;
             calls++;
             if (!point_light) {
-                ray twin = ray_spawn_to(from.point, from.point_error, from.normal_geometric, target, 0.0f, vec3_splat(0.0f));
+                ray twin = ray_spawn_to(from.point, from.point_error, from.normal_geometric, target, 0.0f,
+                                        vec3_splat(0.0f));
                 wrong_twin += !occluded_by_everything(&sc, twin) != truth;
             }
         }
@@ -941,6 +943,68 @@ static void test_the_old_offsets_render_the_scaled_boxes_wrong(void **state)
     render_result_free(&unscaled);
 }
 
+/* ---- objects too small for where they are --------------------------------------
+ * pt_scene_check_scale() names every object fewer than RAY_MIN_STEPS_ACROSS
+ * float steps across at its distance from the origin, and says to move the
+ * scene: the Cornell box scaled by 1e-3 and moved to (1e5, 0, 1e5) has a
+ * light 0.13 wide there, 17 steps (and walls of 71, which pass); a sphere
+ * of radius 1e-3 at 1e5 is a quarter of a step. The twins: the box itself,
+ * the box scaled by 1e-7 near 0 (small is not the matter) and a sphere of
+ * radius 1 at 1e5 (256 steps) get no warning. */
+static int scale_warnings(const pt_scene *sc, char **text)
+{
+    size_t size = 0;
+    FILE *out = open_memstream(text, &size);
+    assert_non_null(out);
+    int n = pt_scene_check_scale(sc, "test", out);
+    fclose(out);
+    return n;
+}
+
+static int sphere_warnings(vec3 centre, float radius, char **text)
+{
+    pt_scene sc;
+    pt_scene_init(&sc);
+    int m = pt_scene_add_material(&sc, pt_diffuse(vec3_splat(0.5f)));
+    pt_scene_add_sphere(&sc, centre, radius, m, false);
+    pt_scene_finish(&sc);
+    int n = scale_warnings(&sc, text);
+    pt_scene_free(&sc);
+    return n;
+}
+
+static void test_objects_too_small_for_their_place_are_named(void **state)
+{
+    (void)state;
+    char *text = NULL;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    pt_scene_transform(&sc, 1e-3f, SCALE_FAR);
+    assert_int_equal(scale_warnings(&sc, &text), 1);
+    print_message("%s", text);
+    assert_non_null(strstr(text, "test: warning: the 2 triangles of material #3, a light"));
+    assert_non_null(strstr(text, "move the scene near the origin"));
+    free(text);
+    pt_scene_free(&sc);
+
+    assert_int_equal(sphere_warnings(vec3_make(1e5f, 0.0f, 0.0f), 1e-3f, &text), 1);
+    assert_non_null(strstr(text, "sphere #0 at (100000, 0, 0), radius 0.001"));
+    assert_non_null(strstr(text, "move the scene near the origin"));
+    free(text);
+
+    /* the twins */
+    pt_scene_build_cornell_box(&sc);
+    assert_int_equal(scale_warnings(&sc, &text), 0);
+    assert_string_equal(text, "");
+    free(text);
+    pt_scene_transform(&sc, 1e-7f, vec3_splat(0.0f));
+    assert_int_equal(scale_warnings(&sc, &text), 0);
+    free(text);
+    pt_scene_free(&sc);
+    assert_int_equal(sphere_warnings(vec3_make(1e5f, 0.0f, 0.0f), 1.0f, &text), 0);
+    free(text);
+}
+
 /* Signed distance of p from the plane of triangle t, in long double: the
  * edges are exact there (differences of floats) and their products carry
  * 64-bit rounding, far finer than the float test's. */
@@ -1012,6 +1076,7 @@ int main(void)
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
         cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),
+        cmocka_unit_test(test_objects_too_small_for_their_place_are_named),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);
 }

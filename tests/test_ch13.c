@@ -1406,7 +1406,10 @@ static vec3 random_direction(pcg32 *rng)
     return sample_uniform_sphere(vec2_make(pcg32_float(rng), pcg32_float(rng)));
 }
 
-static float hard_size(pcg32 *rng) { return SPAWN_SIZES[pcg32_bounded(rng, sizeof SPAWN_SIZES / sizeof SPAWN_SIZES[0])]; }
+static float hard_size(pcg32 *rng)
+{
+    return SPAWN_SIZES[pcg32_bounded(rng, sizeof SPAWN_SIZES / sizeof SPAWN_SIZES[0])];
+}
 
 static bool same_bits(vec3 a, vec3 b) { return memcmp(&a, &b, sizeof a) == 0; }
 

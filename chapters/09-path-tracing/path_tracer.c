@@ -213,7 +213,8 @@ static void count_continuation(ray_counters *counters, const bsdf_sample_result 
 static bool light_visible(const path_tracer *pt, const hit_record *p, const pt_light_sample *x,
                           ray_counters *counters)
 {
-    return !(pt->effects & EFFECT_SHADOWS) || pt_scene_visible(pt->scene, p, &x->point, x->point_error, &x->normal, counters);
+    return !(pt->effects & EFFECT_SHADOWS) ||
+           pt_scene_visible(pt->scene, p, &x->point, x->point_error, &x->normal, counters);
 }
 
 /* Does the path go on from p (bounce depth + 1 to a vertex whose light

@@ -188,6 +188,63 @@ void pt_scene_transform(pt_scene *sc, float scale, vec3 offset)
     pt_scene_finish(sc);
 }
 
+/* ---- what float can place ------------------------------------------------------ */
+
+/* The warning's common part: how many steps, and what to do. */
+static void warn_too_small(FILE *out, float extent, float magnitude)
+{
+    float step = ray_float_step(magnitude);
+    fprintf(out,
+            " is only %.3g float steps across at its distance from the origin (a step there is %.3g; below %.0f its "
+            "corners are rounded by, and rays leave it, a visible part of its size): its shading and shadows may be "
+            "wrong; move the scene near the origin (subtract its centre from every coordinate)\n",
+            (double)(extent / step), (double)step, (double)RAY_MIN_STEPS_ACROSS);
+}
+
+int pt_scene_check_scale(const pt_scene *sc, const char *label, FILE *out)
+{
+    int warnings = 0;
+    for (int i = 0; i < sc->sphere_count; i++) {
+        const pt_sphere *s = &sc->spheres[i];
+        float extent = 2.0f * s->radius, magnitude = vec3_max_component(vec3_abs(s->center)) + s->radius;
+        if (!ray_too_small_for_position(extent, magnitude))
+            continue;
+        fprintf(out, "%s: warning: sphere #%d at (%.7g, %.7g, %.7g), radius %.7g,", label, i, (double)s->center.x,
+                (double)s->center.y, (double)s->center.z, (double)s->radius);
+        warn_too_small(out, extent, magnitude);
+        warnings++;
+    }
+    for (int m = 0; m < sc->material_count; m++) {
+        vec3 lo = vec3_splat(INFINITY), hi = vec3_splat(-INFINITY);
+        int count = 0, first = -1;
+        for (int f = 0; f < sc->geometry.face_count; f++) {
+            if (sc->geometry.faces[f].material != m)
+                continue;
+            for (int k = 0; k < 3; k++) {
+                vec3 p = mesh_vertex(&sc->geometry, f, k);
+                lo = vec3_min(lo, p);
+                hi = vec3_max(hi, p);
+            }
+            first = count++ == 0 ? f : first;
+        }
+        if (count == 0)
+            continue;
+        float extent = vec3_max_component(vec3_sub(hi, lo));
+        float magnitude = vec3_max_component(vec3_max(vec3_abs(lo), vec3_abs(hi)));
+        if (!ray_too_small_for_position(extent, magnitude))
+            continue;
+        fprintf(out,
+                "%s: warning: the %d triangle%s of material #%d%s (the first is triangle #%d), "
+                "from (%.7g, %.7g, %.7g) to (%.7g, %.7g, %.7g),",
+                label, count, count == 1 ? "" : "s", m,
+                vec3_max_component(sc->materials[m].emission) > 0.0f ? ", a light" : "", first, (double)lo.x,
+                (double)lo.y, (double)lo.z, (double)hi.x, (double)hi.y, (double)hi.z);
+        warn_too_small(out, extent, magnitude);
+        warnings++;
+    }
+    return warnings;
+}
+
 /* ---- intersection ---------------------------------------------------------- */
 
 bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters)

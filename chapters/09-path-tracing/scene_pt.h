@@ -18,6 +18,7 @@
 #define SCENE_PT_H
 
 #include <stdbool.h>
+#include <stdio.h>
 
 #include "01-ray-casting/shapes.h"
 #include "03-aabb-slabs/accel.h"
@@ -106,6 +107,16 @@ void pt_scene_use_accel(pt_scene *sc, pt_accel_builder build, const void *contex
  * picture at another scale and place, as far as float can hold it: how the
  * tests put the Cornell box at 1e-7 or far from the origin. */
 void pt_scene_transform(pt_scene *sc, float scale, vec3 offset);
+/* Objects too small for where they are (ray.h's ray_too_small_for_position:
+ * fewer than RAY_MIN_STEPS_ACROSS float steps across at the magnitude of
+ * their coordinates), which no ray offset can render right: each sphere,
+ * and the triangles of each material together (the scene keeps no other
+ * grouping). Writes one warning per object to `out`,
+ * "label: warning: <the object> is only N float steps across at that
+ * distance from the origin ...; move the scene near the origin", and
+ * returns how many. The programs of chapters 09-13 call it before
+ * rendering. */
+int pt_scene_check_scale(const pt_scene *sc, const char *label, FILE *out);
 /* The structures of chapters 03-06 as builders: --accel's brute, grid,
  * kdtree and bvh (the default), by name; NULL for an unknown name. The
  * names, NULL-terminated, for --help and messages. */

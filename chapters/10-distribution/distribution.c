@@ -116,8 +116,8 @@ static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, v
             continue;
         if (dt->effects & EFFECT_SHADOWS) {
             counters->shadow_rays++;
-            timed_ray shadow = {ray_spawn_to(hit->point, hit->point_error, hit->normal_geometric, x_light, x_error, n_light),
-                                 time};
+            timed_ray shadow = {
+                ray_spawn_to(hit->point, hit->point_error, hit->normal_geometric, x_light, x_error, n_light), time};
             if (motion_scene_occluded(dt->scene, shadow, counters))
                 continue;
         }
@@ -139,9 +139,9 @@ static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, v
             continue;
         if (dt->effects & EFFECT_SHADOWS) {
             counters->shadow_rays++;
-            timed_ray shadow = {
-                ray_spawn_to(hit->point, hit->point_error, hit->normal_geometric, light->position, 0.0f, vec3_splat(0.0f)),
-                time};
+            timed_ray shadow = {ray_spawn_to(hit->point, hit->point_error, hit->normal_geometric, light->position,
+                                             0.0f, vec3_splat(0.0f)),
+                                time};
             if (motion_scene_occluded(dt->scene, shadow, counters))
                 continue;
         }

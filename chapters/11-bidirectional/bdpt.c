@@ -246,8 +246,9 @@ static int light_subpath(const bdpt *b, bdpt_vertex *path, pcg32 *rng, ray_count
         return 1;
     vec3 w = frame_to_world(y0->normal, local);
     counters->indirect_rays++;
-    return random_walk(b, ray_spawn(y0->point, y0->point_error, y0->normal_geometric, w), vec3_scale(y0->beta, (float)PI),
-                       cosine_hemisphere_pdf(local.z), path, 1, b->max_depth + 1, rng, counters);
+    return random_walk(b, ray_spawn(y0->point, y0->point_error, y0->normal_geometric, w),
+                       vec3_scale(y0->beta, (float)PI), cosine_hemisphere_pdf(local.z), path, 1, b->max_depth + 1, rng,
+                       counters);
 }
 
 /* ---- multiple importance sampling -------------------------------------------------

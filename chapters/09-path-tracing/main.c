@@ -139,6 +139,7 @@ int main(int argc, char **argv)
     if (accel_builder != pt_accel_builder_named("bvh"))
         pt_scene_use_accel(&sc, accel_builder, NULL);
     program_note_accel(sc.bvh->stats.name);
+    pt_scene_check_scale(&sc, spec.program, stderr);
     pt = path_tracer_defaults(&sc);
     pt.effects = effects;
     pt.integrator = chosen;

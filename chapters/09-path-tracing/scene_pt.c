@@ -196,7 +196,7 @@ static void warn_too_small(FILE *out, float extent, float magnitude)
     float step = ray_float_step(magnitude);
     fprintf(out,
             " is only %.3g float steps across at its distance from the origin (a step there is %.3g; below %.0f its "
-            "corners are rounded by, and rays leave it, a visible part of its size): its shading and shadows may be "
+            "shape is rounded by, and rays leave it, a visible part of its size): its shading and shadows may be "
             "wrong; move the scene near the origin (subtract its centre from every coordinate)\n",
             (double)(extent / step), (double)step, (double)RAY_MIN_STEPS_ACROSS);
 }

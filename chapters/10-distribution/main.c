@@ -82,6 +82,8 @@ int main(int argc, char **argv)
     } else {
         motion_scene_build_showcase(&ms);
     }
+    /* (the still part; the moving objects are not checked) */
+    pt_scene_check_scale(&ms.base, spec.program, stderr);
 
     int status = 0;
     if (data != NULL) {

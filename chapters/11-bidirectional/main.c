@@ -170,6 +170,7 @@ int main(int argc, char **argv)
         pt_scene_free(&sc);
         return 1;
     }
+    pt_scene_check_scale(&sc, spec.program, stderr);
     if (max_depth < 0)
         max_depth = max_depth_file >= 0 && max_depth_file <= BDPT_MAX_DEPTH ? max_depth_file : BDPT_MAX_DEPTH;
 

@@ -91,6 +91,7 @@ int main(int argc, char **argv)
                 scene_name);
         return 2;
     }
+    pt_scene_check_scale(&sc, "12-metropolis", stderr);
     path_tracer pt = path_tracer_defaults(&sc);
     pt.integrator = PT_MIS;
     pt.russian_roulette = RR_THROUGHPUT;

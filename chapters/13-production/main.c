@@ -57,6 +57,7 @@ static int render(cli_options *opts, const production_flags *f)
         scene_desc_free(&desc);
         return from_file || f->obj != NULL ? 1 : 2;
     }
+    pt_scene_check_scale(&sc, "13-production", stderr);
     if (!from_file)
         pt_scene_describe(&sc, &desc);
     effects_report e = effects_analyse(&desc);

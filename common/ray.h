@@ -183,9 +183,11 @@ static inline ray ray_spawn_to(vec3 point, float point_error, vec3 n, vec3 targe
         target = ray_offset_origin(target, pull, target_side);
     }
     ray r = ray_make(origin, vec3_sub(target, origin));
-    /* (a segment of length 0 is empty: t_min = 0 > t_max = -inf, or NaN) */
-    r.t_min = length > 0.0f ? point_error / length : 0.0f;
-    r.t_max = length > 0.0f ? 1.0f - pull / length : -INFINITY;
+    /* in units of the segment (one division: they are on every shadow ray's
+     * way); a segment of length 0 is empty, t_min = 0 > t_max = -inf */
+    float per_length = 1.0f / length;
+    r.t_min = length > 0.0f ? point_error * per_length : 0.0f;
+    r.t_max = length > 0.0f ? 1.0f - pull * per_length : -INFINITY;
     return r;
 }
 

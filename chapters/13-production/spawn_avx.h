@@ -98,9 +98,10 @@ SPAWN_TARGET static inline void ray_spawn_to8(const __m256 point[3], __m256 erro
         direction[c] = _mm256_sub_ps(far_end[c], origin[c]);
     /* t_min, t_max, and the empty segment where the length is 0 */
     __m256 some = _mm256_cmp_ps(length, zero, _CMP_GT_OQ);
-    *t_min = _mm256_blendv_ps(zero, _mm256_div_ps(error, length), some);
+    __m256 per_length = _mm256_div_ps(_mm256_set1_ps(1.0f), length);
+    *t_min = _mm256_blendv_ps(zero, _mm256_mul_ps(error, per_length), some);
     *t_max = _mm256_blendv_ps(_mm256_set1_ps(-INFINITY),
-                              _mm256_sub_ps(_mm256_set1_ps(1.0f), _mm256_div_ps(pull, length)), some);
+                              _mm256_sub_ps(_mm256_set1_ps(1.0f), _mm256_mul_ps(pull, per_length)), some);
 }
 
 #else

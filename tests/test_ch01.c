@@ -731,7 +731,7 @@ static const float BOX_THICKNESS = 0.1f; /* of the box's size */
  * offsets move the hit (below). */
 static const float BOX_HIT_TOLERANCE = 1e-3f;
 /* Segments meeting a face at a sine below this (1/20: about 3 degrees) are
- * left out of the nearest-hit check (below). */
+ * left out of the nearest-hit check, and in turned boxes altogether (below). */
 static const float BOX_MIN_SINE = 0.05f;
 /* Points are drawn at least this many of their error bounds from every
  * other face's plane. A point within rounding of an edge lies on two
@@ -827,6 +827,19 @@ static box_count count_box_blocks(int size_index, int distance_index, bool fixed
                 } while (near_another_face(tris, index / 2, p[e], error[e]));
                 face[e] = index / 2;
             }
+            /* In a turned box, segments that graze a face are left out:
+             * its two triangles, whose corners were rounded apart, are not
+             * quite flat (by up to a few roundings of the corners, as much
+             * as the offsets), and a segment that runs along the face one
+             * offset off it can meet the other triangle (measured: 6 of
+             * 40 seeds blocked one such pair, all between points of one
+             * face 1000 sizes out). A box along the axes has flat faces. */
+            vec3 v = vec3_sub(p[1], p[0]);
+            float along = vec3_length(v);
+            bool grazing = fabsf(vec3_dot(v, n[0])) < BOX_MIN_SINE * along ||
+                           fabsf(vec3_dot(v, n[1])) < BOX_MIN_SINE * along;
+            if (k % 3 != 0 && grazing)
+                continue;
             count.pairs++;
             ray shadow = spawn_to(p[0], error[0], n[0], p[1], error[1], n[1]);
             bool blocked = false;
@@ -836,10 +849,7 @@ static box_count count_box_blocks(int size_index, int distance_index, bool fixed
             /* The nearest-hit check, from a point towards one on another
              * face, where the segment meets both at an angle (a ray that
              * grazes a face moves its hit along it by a lot). */
-            vec3 v = vec3_sub(p[1], p[0]);
-            float along = vec3_length(v);
-            if (face[0] == face[1] || fabsf(vec3_dot(v, n[0])) < BOX_MIN_SINE * along ||
-                fabsf(vec3_dot(v, n[1])) < BOX_MIN_SINE * along)
+            if (face[0] == face[1] || grazing)
                 continue;
             count.aimed++;
             ray towards = fixed ? fixed_spawn(p[0], n[0], vec3_sub(p[1], p[0]))
@@ -882,7 +892,7 @@ static void test_points_inside_a_closed_box_see_each_other(void **state)
         }
     print_message("%ld pairs of points inside boxes: none blocked; %ld rays aimed from one to the other: no nearest "
                   "hit skipped\n", pairs, aimed);
-    assert_true(pairs > 200000 && aimed > pairs / 2);
+    assert_true(pairs > 200000 && aimed > pairs / 3);
 }
 
 static void test_fixed_offset_near_zero_blocks_points_inside_a_small_box(void **state)

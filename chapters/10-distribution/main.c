@@ -146,6 +146,7 @@ int main(int argc, char **argv)
     int status = load_scene(&ms, &opts, spec.program, &f, &effects);
     if (status != 0)
         return status;
+    pt_scene_check_scale(&ms.base, spec.program, stderr); /* the still part; moving objects are not checked */
     status = f.data != NULL ? run_experiments(&ms, opts.threads, f.data, spec.program)
                             : render(&opts, spec.program, &ms, &f, effects);
     motion_scene_free(&ms);

@@ -62,6 +62,7 @@ static int render(cli_options *opts, const production_flags *f)
         scene_desc_free(&desc);
         return 1;
     }
+    pt_scene_check_scale(&sc, "13-production", stderr);
     if (!from_file)
         pt_scene_describe(&sc, &desc);
     camera_override_apply(&f->view, &sc.eye, &sc.target, &sc.vertical_fov_degrees);

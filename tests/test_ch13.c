@@ -16,6 +16,7 @@
 
 #include "06-bvh/bvh.h"
 #include "08-monte-carlo/sampling.h"
+#include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "13-production/bvh4.h"
@@ -1538,6 +1539,110 @@ static void test_fast_sincos_turns_is_within_a_few_ulps(void **state)
     assert_true(twin > FAST_SINCOS_TURNS_ULPS);
 }
 
+/* ---- the physics once: the lanes' light sample against chapter 09's ----------
+ * The eight-path renderer computes each vertex's light sample in AVX (or
+ * lane by lane), in the solid-angle form; chapter 09's shade() computes it
+ * from pt_scene_sample_light() and bsdf_eval() in the area form,
+ *   L_e f_r cos(theta) cos(theta') / |x' - p|^2 / pdf_light.
+ * On random vertices of the Cornell box with random light samples the two
+ * agree to rounding (the forms order their products differently: a few
+ * ulps each, LIGHT_MATH_TOLERANCE relative), and agree on which samples
+ * add light. The twin: the area form without cos(theta') is caught. */
+static const float LIGHT_MATH_TOLERANCE = 1e-5f;
+
+static vec3 random_unit_in_hemisphere(vec3 n, pcg32 *rng)
+{
+    for (;;) {
+        vec3 d = vec3_make(2.0f * pcg32_float(rng) - 1.0f, 2.0f * pcg32_float(rng) - 1.0f, 2.0f * pcg32_float(rng) - 1.0f);
+        float l2 = vec3_length_squared(d);
+        if (l2 > 1e-4f && l2 <= 1.0f)
+            return vec3_dot(d, n) > 0.0f ? vec3_normalize(d) : vec3_normalize(vec3_neg(d));
+    }
+}
+
+static long light_math_mismatches(const pt_scene *sc, int vertices, bool with_cos_light, uint64_t seed, long *lit)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    long wrong = 0;
+    for (int start = 0; start < vertices; start += 8) {
+        wide_light_vertex v[8];
+        vec3 expected[8];
+        bool adds[8];
+        for (int k = 0; k < 8; k++) {
+            int t;
+            do
+                t = (int)pcg32_bounded(&rng, (uint32_t)sc->triangles.count);
+            while (vec3_max_component(sc->materials[sc->geometry.faces[t].material].emission) > 0.0f);
+            const triangle *tri = &sc->triangles.triangles[t];
+            const pt_material *m = &sc->materials[sc->geometry.faces[t].material];
+            float r1 = sqrtf(pcg32_float(&rng)), r2 = pcg32_float(&rng);
+            v[k].p = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - r1), vec3_scale(tri->p1, r1 * (1.0f - r2))),
+                              vec3_scale(tri->p2, r1 * r2));
+            v[k].n = v[k].ng = vec3_normalize(vec3_cross(vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0)));
+            v[k].wo = random_unit_in_hemisphere(v[k].n, &rng);
+            v[k].albedo = m->albedo;
+            v[k].throughput = vec3_make(0.5f + 0.5f * pcg32_float(&rng), 0.5f + 0.5f * pcg32_float(&rng), 1.0f);
+            v[k].p_error = 0.0f;
+            pt_light_sample x;
+            memset(&x, 0, sizeof x); /* assert_true may return: the compiler cannot know it stops the test */
+            float u_pick = pcg32_float(&rng), u1 = pcg32_float(&rng), u2 = pcg32_float(&rng);
+            assert_true(pt_scene_sample_light(sc, u_pick, u1, u2, &x));
+            v[k].x_light = x.point;
+            v[k].n_light = x.normal;
+            v[k].le = x.emission;
+            v[k].x_error = x.point_error;
+            v[k].pdf_area = x.pdf_light;
+            /* chapter 09's shade(), the area form */
+            vec3 to_light = vec3_sub(x.point, v[k].p);
+            float distance2 = vec3_length_squared(to_light);
+            vec3 ws = vec3_scale(to_light, 1.0f / sqrtf(distance2));
+            float cos_theta = vec3_dot(v[k].n, ws), cos_theta_x = -vec3_dot(x.normal, ws);
+            vec3 f_r = bsdf_eval(m, v[k].n, v[k].wo, ws);
+            adds[k] = cos_theta > 0.0f && cos_theta_x > 0.0f && !vec3_is_black(f_r);
+            float g = cos_theta * (with_cos_light ? cos_theta_x : 1.0f) / distance2;
+            expected[k] = vec3_mul(v[k].throughput, vec3_scale(vec3_mul(x.emission, f_r), g / x.pdf_light));
+        }
+        vec3 got[8];
+        int mask = path_tracer_wide_light_math(v, 8, got);
+        for (int k = 0; k < 8; k++) {
+            bool wide_adds = (mask >> k) & 1;
+            *lit += adds[k];
+            if (wide_adds != adds[k]) {
+                wrong++;
+                continue;
+            }
+            if (!adds[k])
+                continue;
+            float scale = fmaxf(vec3_max_component(expected[k]), vec3_max_component(got[k]));
+            wrong += vec3_max_component(vec3_abs(vec3_sub(got[k], expected[k]))) > LIGHT_MATH_TOLERANCE * scale;
+        }
+    }
+    return wrong;
+}
+
+static void test_lanes_light_sample_is_chapter_09s(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    enum { VERTICES = 8000 };
+    for (int avx = 1; avx >= 0; avx--) {
+        path_tracer_wide_use_avx(avx);
+        long lit = 0;
+        long wrong = light_math_mismatches(&sc, VERTICES, true, test_seed(151), &lit);
+        print_message("light sample, %s: %ld of %d vertices differ from chapter 09's (%ld add light)\n",
+                      avx ? "AVX" : "lane by lane", wrong, VERTICES, lit);
+        assert_int_equal(wrong, 0);
+        assert_true(lit > VERTICES / 4);
+    }
+    path_tracer_wide_use_avx(true);
+    long lit = 0;
+    long twin = light_math_mismatches(&sc, VERTICES, false, test_seed(151), &lit);
+    print_message("twin, without cos(theta'): %ld differ\n", twin);
+    assert_true(twin > lit / 2);
+    pt_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1564,6 +1669,7 @@ int main(void)
         cmocka_unit_test(test_eight_paths_same_bits_for_threads_and_lanes),
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
         cmocka_unit_test(test_fast_sincos_turns_is_within_a_few_ulps),
+        cmocka_unit_test(test_lanes_light_sample_is_chapter_09s),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

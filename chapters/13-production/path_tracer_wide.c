@@ -738,3 +738,36 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
     *out = e;
     return true;
 }
+
+int path_tracer_wide_light_math(const wide_light_vertex *v, int count, vec3 contribution[8])
+{
+    vertex_lanes L;
+    memset(&L, 0, sizeof L);
+    int lanes = 0;
+    for (int k = 0; k < count && k < LANES; k++) {
+        lanes_set(L.p, k, v[k].p);
+        lanes_set(L.ng, k, v[k].ng);
+        lanes_set(L.n, k, v[k].n);
+        lanes_set(L.wo, k, v[k].wo);
+        lanes_set(L.albedo, k, v[k].albedo);
+        lanes_set(L.throughput, k, v[k].throughput);
+        lanes_set(L.x_light, k, v[k].x_light);
+        lanes_set(L.n_light, k, v[k].n_light);
+        lanes_set(L.le, k, v[k].le);
+        L.p_error[k] = v[k].p_error;
+        L.x_error[k] = v[k].x_error;
+        L.pdf_area[k] = v[k].pdf_area;
+        lanes |= 1 << k;
+    }
+    int lit = 0;
+#if WIDE_HAVE_AVX
+    if (use_avx && __builtin_cpu_supports("avx2"))
+        lit = light_math_avx(&L, lanes);
+    else
+#endif
+        for (int k = 0; k < count && k < LANES; k++)
+            lit |= light_math_lane(&L, k);
+    for (int k = 0; k < count && k < LANES; k++)
+        contribution[k] = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
+    return lit;
+}

@@ -27,6 +27,7 @@
 #include "scene_file.h"
 #include "stats.h"
 #include "image_check.h"
+#include "pt_scene_check.h"
 #include "test_support.h"
 
 /* How many standard errors a pixel may be from the truth, in the per-pixel
@@ -699,30 +700,6 @@ static void test_point_light_in_a_sphere_needs_no_shadow_ray(void **state)
 
 
 /* ---- shadow rays ---------------------------------------------------------------- */
-
-/* A uniform point on triangle t, and the triangle's unit normal. */
-static vec3 point_on_triangle(const triangle *t, pcg32 *rng)
-{
-    float s = sqrtf(pcg32_float(rng)), u = pcg32_float(rng);
-    float b1 = (1.0f - u) * s, b2 = u * s;
-    return vec3_add(vec3_add(vec3_scale(t->p0, 1.0f - b1 - b2), vec3_scale(t->p1, b1)), vec3_scale(t->p2, b2));
-}
-
-static vec3 triangle_normal(const triangle *t)
-{
-    return vec3_normalize(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
-}
-
-static bool spheres_block(const pt_scene *sc, ray r)
-{
-    hit_record hit;
-    for (int i = 0; i < sc->sphere_count; i++) {
-        sphere shape = {sc->spheres[i].center, sc->spheres[i].radius};
-        if (sphere_intersect(&shape, r, &hit))
-            return true;
-    }
-    return false;
-}
 
 /* The answer without the walls shortcut: every triangle, every sphere. */
 static bool occluded_by_everything(const pt_scene *sc, ray r)

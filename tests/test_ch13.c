@@ -30,6 +30,7 @@
 #include "stats.h"
 #include "accel_check.h"
 #include "image_check.h"
+#include "pt_scene_check.h"
 #include "test_support.h"
 
 static bool box_contains(aabb outer, aabb inner)
@@ -88,29 +89,6 @@ static void assert_same_render(const path_tracer *a, const path_tracer *b, ray_c
 
 /* A uniform point on triangle t (as a hit computes it, P0 + (b1 E1 + b2 E2)),
  * and the triangle's unit normal. */
-static vec3 point_on_triangle(const triangle *t, pcg32 *rng)
-{
-    float s = sqrtf(pcg32_float(rng)), u = pcg32_float(rng);
-    float b1 = (1.0f - u) * s, b2 = u * s;
-    return vec3_add(t->p0, vec3_add(vec3_scale(vec3_sub(t->p1, t->p0), b1), vec3_scale(vec3_sub(t->p2, t->p0), b2)));
-}
-
-static vec3 triangle_normal(const triangle *t)
-{
-    return vec3_normalize(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
-}
-
-static bool spheres_block(const pt_scene *sc, ray r)
-{
-    hit_record hit;
-    for (int i = 0; i < sc->sphere_count; i++) {
-        sphere shape = {sc->spheres[i].center, sc->spheres[i].radius};
-        if (sphere_intersect(&shape, r, &hit))
-            return true;
-    }
-    return false;
-}
-
 /* The answer without the walls shortcut: every triangle, every sphere. */
 static bool occluded_by_everything(const pt_scene *sc, ray r)
 {

@@ -36,7 +36,7 @@ estimate_image render_estimate(const path_tracer *pt, const camera *cam, int spp
     e.standard_error = image_make(cam->width, cam->height);
     render_job job = {.cam = cam, .spp = spp, .seed = seed, .threads = threads, .quiet = true,
                       .radiance = path_trace_radiance, .scene = pt, .standard_error = &e.standard_error,
-                      .jitter = true};
+                      .jitter = true, .sample = path_tracer_sample_fn(pt)};
     render_stats stats;
     render_image(&job, &e.mean, &stats);
     e.spp = spp;

@@ -3,6 +3,7 @@
 
 #include "counters.h"
 #include "input_file.h"
+#include "run_record.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -177,9 +178,35 @@ static bool set_float(const cli_flag *f, const char *value, char *err, size_t er
     return false;
 }
 
+/* "X,Y,Z": three numbers within [min, max], nothing else. */
+static bool set_vec3(const cli_flag *f, const char *value, char *err, size_t err_size)
+{
+    float c[3];
+    char part[64];
+    const char *p = value;
+    for (int k = 0; k < 3; k++) {
+        const char *end = k < 2 ? strchr(p, ',') : p + strlen(p);
+        if (end == NULL || end - p >= (long)sizeof part)
+            break;
+        snprintf(part, sizeof part, "%.*s", (int)(end - p), p);
+        if (!parse_float(part, f->min, f->max, &c[k]))
+            break;
+        if (k == 2) {
+            *(vec3 *)f->value = vec3_make(c[0], c[1], c[2]);
+            return true;
+        }
+        p = end + 1;
+    }
+    snprintf(err, err_size, "%s: expected three numbers X,Y,Z from %g to %g, got '%s'", f->name, f->min, f->max,
+             value);
+    return false;
+}
+
 static bool set_extra(const cli_flag *f, const char *value, char *err, size_t err_size)
 {
     switch (f->kind) {
+    case CLI_VEC3:
+        return set_vec3(f, value, err, err_size);
     case CLI_INT:
         return set_int(f, value, err, err_size);
     case CLI_FLOAT:
@@ -342,6 +369,7 @@ static void flag_usage(const cli_flag *f, char *out, size_t size)
                           : f->kind == CLI_STRING ? "TEXT"
                           : f->kind == CLI_DIR    ? "DIR"
                           : f->kind == CLI_CHOICE ? "NAME"
+                          : f->kind == CLI_VEC3   ? "X,Y,Z"
                                                   : "";
     snprintf(out + n, size - (size_t)n, "%s", metavar);
 }
@@ -379,8 +407,8 @@ void cli_print_help(const cli_spec *spec, const cli_options *d)
     printf("                   (default %s)\n", d->out);
     printf("  --exposure X     preview brightness in stops, 2^X (default %g)\n", (double)d->exposure);
     printf("  --scene FILE     render a scene file instead of the built-in scene (docs/scene-format.md)\n");
-    printf("  --explain X,Y    print the path tree of pixel (X, Y) -- every ray, hit, light sample and\n");
-    printf("                   Russian roulette decision -- instead of rendering the image\n");
+    if (spec->explain != NULL)
+        printf("  --explain X,Y    instead of rendering, print for pixel (X, Y) %s\n", spec->explain);
     printf("  --max-input-mb N the largest OBJ or MTL file read, in MB of 2^20 bytes (default %d)\n", d->max_input_mb);
     printf("  --quiet          no progress line and no report\n");
     printf("  --help           this text\n");
@@ -410,6 +438,7 @@ void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options 
         fprintf(stderr, "%s: %s\n(try '%s --help')\n", spec->program, err, spec->program);
         exit(2);
     }
+    run_record_command(argc, argv, opts);
     /* Inputs are bounded, and none may be a file this run writes. */
     input_file_set_mesh_limit((uint64_t)opts->max_input_mb << 20);
     char sidecar[PATH_MAX];

@@ -27,6 +27,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "camera.h"
+
 typedef struct {
     int width, height;
     int spp;            /* samples per pixel */
@@ -55,7 +57,8 @@ typedef struct {
  * than after the experiment it was to hold.
  * CLI_CHOICE: one of a list of names (a cli_choice). Anything else is
  * refused with "--flag: unknown 'x' (a, b, c)", here, for every program. */
-typedef enum { CLI_INT, CLI_FLOAT, CLI_STRING, CLI_BOOL, CLI_DIR, CLI_CHOICE } cli_kind;
+/* CLI_VEC3: three numbers "X,Y,Z" into a vec3, each within [min, max]. */
+typedef enum { CLI_INT, CLI_FLOAT, CLI_STRING, CLI_BOOL, CLI_DIR, CLI_CHOICE, CLI_VEC3 } cli_kind;
 
 /* What a CLI_CHOICE flag points to. The names are the only accepted
  * values; index is the default before parsing (-1: none, for "not given")
@@ -85,6 +88,10 @@ typedef struct {
     const char *summary; /* what the program shows, for --help */
     const cli_flag *extras;
     int extra_count;
+    /* What --explain X,Y prints in this program, for --help (NULL: it has
+     * nothing to explain per pixel, --help does not offer the flag, and
+     * the program says why if it is given). */
+    const char *explain;
 } cli_spec;
 
 typedef enum { CLI_OK, CLI_HELP, CLI_ERROR } cli_status;
@@ -102,5 +109,15 @@ cli_status cli_parse(int argc, char **argv, const cli_spec *spec, cli_options *o
  * as input stops the program with status 2). */
 void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options *opts);
 void cli_print_help(const cli_spec *spec, const cli_options *defaults);
+
+/* The camera flags of every program that renders a mesh it was given
+ * (--obj, a scene file): three entries for a cli_flag table, filling a
+ * camera_override (camera.h) that starts as CAMERA_NOT_OVERRIDDEN. */
+#define CLI_CAMERA_FLAGS(o)                                                                                           \
+    {"--eye", CLI_VEC3, &(o).eye, "X,Y,Z", "where the camera stands (default: the scene's camera, or one that "    \
+                                           "frames the mesh)", -1e7, 1e7},                                          \
+        {"--target", CLI_VEC3, &(o).target, "X,Y,Z", "the point it looks at (default: along the scene camera's view)", \
+         -1e7, 1e7},                                                                                                 \
+        {"--fov", CLI_FLOAT, &(o).vertical_fov_degrees, "DEGREES", "its vertical field of view", 1.0, 179.0}
 
 #endif

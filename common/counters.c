@@ -1,4 +1,5 @@
 #include "counters.h"
+#include "run_record.h"
 
 #include "atomic_file.h"
 
@@ -55,6 +56,8 @@ void counters_path_for_image(const char *image_path, char *out, size_t out_size)
 bool counters_write_json(const char *path, const ray_counters *c, double seconds, const char *extra, char *err,
                          size_t err_size)
 {
+    char record[8192];
+    run_record_json(record, sizeof record);
     atomic_file out;
     if (!atomic_file_open(&out, path, err, err_size))
         return false;
@@ -63,8 +66,9 @@ bool counters_write_json(const char *path, const ray_counters *c, double seconds
             ",\n  \"reflection_rays\": %" PRIu64
             ",\n  \"refraction_rays\": %" PRIu64 ",\n  \"indirect_rays\": %" PRIu64 ",\n  \"box_tests\": %" PRIu64
             ",\n  \"primitive_tests\": %" PRIu64 ",\n  \"nonfinite_samples_dropped\": %" PRIu64
-            ",\n  \"seconds\": %.6f%s%s\n}\n",
+            ",\n  \"seconds\": %.6f%s%s%s%s\n}\n",
             c->camera_rays, c->shadow_rays, c->shadow_rays_inside_walls, c->reflection_rays, c->refraction_rays,
-            c->indirect_rays, c->box_tests, c->primitive_tests, c->nonfinite_samples, seconds, extra != NULL ? ",\n  " : "", extra != NULL ? extra : "");
+            c->indirect_rays, c->box_tests, c->primitive_tests, c->nonfinite_samples, seconds,
+            extra != NULL ? ",\n  " : "", extra != NULL ? extra : "", record[0] != '\0' ? ",\n  " : "", record);
     return atomic_file_commit(&out, err, err_size);
 }

@@ -7,30 +7,43 @@
 
 #include "explain.h"
 #include "input_file.h"
+#include "run_record.h"
 #include "timer.h"
 
 #include <omp.h>
 
-/* The effects of the current render, for its counters file ("" until noted). */
-static char noted_effects[256];
-
 void program_note_effects(const effects_report *e)
 {
-    size_t used = (size_t)snprintf(noted_effects, sizeof noted_effects, "\"effects_simulated\": [");
+    char list[256];
+    size_t used = (size_t)snprintf(list, sizeof list, "[");
     bool first = true;
     for (int k = 0; k < EFFECT_COUNT; k++)
         if (e->simulated & (1u << k)) {
-            used += (size_t)snprintf(noted_effects + used, sizeof noted_effects - used, "%s\"%s\"", first ? "" : ", ",
+            used += (size_t)snprintf(list + used, sizeof list - used, "%s\"%s\"", first ? "" : ", ",
                                      effect_name(1u << k));
             first = false;
         }
-    snprintf(noted_effects + used, sizeof noted_effects - used, "]");
+    snprintf(list + used, sizeof list - used, "]");
+    run_record_note("effects_simulated", list);
 }
 
 /* The structure the rays were traced through, for the report ("" until noted). */
 static char noted_accel[64];
 
-void program_note_accel(const char *name) { snprintf(noted_accel, sizeof noted_accel, "%s", name); }
+void program_note_accel(const char *name)
+{
+    snprintf(noted_accel, sizeof noted_accel, "%s", name);
+    run_record_note("accel", name);
+}
+
+bool program_write_record(const cli_options *opts, const char *label, const ray_counters *c, double seconds,
+                          char *err, size_t err_size)
+{
+    char path[4096], extra[128];
+    counters_path_for_image(opts->out, path, sizeof path);
+    snprintf(extra, sizeof extra, "\"program\": \"%s\"", label);
+    return counters_write_json(path, c, seconds, extra, err, err_size);
+}
 
 void program_warn(const char *label, const scene_desc *d, int line, int column, const char *format, ...)
 {
@@ -169,12 +182,9 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
         fprintf(stderr, "%s: %s\n", label, err);
         return 1;
     }
-    char counters_path[4096], extra[640], accel_note[96] = "";
+    char counters_path[4096], extra[128];
     counters_path_for_image(opts->out, counters_path, sizeof counters_path);
-    if (noted_accel[0] != '\0')
-        snprintf(accel_note, sizeof accel_note, ",\n  \"accel\": \"%s\"", noted_accel);
-    snprintf(extra, sizeof extra, "\"program\": \"%s\",\n  \"width\": %d,\n  \"height\": %d,\n  \"spp\": %d%s%s%s",
-             label, cam->width, cam->height, opts->spp, accel_note, noted_effects[0] ? ",\n  " : "", noted_effects);
+    snprintf(extra, sizeof extra, "\"program\": \"%s\"", label);
     if (!counters_write_json(counters_path, &stats.counters, stats.seconds, extra, err, sizeof err)) {
         fprintf(stderr, "%s: %s\n", label, err);
         return 1;

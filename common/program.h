@@ -36,6 +36,12 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
  * d is left empty and the result is false. */
 bool program_load_scene(cli_options *opts, const char *label, scene_desc *d);
 
+/* The counters file beside the image (counters_path_for_image): c, the
+ * seconds, the program's name and the run's record (run_record.h). For
+ * programs that make their picture without program_render(). */
+bool program_write_record(const cli_options *opts, const char *label, const ray_counters *c, double seconds,
+                          char *err, size_t err_size);
+
 /* Records which effects the render simulates, for the counters file. */
 void program_note_effects(const effects_report *e);
 /* Records the acceleration structure the rays go through (its

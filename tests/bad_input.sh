@@ -1,9 +1,10 @@
 #!/bin/bash
 # bad_input.sh -- every chapter program, fed bad input, must fail cleanly.
 #
-#   tests/bad_input.sh BUILD_DIR          (run by `make test`)
+#   tests/bad_input.sh BUILD_DIR [PROGRAM...]   (run by `make test`, one program at a time)
 #
-# For every program in BUILD_DIR/bin and every case below the run must:
+# For every program in BUILD_DIR/bin (or the PROGRAMs named, such as
+# 01-ray-casting) and every case below the run must:
 #   - exit with status 1 or 2 (not 0, and not killed by a signal: no crash);
 #   - print a message on stderr that names the flag, or the file and line;
 #   - leave no output file (image, preview, CSV) and no temporary file behind.
@@ -17,8 +18,10 @@
 # (status 2, the input untouched). Prints one line per failing case and a
 # summary.
 set -u
-build=${1:?usage: bad_input.sh BUILD_DIR}
+build=${1:?usage: bad_input.sh BUILD_DIR [PROGRAM...]}
 bin=$build/bin
+shift
+if [ $# -gt 0 ]; then programs=("${@/#/$bin/}"); else programs=("$bin"/[0-9][0-9]-*); fi
 work=$(mktemp -d "${TMPDIR:-/tmp}/bad_input.XXXXXX")
 trap 'chmod -R u+w "$work" 2>/dev/null; rm -rf "$work"' EXIT
 cases=0
@@ -129,8 +132,8 @@ full_disk() { # KB COMMAND...
 }
 
 tri='v 0 0 0\nv 1 0 0\nv 0 1 0\n' # three vertices (printf format)
-for program in "$bin"/[0-9][0-9]-*; do
-    [ -x "$program" ] || continue
+for program in "${programs[@]}"; do
+    [ -x "$program" ] || { echo "FAIL $program: no such program"; failures=$((failures + 1)); continue; }
     p=$(basename "$program")
     args=$(small_args "$p")
     # shellcheck disable=SC2086

@@ -25,12 +25,13 @@
 #include <omp.h>
 #endif
 
-#include "03-aabb-slabs/accel.h"
+#include "03-aabb-slabs/accel_program.h"
 #include "04-uniform-grid/grid.h"
 #include "05-kd-tree/kdtree.h"
 #include "06-bvh/bvh.h"
 #include "13-production/bvh4.h"
 #include "13-production/flat.h"
+#include "atomic_file.h"
 #include "memory.h"
 #include "mesh.h"
 #include "timer.h"
@@ -222,13 +223,14 @@ static const embree_figures *embree_find(const embree_figures *e, int n, int tri
  * densities C: a finer grid helps only slowly, and costs memory. */
 static void stadium_study(const char *path, int reps)
 {
-    char temp[4096];
-    snprintf(temp, sizeof temp, "%s.part", path); /* renamed when complete */
-    FILE *csv = fopen(temp, "w");
-    if (csv == NULL) {
-        fprintf(stderr, "bench_accel: cannot write '%s'\n", path);
+    /* Put in place only when complete (atomic_file.h). */
+    char err[1024];
+    atomic_file out;
+    if (!atomic_file_open(&out, path, err, sizeof err)) {
+        fprintf(stderr, "bench_accel: %s\n", err);
         exit(1);
     }
+    FILE *csv = out.stream;
     fprintf(csv, "mesh,structure,density,triangles,build_ms,bytes_per_triangle,boxes_per_ray,triangles_per_ray,"
                  "mrays\n");
     printf("\nteapot in a stadium: rays aimed at random triangles, closest hit, 1 thread\n");
@@ -282,9 +284,8 @@ static void stadium_study(const char *path, int reps)
         triangle_set_free(&set);
         mesh_free(&m);
     }
-    if (fclose(csv) != 0 || rename(temp, path) != 0) {
-        fprintf(stderr, "bench_accel: cannot write '%s'\n", path);
-        remove(temp);
+    if (!atomic_file_commit(&out, err, sizeof err)) {
+        fprintf(stderr, "bench_accel: %s\n", err);
         exit(1);
     }
     printf("wrote %s\n", path);
@@ -356,16 +357,17 @@ int main(int argc, char **argv)
 
     /* The CSV only with --out: a quick run of one structure must not replace
      * the full benchmark's figures that `make plots` draws. Written to a
-     * temporary file and renamed at the end, so an interrupted run leaves
-     * the old file whole. */
-    char out_temp[4096] = "";
+     * temporary file and renamed at the end (atomic_file.h), so an
+     * interrupted run leaves the old file whole. */
+    char err[1024];
+    atomic_file out;
     FILE *csv = NULL;
     if (out_path != NULL) {
-        snprintf(out_temp, sizeof out_temp, "%s.part", out_path);
-        if ((csv = fopen(out_temp, "w")) == NULL) {
-            fprintf(stderr, "bench_accel: cannot write '%s'\n", out_path);
+        if (!atomic_file_open(&out, out_path, err, sizeof err)) {
+            fprintf(stderr, "bench_accel: %s\n", err);
             return 1;
         }
+        csv = out.stream;
     }
     if (csv != NULL)
         fprintf(csv, "structure,triangles,build_ms,bytes_per_triangle,nodes,leaves,max_depth,threads,"
@@ -482,9 +484,8 @@ int main(int argc, char **argv)
         mesh_free(&m);
     }
     if (csv != NULL) {
-        if (fclose(csv) != 0 || rename(out_temp, out_path) != 0) {
-            fprintf(stderr, "bench_accel: cannot write '%s'\n", out_path);
-            remove(out_temp);
+        if (!atomic_file_commit(&out, err, sizeof err)) {
+            fprintf(stderr, "bench_accel: %s\n", err);
             return 1;
         }
         printf("wrote %s\n", out_path);

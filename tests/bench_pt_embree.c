@@ -45,6 +45,7 @@
 #include "13-production/bvh4.h"
 #include "13-production/speed.h"
 #include "13-production/walls.h"
+#include "atomic_file.h"
 #include "memory.h"
 #include "timer.h"
 
@@ -467,12 +468,15 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    char err[4400] = "", csv_path[4200] = "";
+    char err[4400] = "";
+    atomic_file out;
     FILE *csv = NULL;
-    if (data_dir != NULL && (csv = experiment_csv_open(data_dir, "ch09_embree.csv", csv_path, sizeof csv_path, err,
-                                                        sizeof err)) == NULL) {
-        fprintf(stderr, "bench_pt_embree: %s\n", err);
-        return 1;
+    if (data_dir != NULL) {
+        if (!atomic_file_open_in(&out, data_dir, "ch09_embree.csv", err, sizeof err)) {
+            fprintf(stderr, "bench_pt_embree: %s\n", err);
+            return 1;
+        }
+        csv = out.stream;
     }
 
     pt_scene sc;
@@ -489,7 +493,7 @@ int main(int argc, char **argv)
         accel_destroy(embree);
         pt_scene_free(&sc);
         if (csv != NULL)
-            experiment_csv_discard(csv, csv_path);
+            atomic_file_abandon(&out);
         return 1;
     }
     printf("Cornell box: %d triangles; %s, %s\n", sc.triangles.count, ours->stats.name, embree->stats.name);
@@ -641,7 +645,7 @@ int main(int argc, char **argv)
 
     accel_destroy(embree);
     pt_scene_free(&sc);
-    if (csv != NULL && !experiment_csv_close(csv, csv_path, err, sizeof err)) {
+    if (csv != NULL && !atomic_file_commit(&out, err, sizeof err)) {
         fprintf(stderr, "bench_pt_embree: %s\n", err);
         return 1;
     }

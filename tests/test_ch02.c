@@ -233,7 +233,7 @@ static bool through_slab(const scene *sc, vec3 origin, vec3 d, bool exit_swaps_i
         vec3 t;
         if (!refract_direction(r.direction, hit.normal_geometric, ratio, &t))
             return false;
-        r = ray_spawn(hit.point, hit.normal_geometric, t);
+        r = ray_spawn(hit.point, hit.point_error, hit.normal_geometric, t);
     }
     *out = r.direction;
     return true;

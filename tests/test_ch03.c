@@ -10,6 +10,7 @@
 
 #include "03-aabb-slabs/aabb.h"
 #include "03-aabb-slabs/accel.h"
+#include "03-aabb-slabs/accel_view.h"
 #include "accel_check.h"
 #include "mesh.h"
 #include "test_support.h"

@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "03-aabb-slabs/accel_program.h"
+#include "03-aabb-slabs/accel_view.h"
 #include "06-bvh/bvh.h"
 #include "06-bvh/bvh_internal.h" /* the tuned slab test, checked against chapter 03's */
 #include "render.h"

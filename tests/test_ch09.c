@@ -19,6 +19,7 @@
 
 #include "06-bvh/bvh.h"
 #include "09-path-tracing/bsdf.h"
+#include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "09-path-tracing/sobol_sampler.h"
 #include "08-monte-carlo/estimators.h"
@@ -376,9 +377,10 @@ static void test_lights_are_picked_by_power(void **state)
     int small_picks = 0;
     for (int i = 0; i < PICKS; i++) {
         vec3 point, normal;
+        float point_error;
         int material = -1; /* set if a light is found, which the assert checks */
         assert_true(pt_scene_sample_emitter(&sc, pcg32_float(&rng), pcg32_float(&rng), pcg32_float(&rng), &point,
-                                            &normal, &material));
+                                            &point_error, &normal, &material));
         small_picks += material == 1;
         assert_true(normal.y < -0.999f); /* the front faces down */
     }
@@ -1045,19 +1047,24 @@ static void test_visible_is_the_shadow_ray_it_builds(void **state)
             hit_record from = {0};
             from.point = point_on_triangle(a, &rng);
             from.normal_geometric = triangle_normal(a);
+            from.point_error = triangle_point_error(a, from.point, from.normal_geometric);
             bool point_light = i % 4 == 3;
             vec3 target = point_on_triangle(b, &rng), target_normal = triangle_normal(b);
+            float target_error = triangle_point_error(b, target, target_normal);
             if (point_light) { /* a point inside the room, no surface */
                 target = vec3_lerp(target, vec3_make(278, 274, 280), 0.5f);
                 target_normal = vec3_splat(0.0f);
+                target_error = 0.0f;
             }
-            bool truth = !occluded_by_everything(
-                &sc, ray_spawn_to(from.point, from.normal_geometric, target, target_normal));
+            ray shadow = ray_spawn_to(from.point, from.point_error, from.normal_geometric, target, target_error,
+                                      target_normal);
+            bool truth = !occluded_by_everything(&sc, shadow);
             blocked += !truth;
-            wrong += pt_scene_visible(&sc, &from, &target, &target_normal, &c) != truth;
+            wrong += pt_scene_visible(&sc, &from, &target, target_error, &target_normal, &c) != truth;
             calls++;
             if (!point_light) {
-                ray twin = ray_spawn_to(from.point, from.normal_geometric, target, vec3_splat(0.0f));
+                ray twin = ray_spawn_to(from.point, from.point_error, from.normal_geometric, target, 0.0f,
+                                        vec3_splat(0.0f));
                 wrong_twin += !occluded_by_everything(&sc, twin) != truth;
             }
         }
@@ -1069,6 +1076,219 @@ static void test_visible_is_the_shadow_ray_it_builds(void **state)
     }
 }
 
+
+/* ---- the Cornell box at every scale -------------------------------------------
+ * The same box, scaled by 1e-7 and by 1e6, and scaled by 1e-3 and moved to
+ * (1e5, 0, 1e5), where a float step is 2^-7 and the room is 71 steps
+ * across: the same picture, within noise (image_check.h's comparison of
+ * two renders, pixel by pixel and the image means). Far out, float has
+ * rounded the corners (the light is 2 % wider, the blocks up to half a
+ * step shorter), so the render there is compared with the same rounded
+ * box moved back to the origin, exactly (each coordinate's difference
+ * from 1e5 is a float); against the unscaled box its mean is printed.
+ * (Not moved in y: 0.1 mm below the ceiling at 1e-3 is 1e-4, under a
+ * float step at 1e5, and the light would sink into the ceiling.) The twin:
+ * every hit's error bound replaced by the offsets of the old ray.h, a
+ * fixed 2^-16 near 0 and 256 steps of each coordinate far out: the box at
+ * 1e-7 (5.5e-5 across) and the one at 1e5 both render visibly wrong. */
+enum { SCALE_SIZE = 16, SCALE_SPP = 256 };
+static const vec3 SCALE_FAR = {1e5f, 0.0f, 1e5f};
+
+/* Chapter 06's BVH with every closest hit's point_error set to *context:
+ * the twin's wrong offsets, through the scene's accel interface. */
+typedef struct {
+    accel base;
+    accel *inner;
+    float point_error;
+} fixed_error_accel;
+
+static bool fixed_error_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    const fixed_error_accel *f = (const fixed_error_accel *)a;
+    if (!accel_closest_hit(f->inner, r, hit, counters))
+        return false;
+    hit->point_error = f->point_error;
+    return true;
+}
+
+static bool fixed_error_any_hit(const accel *a, ray r, ray_counters *counters)
+{
+    return accel_any_hit(((const fixed_error_accel *)a)->inner, r, counters);
+}
+
+static void fixed_error_destroy(accel *a)
+{
+    accel_destroy(((fixed_error_accel *)a)->inner);
+    free(a);
+}
+
+static const accel_ops fixed_error_ops = {fixed_error_closest_hit, fixed_error_any_hit, fixed_error_destroy};
+
+static accel *build_fixed_error(const triangle_set *set, const void *context)
+{
+    fixed_error_accel *f = calloc(1, sizeof *f);
+    assert_non_null(f);
+    f->inner = bvh_build(set, BVH_SPLIT_SAH);
+    f->base = (accel){&fixed_error_ops, set, f->inner->stats};
+    f->point_error = *(const float *)context;
+    return &f->base;
+}
+
+static render_result render_box(const pt_scene *sc, uint64_t seed)
+{
+    path_tracer pt = tracer(sc, PT_MIS, RR_THROUGHPUT);
+    return render(&pt, SCALE_SIZE, SCALE_SIZE, SCALE_SPP, seed, 2);
+}
+
+static double image_mean(const image *m)
+{
+    double sum = 0.0;
+    for (int i = 0; i < m->width * m->height * 3; i++)
+        sum += m->rgb[i];
+    return sum / (m->width * m->height * 3);
+}
+
+/* The box scaled by `scale` and moved by `offset`, rendered; *reference
+ * (if not NULL) gets the same floats moved back by -offset, rendered.
+ * With `twin_error` >= 0 every hit's error bound is that instead. */
+static render_result render_scaled_box(float scale, vec3 offset, float twin_error, uint64_t seed,
+                                       render_result *reference)
+{
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    pt_scene_transform(&sc, scale, offset);
+    if (twin_error >= 0.0f)
+        pt_scene_use_accel(&sc, build_fixed_error, &twin_error);
+    render_result r = render_box(&sc, seed);
+    if (reference != NULL) {
+        pt_scene_transform(&sc, 1.0f, vec3_neg(offset));
+        *reference = render_box(&sc, seed + 100);
+    }
+    pt_scene_free(&sc);
+    return r;
+}
+
+static void test_the_cornell_box_renders_the_same_at_every_scale(void **state)
+{
+    (void)state;
+    enum { IMAGES = 3 }; /* image checks made (Sidak) */
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    render_result unscaled = render_box(&sc, 61);
+    pt_scene_free(&sc);
+    const float scales[2] = {1e-7f, 1e6f};
+    for (int k = 0; k < 2; k++) {
+        render_result r = render_scaled_box(scales[k], vec3_splat(0.0f), -1.0f, 62 + (uint64_t)k, NULL);
+        image_check c = check_agree(&r.mean, &r.standard_error, &unscaled.mean, &unscaled.standard_error);
+        print_message("scaled by %g: image mean %.5f against %.5f unscaled (z = %.2f, chi-square %.0f on %d)\n",
+                      (double)scales[k], image_mean(&r.mean), image_mean(&unscaled.mean), c.z, c.chi2, c.dof);
+        assert_image_check(c, IMAGES, scales[k] < 1.0f ? "scaled by 1e-7" : "scaled by 1e6");
+        render_result_free(&r);
+    }
+    render_result near;
+    render_result far = render_scaled_box(1e-3f, SCALE_FAR, -1.0f, 64, &near);
+    image_check c = check_agree(&far.mean, &far.standard_error, &near.mean, &near.standard_error);
+    image_check unmoved = check_agree(&far.mean, &far.standard_error, &unscaled.mean, &unscaled.standard_error);
+    print_message("scaled by 1e-3 at (1e5, 0, 1e5): image mean %.5f against %.5f moved back (z = %.2f, chi-square "
+                  "%.0f on %d); %.5f unscaled (z = %.2f)\n",
+                  image_mean(&far.mean), image_mean(&near.mean), c.z, c.chi2, c.dof, image_mean(&unscaled.mean),
+                  unmoved.z);
+    assert_image_check(c, IMAGES, "scaled by 1e-3 and moved to (1e5, 0, 1e5)");
+    render_result_free(&far);
+    render_result_free(&near);
+    render_result_free(&unscaled);
+}
+
+
+static void test_the_old_offsets_render_the_scaled_boxes_wrong(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    render_result unscaled = render_box(&sc, 61);
+    pt_scene_free(&sc);
+    /* At 1e-7 every coordinate is below 1/32: the old offset was a fixed
+     * 2^-16, a quarter of the room. */
+    render_result small = render_scaled_box(1e-7f, vec3_splat(0.0f), 0x1.0p-16f, 65, NULL);
+    image_check c = check_agree(&small.mean, &small.standard_error, &unscaled.mean, &unscaled.standard_error);
+    print_message("twin, 2^-16 offsets at 1e-7: image mean %.5f against %.5f (z = %.1f, p = %.3g)\n",
+                  image_mean(&small.mean), image_mean(&unscaled.mean), c.z, c.p);
+    assert_true(c.p < image_check_alpha(2));
+    /* At 1e5 the old offset was 256 steps of 2^-7: 2 units, in a room 0.55
+     * across. */
+    render_result near;
+    render_result far = render_scaled_box(1e-3f, SCALE_FAR, 2.0f, 66, &near);
+    c = check_agree(&far.mean, &far.standard_error, &near.mean, &near.standard_error);
+    print_message("twin, offsets of 2 at 1e5: image mean %.5f against %.5f (z = %.1f, p = %.3g)\n",
+                  image_mean(&far.mean), image_mean(&near.mean), c.z, c.p);
+    assert_true(c.p < image_check_alpha(2));
+    render_result_free(&small);
+    render_result_free(&far);
+    render_result_free(&near);
+    render_result_free(&unscaled);
+}
+
+/* ---- objects too small for where they are --------------------------------------
+ * pt_scene_check_scale() names every object fewer than RAY_MIN_STEPS_ACROSS
+ * float steps across at its distance from the origin, and says to move the
+ * scene: the Cornell box scaled by 1e-3 and moved to (1e5, 0, 1e5) has a
+ * light 0.13 wide there, 17 steps (and walls of 71, which pass); a sphere
+ * of radius 1e-3 at 1e5 is a quarter of a step. The twins: the box itself,
+ * the box scaled by 1e-7 near 0 (small is not the matter) and a sphere of
+ * radius 1 at 1e5 (256 steps) get no warning. */
+static int scale_warnings(const pt_scene *sc, char **text)
+{
+    size_t size = 0;
+    FILE *out = open_memstream(text, &size);
+    assert_non_null(out);
+    int n = pt_scene_check_scale(sc, "test", out);
+    fclose(out);
+    return n;
+}
+
+static int sphere_warnings(vec3 centre, float radius, char **text)
+{
+    pt_scene sc;
+    pt_scene_init(&sc);
+    int m = pt_scene_add_material(&sc, pt_diffuse(vec3_splat(0.5f)));
+    pt_scene_add_sphere(&sc, centre, radius, m, false);
+    pt_scene_finish(&sc);
+    int n = scale_warnings(&sc, text);
+    pt_scene_free(&sc);
+    return n;
+}
+
+static void test_objects_too_small_for_their_place_are_named(void **state)
+{
+    (void)state;
+    char *text = NULL;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    pt_scene_transform(&sc, 1e-3f, SCALE_FAR);
+    assert_int_equal(scale_warnings(&sc, &text), 1);
+    print_message("%s", text);
+    assert_non_null(strstr(text, "test: warning: the 2 triangles of material #3, a light"));
+    assert_non_null(strstr(text, "move the scene near the origin"));
+    free(text);
+    pt_scene_free(&sc);
+
+    assert_int_equal(sphere_warnings(vec3_make(1e5f, 0.0f, 0.0f), 1e-3f, &text), 1);
+    assert_non_null(strstr(text, "sphere #0 at (100000, 0, 0), radius 0.001"));
+    assert_non_null(strstr(text, "move the scene near the origin"));
+    free(text);
+
+    /* the twins */
+    pt_scene_build_cornell_box(&sc);
+    assert_int_equal(scale_warnings(&sc, &text), 0);
+    assert_string_equal(text, "");
+    free(text);
+    pt_scene_transform(&sc, 1e-7f, vec3_splat(0.0f));
+    assert_int_equal(scale_warnings(&sc, &text), 0);
+    free(text);
+    pt_scene_free(&sc);
+    assert_int_equal(sphere_warnings(vec3_make(1e5f, 0.0f, 0.0f), 1.0f, &text), 0);
+    free(text);
+}
 
 /* Signed distance of p from the plane of triangle t, in long double: the
  * edges are exact there (differences of floats) and their products carry
@@ -1327,9 +1547,66 @@ static void test_a_scene_without_light_is_reported(void **state)
     pt_scene_free(&sc);
 }
 
+/* --target-error: the passes go on until the error the image's own
+ * variance predicts is below the target, judged only from 16 samples per
+ * pixel on (one sample has no variance: its estimate reads 0, and a render
+ * that trusted it stopped after one pass). Over several seeds, the true
+ * error against a reference of 4096 samples per pixel over the estimate is
+ * near 1 in the median: the estimate runs about 1.2x low (a path tracer's
+ * samples are skewed: the bright rare paths a pixel's 16-64 samples miss
+ * are missing from its variance too), and single runs reach 2.7x. The
+ * bounds are twice as wide as that. The twin: one pass of 1 spp, whose
+ * estimate of 0 makes the ratio infinite. */
+static const double ESTIMATE_RATIO_LOW = 0.5, ESTIMATE_RATIO_HIGH = 3.0;
+enum { TARGET_ERROR_RUNS = 9 };
+
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double true_over_estimated(const estimate_image *e, const estimate_image *reference)
+{
+    double rmse, relmse;
+    experiment_error(&e->mean, reference, &rmse, &relmse);
+    double estimated = estimate_relative_error(e);
+    return estimated > 0.0 ? sqrt(relmse) / estimated : INFINITY;
+}
+
+static void test_target_error_is_reached_not_assumed(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    path_tracer pt = tracer(&sc, PT_MIS, RR_THROUGHPUT);
+    camera cam = pt_scene_camera(&sc, 12, 12);
+    estimate_image reference = render_estimate(&pt, &cam, 4096, test_seed(97), 2);
+    const double target = 0.1;
+    double ratio[TARGET_ERROR_RUNS];
+    for (int k = 0; k < TARGET_ERROR_RUNS; k++) {
+        estimate_image e = render_progressive(&pt, &cam, test_seed(98) + 7919u * (uint64_t)k, 2, 0.0, target, NULL);
+        assert_true(e.spp >= 16);
+        assert_true(estimate_relative_error(&e) <= target);
+        ratio[k] = true_over_estimated(&e, &reference);
+        estimate_image_free(&e);
+    }
+    qsort(ratio, TARGET_ERROR_RUNS, sizeof ratio[0], compare_doubles);
+    double median = ratio[TARGET_ERROR_RUNS / 2];
+    print_message("target %.2f: true error / estimated, median of %d runs %.2f (%.2f to %.2f)\n", target,
+                  TARGET_ERROR_RUNS, median, ratio[0], ratio[TARGET_ERROR_RUNS - 1]);
+    assert_true(median >= ESTIMATE_RATIO_LOW && median <= ESTIMATE_RATIO_HIGH);
+    estimate_image one_pass = render_estimate(&pt, &cam, 1, test_seed(99), 2); /* the twin */
+    assert_false(true_over_estimated(&one_pass, &reference) <= ESTIMATE_RATIO_HIGH);
+    estimate_image_free(&one_pass);
+    estimate_image_free(&reference);
+    pt_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_target_error_is_reached_not_assumed),
         cmocka_unit_test(test_a_scene_without_light_is_reported),
         cmocka_unit_test(test_games101_assignment_7_scene_file),
         cmocka_unit_test(test_mtl_materials_as_the_format_means_them),
@@ -1354,6 +1631,9 @@ int main(void)
         cmocka_unit_test(test_one_sided_emitter),
         cmocka_unit_test(test_ggx_sampling_matches_its_pdf),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
+        cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
+        cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),
+        cmocka_unit_test(test_objects_too_small_for_their_place_are_named),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);
 }

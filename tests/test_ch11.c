@@ -205,6 +205,7 @@ static bdpt_vertex surface_vertex(const hit_record *h)
     memset(&v, 0, sizeof v);
     v.kind = BDPT_VERTEX_SURFACE;
     v.point = h->point;
+    v.point_error = h->point_error;
     v.normal = h->normal_shading;
     v.normal_geometric = h->normal_geometric;
     v.material = h->material_id;
@@ -231,13 +232,13 @@ static bool random_path(const bdpt *b, int n, pcg32 *rng, bdpt_vertex *path)
             return false;
         eye_side[k] = surface_vertex(&h);
         vec3 w = frame_to_world(h.normal_shading, sample_cosine_hemisphere(vec2_make(pcg32_float(rng), pcg32_float(rng))));
-        r = ray_spawn(h.point, h.normal_geometric, w);
+        r = ray_spawn(h.point, h.point_error, h.normal_geometric, w);
     }
     bdpt_vertex light;
     memset(&light, 0, sizeof light);
     light.kind = BDPT_VERTEX_LIGHT;
-    if (!pt_scene_sample_emitter(sc, pcg32_float(rng), pcg32_float(rng), pcg32_float(rng), &light.point, &light.normal,
-                                 &light.material))
+    if (!pt_scene_sample_emitter(sc, pcg32_float(rng), pcg32_float(rng), pcg32_float(rng), &light.point,
+                                 &light.point_error, &light.normal, &light.material))
         return false;
     light.normal_geometric = light.normal;
     light.front_face = true;

@@ -16,6 +16,7 @@
 
 #include "06-bvh/bvh.h"
 #include "08-monte-carlo/sampling.h"
+#include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "13-production/bvh4.h"
@@ -85,12 +86,13 @@ static void assert_same_render(const path_tracer *a, const path_tracer *b, ray_c
     image_free(&rb);
 }
 
-/* A uniform point on triangle t, and the triangle's unit normal. */
+/* A uniform point on triangle t (as a hit computes it, P0 + (b1 E1 + b2 E2)),
+ * and the triangle's unit normal. */
 static vec3 point_on_triangle(const triangle *t, pcg32 *rng)
 {
     float s = sqrtf(pcg32_float(rng)), u = pcg32_float(rng);
     float b1 = (1.0f - u) * s, b2 = u * s;
-    return vec3_add(vec3_add(vec3_scale(t->p0, 1.0f - b1 - b2), vec3_scale(t->p1, b1)), vec3_scale(t->p2, b2));
+    return vec3_add(t->p0, vec3_add(vec3_scale(vec3_sub(t->p1, t->p0), b1), vec3_scale(vec3_sub(t->p2, t->p0), b2)));
 }
 
 static vec3 triangle_normal(const triangle *t)
@@ -835,8 +837,10 @@ static ray random_segment(const pt_scene *sc, bool on_surfaces, pcg32 *rng)
     if (on_surfaces) {
         const triangle *a = &sc->triangles.triangles[pcg32_bounded(rng, (uint32_t)sc->triangles.count)];
         const triangle *b = &sc->triangles.triangles[pcg32_bounded(rng, (uint32_t)sc->triangles.count)];
-        return ray_spawn_to(point_on_triangle(a, rng), triangle_normal(a), point_on_triangle(b, rng),
-                            triangle_normal(b));
+        vec3 from = point_on_triangle(a, rng), to = point_on_triangle(b, rng);
+        vec3 from_normal = triangle_normal(a), to_normal = triangle_normal(b);
+        return ray_spawn_to(from, triangle_point_error(a, from, from_normal), from_normal, to,
+                            triangle_point_error(b, to, to_normal), to_normal);
     }
     vec3 lo = sc->triangles.bounds.lo, hi = sc->triangles.bounds.hi, size = vec3_sub(hi, lo);
     vec3 p[2];
@@ -992,8 +996,9 @@ static int points_misjudged(const pt_scene *sc, int points, uint64_t seed, int *
  * point that is exactly on or behind one: its slack bounds the rounding
  * (scene_pt.c). Points at every distance from 2^-6 to 2^-40 of the room's
  * size, on both sides of every wall. And it is not so cautious that it
- * refuses the rays it is for: a point 2^-16 in front of the wall x = 0 (the
- * least ray.h moves a ray's end off a surface) is in front. The twin: with
+ * refuses the rays it is for: a point 2^-16 in front of the wall x = 0 (far
+ * less than ray.h moves a ray's end off that wall: 64 roundings of its
+ * 559.2 mm edge, 2e-3) is in front. The twin: with
  * no slack, points just behind the red wall, whose normal was rounded to
  * float, are called in front. */
 static void test_wall_test_is_never_fooled_by_rounding(void **state)
@@ -1337,23 +1342,23 @@ static void test_eight_paths_same_bits_for_threads_and_lanes(void **state)
 }
 
 /* ---- spawn_avx.h: ray.h's offsets, eight lanes at a time -----------------
- * ray_spawn8() and ray_spawn_to8() against ray_spawn() and ray_spawn_to(),
- * bit for bit, on points whose coordinates are the hard cases of ray.h's
- * offset: exactly 0 and -0, just under and at 1/32 (where the fixed offset
- * hands over to ulps), small and large, of either sign; normals facing
- * either way. The twin is a reference that forgets to pull the shadow ray's
- * far end off the light: the same comparison must see it. */
+ * spawn_point_error8(), ray_spawn8() and ray_spawn_to8() against
+ * ray_point_error(), ray_spawn() and ray_spawn_to(), bit for bit, on points
+ * whose coordinates are hard cases for the arithmetic: exactly 0 and -0,
+ * tiny and huge, of either sign; primitive sizes from 0 to 1e6; normals
+ * facing either way. The twin is a reference that forgets to pull the
+ * shadow ray's far end off the light: the same comparison must see it. */
 #if SPAWN_HAVE_AVX2
-/* The coordinates where ray.h's offset changes how it works (these are
- * inputs, not tolerances): zero of both signs, where the fixed 2^-16 is
- * used; the largest float below ORIGIN_NEAR_ZERO (1/32) and 1/32 itself,
- * either side of the hand-over to ulps; a small and a unit value of each
- * sign; the Cornell box's middle and its ceiling's height; and 5e6, whose
- * ulp is 0.5, so 256 of them are 128 units. */
-static const float SPAWN_HARD_COORDINATES[] = {0.0f,    -0.0f, 0x1.fffffep-6f, -0x1.fffffep-6f, 0x1.0p-5f,
-                                               -0x1.0p-5f, 1e-3f, -1e-3f, 1.0f, -1.0f,
-                                               278.0f,  -278.0f, 548.8f, 5e6f, -5e6f};
+/* Coordinates the offsets must get right (inputs, not tolerances): zero of
+ * both signs, where the point's own rounding vanishes; tiny and unit values
+ * of each sign; the Cornell box's middle and its ceiling's height; 1e5,
+ * whose float step is 2^-7; and 5e6, whose step is 0.5. */
+static const float SPAWN_HARD_COORDINATES[] = {0.0f,   -0.0f, 1e-7f,  -1e-7f,  1e-3f, -1e-3f, 1.0f,  -1.0f,
+                                               278.0f, -278.0f, 548.8f, 1e5f, -1e5f, 5e6f,  -5e6f};
 enum { SPAWN_HARD_COUNT = sizeof SPAWN_HARD_COORDINATES / sizeof SPAWN_HARD_COORDINATES[0] };
+/* Primitive sizes: none (an infinite plane's point), a 1e-7 object, a unit
+ * one, the Cornell box's walls, a million. */
+static const float SPAWN_SIZES[] = {0.0f, 1e-7f, 1.0f, 559.2f, 1e6f};
 
 /* One of the hard coordinates three times in four, else anywhere in the
  * Cornell box's span around 0. */
@@ -1372,26 +1377,33 @@ static vec3 random_direction(pcg32 *rng)
     return sample_uniform_sphere(vec2_make(pcg32_float(rng), pcg32_float(rng)));
 }
 
-static bool same_bits(vec3 a, vec3 b) { return memcmp(&a, &b, sizeof a) == 0; }
-
-static ray spawn_to_without_far_end(vec3 point, vec3 n, vec3 target, vec3 target_normal)
+static float hard_size(pcg32 *rng)
 {
-    (void)target_normal;
-    vec3 side = vec3_dot(vec3_sub(target, point), n) < 0.0f ? vec3_neg(n) : n;
-    vec3 origin = ray_offset_origin(point, side);
-    return ray_make(origin, vec3_sub(target, origin));
+    return SPAWN_SIZES[pcg32_bounded(rng, sizeof SPAWN_SIZES / sizeof SPAWN_SIZES[0])];
 }
 
-typedef ray (*spawn_to_fn)(vec3 point, vec3 n, vec3 target, vec3 target_normal);
+static bool same_bits(vec3 a, vec3 b) { return memcmp(&a, &b, sizeof a) == 0; }
 
-/* Rays whose spawned origin or shadow ray differs from the reference's in
- * any bit, of `batches` batches of eight. */
+static ray spawn_to_without_far_end(vec3 point, float point_error, vec3 n, vec3 target, float target_error,
+                                    vec3 target_normal)
+{
+    (void)target_error;
+    ray r = ray_spawn_to(point, point_error, n, target, 0.0f, vec3_splat(0.0f));
+    r.t_max = ray_spawn_to(point, point_error, n, target, target_error, target_normal).t_max;
+    return r;
+}
+
+typedef ray (*spawn_to_fn)(vec3 point, float point_error, vec3 n, vec3 target, float target_error,
+                           vec3 target_normal);
+
+/* Rays whose error bound, spawned origin or shadow ray differs from the
+ * reference's in any bit, of `batches` batches of eight. */
 SPAWN_TARGET static long spawns_apart(spawn_to_fn reference, int batches, uint64_t seed)
 {
     pcg32 rng = pcg32_for_pixel(seed, 0);
     long apart = 0;
     for (int b = 0; b < batches; b++) {
-        _Alignas(32) float in[5][3][8];
+        _Alignas(32) float in[5][3][8], sizes[2][8];
         vec3 v[5][8];
         for (int k = 0; k < 8; k++) {
             v[0][k] = hard_point(&rng);       /* point */
@@ -1404,23 +1416,38 @@ SPAWN_TARGET static long spawns_apart(spawn_to_fn reference, int batches, uint64
                 in[a][1][k] = v[a][k].y;
                 in[a][2][k] = v[a][k].z;
             }
+            sizes[0][k] = hard_size(&rng);
+            sizes[1][k] = hard_size(&rng);
         }
-        __m256 m[5][3], origin[3], shadow_origin[3], shadow_direction[3];
+        __m256 m[5][3], origin[3], shadow_origin[3], shadow_direction[3], t_min, shadow_t_min, shadow_t_max;
         for (int a = 0; a < 5; a++)
             for (int c = 0; c < 3; c++)
                 m[a][c] = _mm256_load_ps(in[a][c]);
-        ray_spawn8(m[0], m[1], m[2], origin);
-        ray_spawn_to8(m[0], m[1], m[3], m[4], shadow_origin, shadow_direction);
-        _Alignas(32) float out[3][3][8];
+        __m256 error = spawn_point_error8(m[0], m[1], _mm256_load_ps(sizes[0]));
+        __m256 target_error = spawn_point_error8(m[3], m[4], _mm256_load_ps(sizes[1]));
+        ray_spawn8(m[0], error, m[1], m[2], origin, &t_min);
+        ray_spawn_to8(m[0], error, m[1], m[3], target_error, m[4], shadow_origin, shadow_direction, &shadow_t_min,
+                      &shadow_t_max);
+        _Alignas(32) float out[3][3][8], errors[2][8], ts[3][8];
         for (int c = 0; c < 3; c++) {
             _mm256_store_ps(out[0][c], origin[c]);
             _mm256_store_ps(out[1][c], shadow_origin[c]);
             _mm256_store_ps(out[2][c], shadow_direction[c]);
         }
+        _mm256_store_ps(errors[0], error);
+        _mm256_store_ps(errors[1], target_error);
+        _mm256_store_ps(ts[0], t_min);
+        _mm256_store_ps(ts[1], shadow_t_min);
+        _mm256_store_ps(ts[2], shadow_t_max);
         for (int k = 0; k < 8; k++) {
-            ray spawned = ray_spawn(v[0][k], v[1][k], v[2][k]);
-            ray shadow = reference(v[0][k], v[1][k], v[3][k], v[4][k]);
-            bool same = same_bits(spawned.origin, vec3_make(out[0][0][k], out[0][1][k], out[0][2][k])) &&
+            float e = ray_point_error(v[0][k], v[1][k], sizes[0][k]);
+            float e_target = ray_point_error(v[3][k], v[4][k], sizes[1][k]);
+            ray spawned = ray_spawn(v[0][k], e, v[1][k], v[2][k]);
+            ray shadow = reference(v[0][k], e, v[1][k], v[3][k], e_target, v[4][k]);
+            float t[3] = {spawned.t_min, shadow.t_min, shadow.t_max}, t_lanes[3] = {ts[0][k], ts[1][k], ts[2][k]};
+            bool same = memcmp(&e, &errors[0][k], sizeof e) == 0 && memcmp(&e_target, &errors[1][k], sizeof e) == 0 &&
+                        memcmp(t, t_lanes, sizeof t) == 0 &&
+                        same_bits(spawned.origin, vec3_make(out[0][0][k], out[0][1][k], out[0][2][k])) &&
                         same_bits(shadow.origin, vec3_make(out[1][0][k], out[1][1][k], out[1][2][k])) &&
                         same_bits(shadow.direction, vec3_make(out[2][0][k], out[2][1][k], out[2][2][k]));
             apart += !same;
@@ -1512,6 +1539,110 @@ static void test_fast_sincos_turns_is_within_a_few_ulps(void **state)
     assert_true(twin > FAST_SINCOS_TURNS_ULPS);
 }
 
+/* ---- the physics once: the lanes' light sample against chapter 09's ----------
+ * The eight-path renderer computes each vertex's light sample in AVX (or
+ * lane by lane), in the solid-angle form; chapter 09's shade() computes it
+ * from pt_scene_sample_light() and bsdf_eval() in the area form,
+ *   L_e f_r cos(theta) cos(theta') / |x' - p|^2 / pdf_light.
+ * On random vertices of the Cornell box with random light samples the two
+ * agree to rounding (the forms order their products differently: a few
+ * ulps each, LIGHT_MATH_TOLERANCE relative), and agree on which samples
+ * add light. The twin: the area form without cos(theta') is caught. */
+static const float LIGHT_MATH_TOLERANCE = 1e-5f;
+
+static vec3 random_unit_in_hemisphere(vec3 n, pcg32 *rng)
+{
+    for (;;) {
+        vec3 d = vec3_make(2.0f * pcg32_float(rng) - 1.0f, 2.0f * pcg32_float(rng) - 1.0f, 2.0f * pcg32_float(rng) - 1.0f);
+        float l2 = vec3_length_squared(d);
+        if (l2 > 1e-4f && l2 <= 1.0f)
+            return vec3_dot(d, n) > 0.0f ? vec3_normalize(d) : vec3_normalize(vec3_neg(d));
+    }
+}
+
+static long light_math_mismatches(const pt_scene *sc, int vertices, bool with_cos_light, uint64_t seed, long *lit)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    long wrong = 0;
+    for (int start = 0; start < vertices; start += 8) {
+        wide_light_vertex v[8];
+        vec3 expected[8];
+        bool adds[8];
+        for (int k = 0; k < 8; k++) {
+            int t;
+            do
+                t = (int)pcg32_bounded(&rng, (uint32_t)sc->triangles.count);
+            while (vec3_max_component(sc->materials[sc->geometry.faces[t].material].emission) > 0.0f);
+            const triangle *tri = &sc->triangles.triangles[t];
+            const pt_material *m = &sc->materials[sc->geometry.faces[t].material];
+            float r1 = sqrtf(pcg32_float(&rng)), r2 = pcg32_float(&rng);
+            v[k].p = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - r1), vec3_scale(tri->p1, r1 * (1.0f - r2))),
+                              vec3_scale(tri->p2, r1 * r2));
+            v[k].n = v[k].ng = vec3_normalize(vec3_cross(vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0)));
+            v[k].wo = random_unit_in_hemisphere(v[k].n, &rng);
+            v[k].albedo = m->albedo;
+            v[k].throughput = vec3_make(0.5f + 0.5f * pcg32_float(&rng), 0.5f + 0.5f * pcg32_float(&rng), 1.0f);
+            v[k].p_error = 0.0f;
+            pt_light_sample x;
+            memset(&x, 0, sizeof x); /* assert_true may return: the compiler cannot know it stops the test */
+            float u_pick = pcg32_float(&rng), u1 = pcg32_float(&rng), u2 = pcg32_float(&rng);
+            assert_true(pt_scene_sample_light(sc, u_pick, u1, u2, &x));
+            v[k].x_light = x.point;
+            v[k].n_light = x.normal;
+            v[k].le = x.emission;
+            v[k].x_error = x.point_error;
+            v[k].pdf_area = x.pdf_light;
+            /* chapter 09's shade(), the area form */
+            vec3 to_light = vec3_sub(x.point, v[k].p);
+            float distance2 = vec3_length_squared(to_light);
+            vec3 ws = vec3_scale(to_light, 1.0f / sqrtf(distance2));
+            float cos_theta = vec3_dot(v[k].n, ws), cos_theta_x = -vec3_dot(x.normal, ws);
+            vec3 f_r = bsdf_eval(m, v[k].n, v[k].wo, ws);
+            adds[k] = cos_theta > 0.0f && cos_theta_x > 0.0f && !vec3_is_black(f_r);
+            float g = cos_theta * (with_cos_light ? cos_theta_x : 1.0f) / distance2;
+            expected[k] = vec3_mul(v[k].throughput, vec3_scale(vec3_mul(x.emission, f_r), g / x.pdf_light));
+        }
+        vec3 got[8];
+        int mask = path_tracer_wide_light_math(v, 8, got);
+        for (int k = 0; k < 8; k++) {
+            bool wide_adds = (mask >> k) & 1;
+            *lit += adds[k];
+            if (wide_adds != adds[k]) {
+                wrong++;
+                continue;
+            }
+            if (!adds[k])
+                continue;
+            float scale = fmaxf(vec3_max_component(expected[k]), vec3_max_component(got[k]));
+            wrong += vec3_max_component(vec3_abs(vec3_sub(got[k], expected[k]))) > LIGHT_MATH_TOLERANCE * scale;
+        }
+    }
+    return wrong;
+}
+
+static void test_lanes_light_sample_is_chapter_09s(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    enum { VERTICES = 8000 };
+    for (int avx = 1; avx >= 0; avx--) {
+        path_tracer_wide_use_avx(avx);
+        long lit = 0;
+        long wrong = light_math_mismatches(&sc, VERTICES, true, test_seed(151), &lit);
+        print_message("light sample, %s: %ld of %d vertices differ from chapter 09's (%ld add light)\n",
+                      avx ? "AVX" : "lane by lane", wrong, VERTICES, lit);
+        assert_int_equal(wrong, 0);
+        assert_true(lit > VERTICES / 4);
+    }
+    path_tracer_wide_use_avx(true);
+    long lit = 0;
+    long twin = light_math_mismatches(&sc, VERTICES, false, test_seed(151), &lit);
+    print_message("twin, without cos(theta'): %ld differ\n", twin);
+    assert_true(twin > lit / 2);
+    pt_scene_free(&sc);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1538,6 +1669,7 @@ int main(void)
         cmocka_unit_test(test_eight_paths_same_bits_for_threads_and_lanes),
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
         cmocka_unit_test(test_fast_sincos_turns_is_within_a_few_ulps),
+        cmocka_unit_test(test_lanes_light_sample_is_chapter_09s),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -17,11 +17,13 @@
 #include "cli.h"
 #include "counters.h"
 #include "image.h"
+#include "progressive.h"
 #include "ray.h"
 #include "render.h"
 #include "rng.h"
 #include "splat_film.h"
 #include "stats.h"
+#include "run_record.h"
 #include "test_support.h"
 
 /* ---- PCG32 ---------------------------------------------------------------- */
@@ -183,39 +185,61 @@ static void test_camera_edges_span_the_field_of_view(void **state)
 static void test_offset_origin_moves_to_the_normal_side_at_every_scale(void **state)
 {
     (void)state;
-    const float scales[] = {1e-3f, 1.0f, 1e2f, 1e4f, 1e6f};
+    /* Points of an object of size `scale` placed up to 1e5 from the origin
+     * (where it is still many float steps across), random unit normals. */
+    const float scales[] = {1e-7f, 1e-4f, 1.0f, 1e2f, 1e4f, 1e6f};
+    const float places[] = {0.0f, 1.0f, 1e3f, 1e5f};
     pcg32 rng = pcg32_for_pixel(11, 0);
-    for (int s = 0; s < 5; s++) {
-        for (int i = 0; i < 1000; i++) {
-            vec3 p = vec3_scale(vec3_make(pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1,
-                                          pcg32_float(&rng) * 2 - 1), scales[s]);
-            vec3 n = vec3_normalize(vec3_make(pcg32_float(&rng) - 0.5f, pcg32_float(&rng) - 0.5f,
-                                              pcg32_float(&rng) - 0.5f));
-            vec3 q = ray_offset_origin(p, n);
-            /* Strictly on the side n points to, by more than float rounding
-             * of p could ever explain (a few ulps), at every scale. */
-            float moved = vec3_dot(vec3_sub(q, p), n);
-            float ulp = nextafterf(vec3_max_component(vec3_abs(p)), INFINITY) - vec3_max_component(vec3_abs(p));
-            assert_true(moved > 0.0f);
-            assert_true(moved > 4.0f * ulp || vec3_max_component(vec3_abs(p)) < 1.0f / 32);
-            /* ... and by little: 1e-3 relative to the scale at most. */
-            assert_true(vec3_length(vec3_sub(q, p)) < 1e-3f * fmaxf(scales[s], 1.0f / 32));
+    for (int s = 0; s < 6; s++) {
+        for (int w = 0; w < 4; w++) {
+            vec3 centre = vec3_splat(places[w]);
+            if (ray_too_small_for_position(scales[s], places[w] + scales[s]))
+                continue;
+            for (int i = 0; i < 1000; i++) {
+                vec3 p = vec3_add(centre, vec3_scale(vec3_make(pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1,
+                                                               pcg32_float(&rng) * 2 - 1), scales[s]));
+                vec3 n = vec3_normalize(vec3_make(pcg32_float(&rng) - 0.5f, pcg32_float(&rng) - 0.5f,
+                                                  pcg32_float(&rng) - 0.5f));
+                float error = ray_point_error(p, n, scales[s]);
+                vec3 q = ray_offset_origin(p, error, n);
+                /* Strictly on the side n points to, by at least half the
+                 * bound (the origin's own rounding takes at most one of the
+                 * 2 roundings of the coordinates it holds), in double. */
+                double moved = ((double)q.x - p.x) * n.x + ((double)q.y - p.y) * n.y + ((double)q.z - p.z) * n.z;
+                assert_true(moved > 0.0);
+                assert_true(moved >= 0.5 * error);
+                /* ... and by little: the bound is 2 roundings of the
+                 * coordinates (at most 2 sqrt(3) u |p|, 2.1e-7 |p|) and 64
+                 * of the size (3.8e-6 of it). */
+                assert_true(error < 4e-6f * scales[s] + 2.1e-7f * vec3_max_component(vec3_abs(p)));
+            }
         }
     }
+    /* The issue's small object: 1e-4 across, near 0. The offset once was a
+     * fixed 2^-16 there, 15 % of the object; now it is 4e-10 or less. */
+    vec3 p = vec3_make(3e-5f, -2e-5f, 1e-5f), n = vec3_make(0, 0, 1);
+    assert_true(ray_point_error(p, n, 1e-4f) < 4e-10f);
 }
 
 static void test_spawn_offsets_towards_the_direction(void **state)
 {
     (void)state;
     vec3 p = vec3_make(3.0f, 0.0f, 0.0f), n = vec3_make(1, 0, 0);
-    ray out = ray_spawn(p, n, vec3_make(1, 1, 0));
-    ray in = ray_spawn(p, n, vec3_make(-1, 1, 0));
+    float error = ray_point_error(p, n, 1.0f);
+    ray out = ray_spawn(p, error, n, vec3_make(1, 1, 0));
+    ray in = ray_spawn(p, error, n, vec3_make(-1, 1, 0));
     assert_true(out.origin.x > 3.0f);
     assert_true(in.origin.x < 3.0f);
-    ray to = ray_spawn_to(p, n, vec3_make(10, 0, 0), vec3_splat(0.0f));
+    ray to = ray_spawn_to(p, error, n, vec3_make(10, 0, 0), 0.0f, vec3_splat(0.0f));
     assert_float_equal(to.t_max, 1.0f, 0.0f);
     vec3 end = ray_at(to, 1.0f);
     assert_float_equal(end.x, 10.0f, 1e-5);
+    /* A target on a surface facing the origin: the far end is pulled back
+     * towards the origin by its error bound and 64 roundings of the
+     * segment's length. */
+    ray to_wall = ray_spawn_to(p, error, n, vec3_make(10, 0, 0), 1e-4f, vec3_make(1, 0, 0));
+    float pulled = 10.0f - ray_at(to_wall, 1.0f).x;
+    assert_close(pulled, 1e-4 + 64.0 * 0x1.0p-24 * 7.0, 1e-6);
 }
 
 /* ---- render loop ---------------------------------------------------------- */
@@ -310,13 +334,56 @@ static void test_one_sample_goes_through_the_pixel_centre(void **state)
     assert_float_equal(d.y, expected.y, 0.0f);
 }
 
+/* ---- estimates and progressive rendering --------------------------------- */
+
+static vec3 constant_radiance(const void *scene, ray r, pcg32 *rng, ray_counters *counters)
+{
+    (void)scene;
+    (void)r;
+    (void)rng;
+    (void)counters;
+    return vec3_splat(0.5f);
+}
+
+/* Without noise there is no error to wait for: the render stops at the
+ * first pass whose variance is trusted (16 samples per pixel). */
+static void test_progressive_stops_at_once_without_noise(void **state)
+{
+    (void)state;
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 50.0f, 9, 7);
+    estimate_image e = progressive_render(constant_radiance, NULL, &cam, 1, 2, 0.0, 1e-3, NULL);
+    assert_int_equal(e.spp, 16);
+    assert_float_equal(estimate_relative_error(&e), 0.0, 0.0);
+    assert_float_equal(e.mean.rgb[0], 0.5f, 0.0f);
+    estimate_image_free(&e);
+}
+
+/* Passes of 2, 2, 4, 8, ... samples until the error the variance predicts
+ * is below the target; every pass's samples are counted. A noisy first
+ * pass must not look converged (one sample per pixel has no variance). */
+static void test_progressive_reaches_the_target_error(void **state)
+{
+    (void)state;
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 50.0f, 9, 7);
+    estimate_image two = estimate_render(noisy_radiance, NULL, &cam, 2, 5, 2);
+    double start_error = estimate_relative_error(&two);
+    estimate_image_free(&two);
+    assert_true(start_error > 0.05);
+    double target = start_error / 4.0; /* about 16 times the samples */
+    estimate_image e = progressive_render(noisy_radiance, NULL, &cam, 5, 2, 0.0, target, NULL);
+    assert_true(estimate_relative_error(&e) <= target);
+    assert_true(e.spp >= 16 && (e.spp & (e.spp - 1)) == 0);
+    assert_int_equal(e.counters.camera_rays, (uint64_t)(9 * 7) * (uint64_t)e.spp);
+    estimate_image_free(&e);
+}
+
 /* ---- command line --------------------------------------------------------- */
 
 static cli_status parse(int argc, char **argv, cli_options *opts, char *err)
 {
     static int max_depth = 5;
     static const cli_flag extras[] = {{"--max-depth", CLI_INT, &max_depth, "N", "recursion limit", 0, 64}};
-    cli_spec spec = {"test", "a test", extras, 1};
+    cli_spec spec = {"test", "a test", extras, 1, "the path of a pixel"};
     *opts = cli_defaults("/tmp/out.exr", 64, 32, 1);
     return cli_parse(argc, argv, &spec, opts, err, 512);
 }
@@ -390,7 +457,7 @@ static void test_cli_rejects_nan_and_inf_for_an_unranged_float(void **state)
     (void)state;
     static float scale = 1.0f;
     static const cli_flag extras[] = {{"--scale", CLI_FLOAT, &scale, "X", "any finite number", 0, 0}};
-    cli_spec spec = {"test", "a test", extras, 1};
+    cli_spec spec = {"test", "a test", extras, 1, "the path of a pixel"};
     const char *bad[] = {"inf", "-inf", "infinity", "nan", "1e999", "0x1p2000", ""};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         char err[512] = "";
@@ -414,7 +481,7 @@ static void test_cli_checks_a_directory_flag_at_once(void **state)
     (void)state;
     static const char *data = NULL;
     static const cli_flag extras[] = {{"--data", CLI_DIR, &data, "DIR", "where the CSV goes", 0, 0}};
-    cli_spec spec = {"test", "a test", extras, 1};
+    cli_spec spec = {"test", "a test", extras, 1, "the path of a pixel"};
     const char *bad[][2] = {{"/nonexistent-dir", "does not exist"}, {"/etc/passwd", "is not a directory"}, {"", "--data"}};
     for (int i = 0; i < 3; i++) {
         char err[512] = "";
@@ -449,7 +516,7 @@ static const char *const RUNG_NAMES[] = {"lecture", "cosine", "mis", NULL};
 static cli_status parse_choice(int argc, char **argv, cli_choice *choice, char *err, size_t err_size)
 {
     const cli_flag extras[] = {{"--integrator", CLI_CHOICE, choice, NULL, "the rung", 0, 0}};
-    cli_spec spec = {"test", "a test", extras, 1};
+    cli_spec spec = {"test", "a test", extras, 1, "the path of a pixel"};
     cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
     return cli_parse(argc, argv, &spec, &o, err, err_size);
 }
@@ -511,7 +578,7 @@ static void test_cli_choice_bad_value_exits_with_status_2(void **state)
         dup2(pipe_fds[1], 2);
         cli_choice rung = {RUNG_NAMES, NULL, 0};
         const cli_flag extras[] = {{"--integrator", CLI_CHOICE, &rung, NULL, "the rung", 0, 0}};
-        cli_spec spec = {"prog", "a test", extras, 1};
+        cli_spec spec = {"prog", "a test", extras, 1, "the path of a pixel"};
         cli_options o = cli_defaults("/tmp/out.exr", 64, 32, 1);
         char *argv[] = {"prog", "--integrator", "fast", NULL};
         cli_parse_or_exit(3, argv, &spec, &o);
@@ -567,7 +634,7 @@ static void test_cli_choice_help_lists_the_choices(void **state)
         {"--noted", CLI_CHOICE, &noted, NULL, "the rung, noted", 0, 0},
         {"--named", CLI_CHOICE, &named, "RUNG", "the rung, named", 0, 0},
     };
-    cli_spec spec = {"test", "a test", extras, 3};
+    cli_spec spec = {"test", "a test", extras, 3, "the path of a pixel"};
     char help[8192];
     help_text(&spec, help, sizeof help);
     expect_in_help(help, "\n  --plain lecture|cosine|mis the rung\n");
@@ -672,10 +739,82 @@ static void test_splat_film_drops_nonfinite_and_ignores_points_outside(void **st
     splat_film_free(&film);
 }
 
+/* --eye, --target and --fov (CLI_CAMERA_FLAGS) read three numbers X,Y,Z
+ * and a field of view, refuse anything else naming the flag, and replace
+ * only the parts given: with none the camera is the scene's, bit for bit;
+ * with an eye alone the view keeps its direction. */
+static void test_camera_flags_override_the_scenes_camera(void **state)
+{
+    (void)state;
+    camera_override view = CAMERA_NOT_OVERRIDDEN;
+    const cli_flag extras[] = {CLI_CAMERA_FLAGS(view)};
+    cli_spec spec = {"test", "camera flags", extras, 3, "the path of a pixel"};
+    cli_options o = cli_defaults("out.exr", 8, 8, 1);
+    char err[512];
+    char *good[] = {"test", "--eye", "1,2,3", "--fov", "30"};
+    assert_int_equal(cli_parse(5, good, &spec, &o, err, sizeof err), CLI_OK);
+    assert_true(view.eye.x == 1.0f && view.eye.y == 2.0f && view.eye.z == 3.0f);
+    assert_true(isnan(view.target.x) && view.vertical_fov_degrees == 30.0f);
+    const char *bad[] = {"1,2", "1,2,3,4", "1,,3", "a,b,c", "1,2,nan", "", "1e9,0,0"};
+    for (int k = 0; k < 7; k++) {
+        char *argv[] = {"test", "--eye", (char *)bad[k]};
+        assert_int_equal(cli_parse(3, argv, &spec, &o, err, sizeof err), CLI_ERROR);
+        assert_non_null(strstr(err, "--eye"));
+    }
+    camera scene = camera_look_at(vec3_make(0, 1, 5), vec3_make(0, 1, 0), vec3_make(0, 1, 0), 40.0f, 8, 6);
+    camera_override none = CAMERA_NOT_OVERRIDDEN;
+    camera same = camera_overridden(&scene, &none);
+    assert_memory_equal(&same, &scene, sizeof scene);
+    camera_override eye_only = CAMERA_NOT_OVERRIDDEN;
+    eye_only.eye = vec3_make(3, 1, 5);
+    camera moved = camera_overridden(&scene, &eye_only);
+    assert_true(moved.eye.x == 3.0f);
+    assert_true(vec3_length(vec3_sub(moved.forward, scene.forward)) < 1e-6f);
+    assert_true(fabsf(moved.half_height - scene.half_height) < 1e-6f); /* the field of view kept */
+}
+
+/* The record a counters file carries: the command line (an argument with a
+ * space quoted, so the line pastes back), the version, the seed, the size
+ * and the notes, as valid JSON strings (a quote in a note escaped). */
+static void test_counters_file_records_the_run(void **state)
+{
+    (void)state;
+    cli_options o = cli_defaults("out.exr", 16, 8, 4);
+    o.seed = 42;
+    char *argv[] = {"prog", "--seed", "42", "--scene", "my scene.scene"};
+    o.scene = argv[4];
+    run_record_command(5, argv, &o);
+    run_record_note("integrator", "mis");
+    run_record_note("odd", "say \"hi\"");
+    char path[] = "/tmp/test_record.XXXXXX", json[256], err[256], text[8192];
+    int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    close(fd);
+    snprintf(json, sizeof json, "%s.json", path);
+    ray_counters c = {0};
+    assert_true(counters_write_json(json, &c, 1.0, NULL, err, sizeof err));
+    FILE *f = fopen(json, "r");
+    assert_non_null(f);
+    size_t n = fread(text, 1, sizeof text - 1, f);
+    text[n] = '\0';
+    fclose(f);
+    assert_non_null(strstr(text, "\"command\": \"prog --seed 42 --scene 'my scene.scene'\""));
+    assert_non_null(strstr(text, "\"version\": \""));
+    assert_non_null(strstr(text, "\"seed\": 42"));
+    assert_non_null(strstr(text, "\"width\": 16"));
+    assert_non_null(strstr(text, "\"scene\": \"my scene.scene\""));
+    assert_non_null(strstr(text, "\"integrator\": \"mis\""));
+    assert_non_null(strstr(text, "\"odd\": \"say \\\"hi\\\"\""));
+    remove(json);
+    remove(path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pcg32_matches_reference_output),
+        cmocka_unit_test(test_counters_file_records_the_run),
+        cmocka_unit_test(test_camera_flags_override_the_scenes_camera),
         cmocka_unit_test(test_pcg32_float_is_in_unit_interval_and_uniform),
         cmocka_unit_test(test_pcg32_pixel_streams_differ),
         cmocka_unit_test(test_pcg32_bounded_stays_in_range),
@@ -691,6 +830,8 @@ int main(void)
         cmocka_unit_test(test_render_counts_every_camera_ray),
         cmocka_unit_test(test_render_drops_and_counts_nan_samples),
         cmocka_unit_test(test_one_sample_goes_through_the_pixel_centre),
+        cmocka_unit_test(test_progressive_stops_at_once_without_noise),
+        cmocka_unit_test(test_progressive_reaches_the_target_error),
         cmocka_unit_test(test_cli_reads_every_shared_flag),
         cmocka_unit_test(test_cli_rejects_bad_flags_with_a_clear_message),
         cmocka_unit_test(test_cli_rejects_an_unwritable_directory),

@@ -252,7 +252,7 @@ static void test_loaders_refuse_what_is_not_a_regular_file_or_too_large(void **s
 static void test_the_flag_sets_the_limit(void **state)
 {
     reset(state);
-    cli_spec spec = {"t", "t", NULL, 0};
+    cli_spec spec = {"t", "t", NULL, 0, "the path of a pixel"};
     cli_options o = cli_defaults("/tmp/x.png", 64, 48, 1);
     char err[512];
     assert_int_equal(o.max_input_mb, INPUT_DEFAULT_MESH_MB);
@@ -283,7 +283,7 @@ static int read_in_child(const char *out, const char *path, char *message, size_
     if (child == 0) {
         if (freopen(err_path, "w", stderr) == NULL)
             _exit(99);
-        cli_spec spec = {"prog", "t", NULL, 0};
+        cli_spec spec = {"prog", "t", NULL, 0, "the path of a pixel"};
         cli_options o = cli_defaults(out, 8, 8, 1);
         char *argv[] = {"prog"};
         cli_parse_or_exit(1, argv, &spec, &o);

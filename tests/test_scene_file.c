@@ -408,7 +408,7 @@ static void test_scene_and_explain_flags(void **state)
 {
     (void)state;
     cli_options o = cli_defaults("/tmp/x.png", 64, 48, 1);
-    cli_spec spec = {"t", "t", NULL, 0};
+    cli_spec spec = {"t", "t", NULL, 0, "the path of a pixel"};
     char err[512];
     char *argv[] = {"t", "--scene", "a.scene", "--explain", "3,4", "--spp", "2"};
     assert_int_equal(cli_parse(7, argv, &spec, &o, err, sizeof err), CLI_OK);

@@ -1,10 +1,10 @@
 /* 01-ray-casting: render chapter 01's scene by ray casting (lecture 13). */
 #include <stdio.h>
 
+#include "01-ray-casting/ray_casting.h"
 #include "cli.h"
 #include "effects.h"
 #include "program.h"
-#include "ray_casting.h"
 
 int main(int argc, char **argv)
 {
@@ -14,7 +14,7 @@ int main(int argc, char **argv)
                      "hit among a sphere, a plane, a triangle (Moller-Trumbore) and an implicit torus (sphere\n"
                      "tracing), a shadow ray to each point light, and Blinn-Phong shading. The built-in scene\n"
                      "is chapters/01-ray-casting/scenes/default.scene.",
-                     NULL, 0};
+                     NULL, 0, "its rays (camera and shadow rays, each hit and light)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
 
     scene sc;

@@ -1,4 +1,4 @@
-#include "ray_casting.h"
+#include "01-ray-casting/ray_casting.h"
 
 #include "explain.h"
 
@@ -10,7 +10,8 @@ bool light_visible(const scene *sc, const hit_record *hit, vec3 light_position, 
         return true;
     /* Shadow ray from the hit point to the light: blocked if anything lies
      * strictly between them (t in (0, 1) along point -> light). */
-    ray shadow = ray_spawn_to(hit->point, hit->normal_geometric, light_position, vec3_splat(0.0f));
+    ray shadow = ray_spawn_to(hit->point, hit->point_error, hit->normal_geometric, light_position, 0.0f,
+                              vec3_splat(0.0f));
     counters->shadow_rays++;
     return !scene_occluded(sc, shadow, counters);
 }

@@ -6,8 +6,8 @@
 #ifndef RAY_CASTING_H
 #define RAY_CASTING_H
 
+#include "01-ray-casting/scene.h"
 #include "rng.h"
-#include "scene.h"
 
 /* Blinn-Phong at a hit seen from direction `to_viewer` (unit, pointing away
  * from the surface), with a shadow ray to each light:

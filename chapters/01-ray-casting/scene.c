@@ -1,4 +1,4 @@
-#include "scene.h"
+#include "01-ray-casting/scene.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -16,12 +16,12 @@
 #include <stdbool.h>
 #include <stdio.h>
 
+#include "01-ray-casting/shapes.h"
 #include "camera.h"
 #include "cli.h"
 #include "counters.h"
 #include "ray.h"
 #include "scene_file.h"
-#include "shapes.h"
 
 typedef enum {
     MATERIAL_BLINN_PHONG, /* diffuse + specular highlight (chapter 01) */

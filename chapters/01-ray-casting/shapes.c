@@ -1,5 +1,5 @@
 /* shapes.c -- lecture 13: the ray r(t) = o + t d meets a surface. */
-#include "shapes.h"
+#include "01-ray-casting/shapes.h"
 
 /* ---- Ray-sphere: solve |o + t d - c|^2 - R^2 = 0 --------------------------
  * The lecture's quadratic a t^2 + b t + c = 0 with a = d.d, b = 2 (o-c).d,
@@ -21,7 +21,13 @@ bool sphere_intersect_naive(const sphere *s, ray r, hit_record *hit)
         return false;
     hit->t = t;
     hit->point = ray_at(r, t);
-    hit_set_normal(hit, r, vec3_scale(vec3_sub(hit->point, s->center), 1.0f / s->radius));
+    vec3 outward = vec3_scale(vec3_sub(hit->point, s->center), 1.0f / s->radius);
+    /* o + t d: its rounding grows with the distance travelled, hence that
+     * distance in the size (a rough bound: far from the sphere this
+     * formula's t itself is far worse, which is what it is kept to show). */
+    float travelled = vec3_max_component(vec3_abs(vec3_sub(hit->point, r.origin)));
+    hit->point_error = ray_point_error(hit->point, outward, s->radius + travelled);
+    hit_set_normal(hit, r, outward);
     hit->u = hit->v = 0.0f;
     return true;
 }
@@ -36,8 +42,9 @@ bool sphere_intersect_naive(const sphere *s, ray r, hit_record *hit)
  *     no cancellation of large terms;
  *  2. the near root via q = b' + sign(b') sqrt(disc), t0 = c/q, t1 = q/a, so
  *     -b and the square root are never subtracted when they are nearly equal.
- * Hit points are then re-projected onto the sphere, so their error is a few
- * ulps of the sphere's size, which the ray offsets in ray.c rely on. */
+ * Hit points are then re-projected onto the sphere, so their error is one
+ * rounding of their coordinates and a few of the radius, which the ray
+ * offsets in ray.h rely on (ray_point_error with size = the radius). */
 /* Both roots t0 <= t1 of the ray-sphere quadratic, in the ray's own t units;
  * false if the ray's line misses the sphere. */
 static bool sphere_roots(vec3 center, float radius, ray r, float *t0, float *t1)
@@ -73,6 +80,7 @@ bool sphere_intersect(const sphere *s, ray r, hit_record *hit)
     hit->t = t;
     vec3 outward = vec3_normalize(vec3_sub(ray_at(r, t), s->center));
     hit->point = vec3_add(s->center, vec3_scale(outward, s->radius)); /* re-projected */
+    hit->point_error = ray_point_error(hit->point, outward, s->radius);
     hit_set_normal(hit, r, outward);
     hit->u = hit->v = 0.0f;
     return true;
@@ -93,6 +101,12 @@ bool plane_intersect(const plane *p, ray r, hit_record *hit)
      * representable, so offsets start from the surface itself. */
     if (p->normal.x == 0.0f && p->normal.z == 0.0f)
         hit->point.y = p->point.y;
+    /* An infinite plane has no size: what the rounding scales with is the
+     * distance travelled (o + t d) and, for the test from a nearby origin,
+     * the distance to the plane's own point. */
+    float size = vec3_max_component(vec3_abs(vec3_sub(hit->point, r.origin))) +
+                 vec3_max_component(vec3_abs(vec3_sub(hit->point, p->point)));
+    hit->point_error = ray_point_error(hit->point, p->normal, size);
     hit_set_normal(hit, r, p->normal);
     hit->u = hit->v = 0.0f;
     return true;
@@ -216,7 +230,7 @@ bool triangle_intersect_watertight(const triangle *tri, const ray *r, float *t_o
  * however thin it is. Our torus's f is an exact distance (L = 1). The walk
  * stops when |f| falls below a tolerance, and the point is then projected
  * onto the surface along the gradient (p - f grad f), so that hit points are
- * as exact as the sphere's and ray offsets (ray.c) work the same. */
+ * as exact as the sphere's and ray offsets (ray.h) work the same. */
 
 /* Stop when the surface is closer than this fraction of the torus's size:
  * ~20 float ulps of the coordinates, far below a pixel, and above the float
@@ -228,7 +242,8 @@ static const int IMPLICIT_MAX_STEPS = 1024;
 /* A ray that starts this close to the surface is leaving it (a shadow or
  * reflected ray): its first hit only counts once it has got farther away,
  * or it would find the surface it starts on. 40x the tolerance is well above
- * the ray offset of ray.c (256 ulps, ~1.5e-5 relative). */
+ * the ray offset of ray.h (ray_point_error: 64 roundings of the size, 4e-6
+ * relative, and 2 of the coordinates). */
 static const float IMPLICIT_LEAVING_DISTANCE = 40.0f * 1e-6f;
 
 float implicit_torus_value(const implicit_torus *torus, vec3 p)
@@ -271,6 +286,7 @@ bool implicit_intersect(const implicit_torus *torus, ray r, hit_record *hit)
             vec3 gradient = implicit_torus_gradient(torus, p);
             hit->t = t;
             hit->point = vec3_sub(p, vec3_scale(gradient, implicit_torus_value(torus, p)));
+            hit->point_error = ray_point_error(hit->point, gradient, size);
             hit_set_normal(hit, r, gradient);
             hit->u = hit->v = 0.0f;
             return true;

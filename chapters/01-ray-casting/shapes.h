@@ -113,6 +113,20 @@ static inline vec3 triangle_unit_normal(const triangle *tri)
     return vec3_normalize(vec3_cross(e1, e2));
 }
 
+/* A triangle's size for ray_point_error(): the largest coordinate of its
+ * edges E1 = P1 - P0 and E2 = P2 - P0 (at least half its extent). */
+static inline float triangle_edge_size(vec3 e1, vec3 e2)
+{
+    return fmaxf(vec3_max_component(vec3_abs(e1)), vec3_max_component(vec3_abs(e2)));
+}
+
+/* The error bound (ray.h) of a point computed on triangle tri, with unit
+ * normal n, as P0 + (b1 E1 + b2 E2): what its hit record would carry. */
+static inline float triangle_point_error(const triangle *tri, vec3 point, vec3 n)
+{
+    return ray_point_error(point, n, triangle_edge_size(vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0)));
+}
+
 /* triangle_fill_hit() with the triangle's unit normal already at hand
  * (triangle_unit_normal(), computed once per triangle ahead of time: the
  * same bits). Normalising costs a square root and a division, one after
@@ -125,10 +139,16 @@ static inline void triangle_fill_hit_normal(const triangle *tri, vec3 unit_norma
     hit->t = t;
     hit->u = b1;
     hit->v = b2;
-    /* The point from the barycentrics, not o + t d: its error is a few ulps
-     * of the vertices, whatever the distance travelled (see ray.h). */
-    hit->point = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - b1 - b2), vec3_scale(tri->p1, b1)),
-                          vec3_scale(tri->p2, b2));
+    /* The point from the barycentrics, not o + t d, whose error grows with
+     * the distance travelled: (1 - b1 - b2) P0 + b1 P1 + b2 P2, written as
+     * P0 + (b1 E1 + b2 E2). The same point, but for a small triangle far
+     * from the origin the edges are exact differences of nearby floats and
+     * their weighted sum is small, so the point is rounded once, at the
+     * end, where the first form rounds several terms of the coordinates'
+     * size (ray.h's offsets rely on it). */
+    vec3 e1 = vec3_sub(tri->p1, tri->p0), e2 = vec3_sub(tri->p2, tri->p0);
+    hit->point = vec3_add(tri->p0, vec3_add(vec3_scale(e1, b1), vec3_scale(e2, b2)));
+    hit->point_error = ray_point_error(hit->point, unit_normal, triangle_edge_size(e1, e2));
     hit_set_normal(hit, *r, unit_normal);
 }
 

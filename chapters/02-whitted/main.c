@@ -1,10 +1,10 @@
 /* 02-whitted: render chapter 02's scene by Whitted-style ray tracing (lecture 13). */
 #include <stdio.h>
 
+#include "02-whitted/whitted.h"
 #include "cli.h"
 #include "effects.h"
 #include "program.h"
-#include "whitted.h"
 
 static const int DEFAULT_MAX_DEPTH = 5;
 
@@ -22,7 +22,7 @@ int main(int argc, char **argv)
                      "ray (Snell's law), weighted by the exact Fresnel reflectance; diffuse surfaces stop\n"
                      "with a shadow ray to each point light and Blinn-Phong shading. The built-in scene is\n"
                      "chapters/02-whitted/scenes/default.scene.",
-                     extras, 1};
+                     extras, 1, "its ray tree (each hit, light, reflected and refracted ray)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
 
     scene sc;

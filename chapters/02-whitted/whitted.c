@@ -6,7 +6,7 @@
  * added at the hit. At diffuse surfaces the recursion stops and the shadow
  * rays of chapter 01 decide which lights are seen.
  */
-#include "whitted.h"
+#include "02-whitted/whitted.h"
 
 #include <stdio.h>
 
@@ -116,9 +116,9 @@ static vec3 trace_secondary(const scene *sc, const hit_record *hit, vec3 directi
         return vec3_splat(0.0f);
     }
     (*ray_count)++;
-    /* The new ray starts on the side it leaves to (ray.c): a reflected ray
+    /* The new ray starts on the side it leaves to (ray.h): a reflected ray
      * above the surface, a refracted ray below it. */
-    ray next = ray_spawn(hit->point, hit->normal_geometric, direction);
+    ray next = ray_spawn(hit->point, hit->point_error, hit->normal_geometric, direction);
     if (explain_on()) {
         char label[64];
         snprintf(label, sizeof label, "%s ray (depth %d)", kind, depth + 1);

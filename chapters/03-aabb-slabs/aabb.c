@@ -1,5 +1,5 @@
 /* aabb.c -- boxes and the slab test. */
-#include "aabb.h"
+#include "03-aabb-slabs/aabb.h"
 
 float aabb_surface_area(aabb b)
 {

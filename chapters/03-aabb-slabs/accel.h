@@ -16,6 +16,11 @@
  *
  * Every structure counts, per ray, the nodes or cells it visits
  * (counters->box_tests) and the triangles it tests (primitive_tests).
+ *
+ * What is built on the interface has headers of its own: accel_view.h (a
+ * mesh rendered through any structure, or the cost of each ray) and
+ * accel_program.h (what the programs of chapters 03-06 share: the mesh
+ * their flags ask for, the Embree harness's ray sets and their timing).
  */
 #ifndef ACCEL_H
 #define ACCEL_H
@@ -26,11 +31,7 @@
 #include "01-ray-casting/shapes.h"
 #include "03-aabb-slabs/aabb.h"
 #include "counters.h"
-#include "camera.h"
-#include "cli.h"
 #include "mesh.h"
-#include "rng.h"
-#include "scene_file.h"
 
 /* A triangle's unit normal and material, what its hit record needs
  * besides the corners (see triangle_set). */
@@ -148,78 +149,5 @@ static inline void accel_destroy(accel *a)
 /* Brute force: every ray tests every triangle. The baseline every structure
  * must agree with, and beat. */
 accel *brute_force_build(const triangle_set *set);
-
-/* ---- looking at a mesh through any structure ------------------------------
- * What every accelerator chapter's program renders: the mesh lit by a light
- * at the eye (brightest where it faces the camera), or, with heatmap set, the
- * cost of each ray: the nodes or cells it visited plus the triangles it
- * tested, as a colour from dark blue (cheap) to yellow and white (expensive),
- * so you can see where a structure works hard. */
-typedef struct {
-    const accel *structure;
-    bool heatmap;
-    float heatmap_max_cost; /* the cost shown as white */
-} accel_view;
-
-vec3 accel_view_radiance(const void *view, ray r, pcg32 *rng, ray_counters *counters);
-/* The view of the Embree harness's coherent ray set: from
- * c + unit(0.3, 0.4, 1) * 2.5 * half-diagonal, looking at the centre c of
- * the bounds, tan(vertical fov / 2) = 0.3. */
-camera accel_view_camera(aabb bounds, int width, int height);
-/* The ray sets of the Embree harness (../shared/anchors/embree_bench.c),
- * generated operation for operation as it does, for timing on the same work:
- * coherent, a 1024 x 1024 pinhole image of the bounds in scanline order;
- * incoherent, 2^20 rays with origins uniform in the bounds and directions
- * uniform on the sphere (splitmix64 from seed 0xBADC0DE). The caller frees. */
-ray *accel_harness_rays(aabb bounds, bool coherent, int *count);
-
-/* Rays aimed at the mesh itself, whatever a camera sees: origins uniform in
- * the bounds, each aimed at the centroid of a triangle picked uniformly, so
- * a mesh's dense parts get their share of the rays (the teapot, not the
- * empty stadium). Seeded PCG32; the caller frees. */
-ray *accel_aimed_rays(const triangle_set *set, int count, uint64_t seed);
-/* ---- scene files (scene_mesh.c) ---------------------------------------------
- * Chapters 03-06 trace triangles only, lit by a headlight: from a scene file
- * they take the triangle, quad and mesh shapes, appended to m in order, and
- * the camera. Each shape statement is one object (the tori field generator
- * gives one per torus): *object_first (allocated, may be NULL to skip) gets
- * object_count + 1 entries, object k owning faces [first[k], first[k+1]).
- * Everything else -- spheres, planes, tori, lights, materials, effects -- is
- * named in one warning each, not silently dropped. False with err
- * ("file:line:col: ...") if a mesh fails to load or there are no
- * triangles; m is then unchanged. */
-bool accel_mesh_from_desc(mesh *m, const scene_desc *d, const char *label, int **object_first, int *object_count,
-                          char *err, size_t err_size);
-/* The scene file's camera if it has one, else accel_view_camera(bounds). */
-camera accel_scene_camera(const scene_desc *d, aabb bounds, int width, int height);
-
-/* ---- what the programs of chapters 04-06 share (accel_program.c) -------------
- * The mesh their flags ask for: --scene FILE (its triangles and camera),
- * else --obj FILE, else the procedural --mesh NAME: "tori" (the harness's
- * field of tori_triangles), "stadium" (the teapot in a stadium) or
- * "icosphere". On bad input prints "program: message" and returns the exit
- * status (1: a bad or empty file, 2: a bad flag), with nothing left to free;
- * 0 on success, and then accel_input_free releases it. */
-typedef struct {
-    mesh m;
-    scene_desc desc;  /* --scene's description (empty without --scene) */
-    const char *name; /* what was loaded, for messages */
-    bool stadium;     /* the teapot in a stadium: seen by a spectator */
-} accel_input;
-
-int accel_input_load(accel_input *in, cli_options *opts, const char *program, const char *mesh_name,
-                     const char *obj_path, int tori_triangles, int icosphere_subdivisions);
-/* The scene file's camera, a spectator's in the stadium, else the harness's
- * view of the bounds. */
-camera accel_input_camera(const accel_input *in, aabb bounds, int width, int height);
-void accel_input_free(accel_input *in);
-/* Times the harness's coherent or incoherent ray set (accel_harness_rays)
- * on one thread: the median of 3 runs of closest hit and of any hit, by the
- * wall clock and by this thread's CPU time, with the hit fraction, the sum of
- * t (to compare with Embree's) and the tests per ray. */
-void accel_bench_harness(const accel *a, bool coherent);
-
-/* The heat map's colour for cost / max_cost. */
-vec3 accel_heat_colour(float fraction);
 
 #endif

@@ -1,16 +1,19 @@
-/* accel_program.c -- what the programs of chapters 04-06 share: the mesh
- * their flags ask for, the camera that looks at it, and the one-thread
- * timing of the Embree harness's ray sets (see accel.h). One copy here, so
- * the chapters' main.c files hold only what is their own: the structure's
- * flags and figures. */
+/* accel_program.c -- what the programs of chapters 03-06 share (see
+ * accel_program.h): the mesh their flags ask for, the camera that looks at
+ * it, the Embree harness's ray sets and their one-thread timing, and rays
+ * aimed at the mesh. One copy here, so the chapters' main.c files hold only
+ * what is their own: the structure's flags and figures. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
-#include "03-aabb-slabs/accel.h"
+#include "03-aabb-slabs/accel_program.h"
+#include "memory.h"
 #include "program.h"
 #include "timer.h"
+
+const char *const accel_mesh_names[] = {"tori", "stadium", "icosphere", NULL};
 
 int accel_input_load(accel_input *in, cli_options *opts, const char *program, const char *mesh_name,
                      const char *obj_path, int tori_triangles, int icosphere_subdivisions)
@@ -141,4 +144,71 @@ void accel_bench_harness(const accel *a, bool coherent)
     printf("      %.2f nodes visited and %.2f triangles tested per ray (closest and any hit together)\n",
            (double)counters.box_tests / tests, (double)counters.primitive_tests / tests);
     free(rays);
+}
+
+/* ---- the Embree harness's ray sets ------------------------------------------ */
+
+static double harness_uniform(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    z ^= z >> 31;
+    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static vec3 harness_unit(vec3 a) { return vec3_scale(a, 1.0f / sqrtf(vec3_dot(a, a))); }
+
+ray *accel_harness_rays(aabb bounds, bool coherent, int *count)
+{
+    enum { SIDE = 1024, INCOHERENT = 1 << 20 };
+    if (coherent) {
+        *count = SIDE * SIDE;
+        ray *rays = memory_allocate((size_t)*count, sizeof *rays);
+        vec3 c = vec3_scale(vec3_add(bounds.lo, bounds.hi), 0.5f);
+        vec3 diagonal = vec3_sub(bounds.hi, bounds.lo);
+        float rb = 0.5f * sqrtf(vec3_dot(diagonal, diagonal));
+        vec3 eye = vec3_add(c, vec3_scale(harness_unit(vec3_make(0.3f, 0.4f, 1.0f)), 2.5f * rb));
+        vec3 forward = harness_unit(vec3_sub(c, eye));
+        vec3 right = harness_unit(vec3_cross(forward, vec3_make(0, 1, 0)));
+        vec3 up = vec3_cross(right, forward);
+        float th = 0.3f, tw = th * (float)SIDE / (float)SIDE;
+        for (int y = 0; y < SIDE; y++)
+            for (int x = 0; x < SIDE; x++) {
+                float u = (2 * (x + 0.5f) / (float)SIDE - 1) * tw, v = (1 - 2 * (y + 0.5f) / (float)SIDE) * th;
+                vec3 d = harness_unit(vec3_add(forward, vec3_add(vec3_scale(right, u), vec3_scale(up, v))));
+                rays[(size_t)y * SIDE + (size_t)x] = ray_make(eye, d);
+            }
+        return rays;
+    }
+    *count = INCOHERENT;
+    ray *rays = memory_allocate((size_t)*count, sizeof *rays);
+    uint64_t state = 0xBADC0DE;
+    for (int k = 0; k < *count; k++) {
+        vec3 o;
+        o.x = (float)(bounds.lo.x + (bounds.hi.x - bounds.lo.x) * harness_uniform(&state));
+        o.y = (float)(bounds.lo.y + (bounds.hi.y - bounds.lo.y) * harness_uniform(&state));
+        o.z = (float)(bounds.lo.z + (bounds.hi.z - bounds.lo.z) * harness_uniform(&state));
+        float z = (float)(2 * harness_uniform(&state) - 1);
+        float phi = (float)(2 * PI * harness_uniform(&state));
+        float s = sqrtf(1 - z * z);
+        rays[k] = ray_make(o, vec3_make(s * cosf(phi), s * sinf(phi), z));
+    }
+    return rays;
+}
+
+ray *accel_aimed_rays(const triangle_set *set, int count, uint64_t seed)
+{
+    ray *rays = memory_allocate((size_t)count, sizeof *rays);
+    pcg32 rng = pcg32_for_pixel(seed, 0x9120);
+    vec3 lo = set->bounds.lo, e = aabb_extent(set->bounds);
+    for (int i = 0; i < count; i++) {
+        /* in a written order (C leaves a call's argument order open): GCC's */
+        float u_z = pcg32_float(&rng), u_y = pcg32_float(&rng), u_x = pcg32_float(&rng);
+        vec3 o = vec3_make(lo.x + e.x * u_x, lo.y + e.y * u_y, lo.z + e.z * u_z);
+        const triangle *t = &set->triangles[pcg32_bounded(&rng, (uint32_t)set->count)];
+        vec3 target = vec3_scale(vec3_add(vec3_add(t->p0, t->p1), t->p2), 1.0f / 3.0f);
+        rays[i] = ray_make(o, vec3_normalize(vec3_sub(target, o)));
+    }
+    return rays;
 }

@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "03-aabb-slabs/accel.h"
+#include "03-aabb-slabs/accel_program.h"
 #include "cli.h"
 #include "explain.h"
 #include "memory.h"
@@ -112,6 +112,71 @@ static vec3 boxed_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *cou
     return vec3_add(colour, overlay);
 }
 
+/* The tori field: mesh_tori_field builds the tori one after another, each
+ * with the same number of triangles. */
+static void load_tori(mesh *m, boxed_scene *sc)
+{
+    mesh_tori_field(m, 10240);
+    sc->object_count = TORI;
+    sc->first = memory_allocate(TORI + 1, sizeof(int));
+    int per_torus = m->face_count / TORI;
+    for (int k = 0; k <= TORI; k++)
+        sc->first[k] = k * per_torus;
+}
+
+/* One box around each object's triangles. */
+static void build_boxes(boxed_scene *sc)
+{
+    sc->boxes = memory_allocate((size_t)sc->object_count, sizeof(aabb));
+    for (int k = 0; k < sc->object_count; k++) {
+        sc->boxes[k] = aabb_empty();
+        for (int i = sc->first[k]; i < sc->first[k + 1]; i++)
+            sc->boxes[k] = aabb_union(sc->boxes[k], sc->set.boxes[i]);
+    }
+}
+
+/* The scene file's objects (--scene) or the tori field, their boxes, and
+ * the camera: the file's, or the same view as the Embree harness's
+ * coherent ray set. On a bad scene file prints why and returns false. */
+static bool boxed_scene_load(boxed_scene *sc, mesh *m, cli_options *opts, const char *program, camera *cam)
+{
+    scene_desc desc;
+    mesh_init(m);
+    if (program_load_scene(opts, program, &desc)) {
+        char err[SCENE_ERROR_SIZE];
+        if (!accel_mesh_from_desc(m, &desc, program, &sc->first, &sc->object_count, err, sizeof err)) {
+            fprintf(stderr, "%s: %s\n", program, err);
+            scene_desc_free(&desc);
+            return false;
+        }
+    } else {
+        load_tori(m, sc);
+    }
+    triangle_set_from_mesh(&sc->set, m);
+    build_boxes(sc);
+    *cam = accel_scene_camera(&desc, sc->set.bounds, opts->width, opts->height);
+    scene_desc_free(&desc);
+    return true;
+}
+
+static void boxed_scene_report(const boxed_scene *sc, const render_stats *stats)
+{
+    double rays = (double)stats->counters.camera_rays;
+    if (sc->use_boxes)
+        printf("with boxes: %.1f box tests and %.1f triangle tests per ray (without: %d triangle tests per ray)\n",
+               (double)stats->counters.box_tests / rays, (double)stats->counters.primitive_tests / rays, sc->set.count);
+    else
+        printf("without boxes: %.1f triangle tests per ray\n", (double)stats->counters.primitive_tests / rays);
+}
+
+static void boxed_scene_free(boxed_scene *sc, mesh *m)
+{
+    triangle_set_free(&sc->set);
+    free(sc->boxes);
+    free(sc->first);
+    mesh_free(m);
+}
+
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch03.exr", 640, 480, 1);
@@ -126,57 +191,18 @@ int main(int argc, char **argv)
                      "triangles inside. Prints the box and triangle tests per ray. The built-in scene is\n"
                      "chapters/03-aabb-slabs/scenes/default.scene; with --scene, each triangle, quad or mesh\n"
                      "statement gets one box (the tori field one per torus).",
-                     extras, 2};
+                     extras, 2, "its camera ray (the boxes and triangles it is tested against)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
 
     mesh m;
-    mesh_init(&m);
-    boxed_scene sc;
-    scene_desc desc;
-    bool from_file = program_load_scene(&opts, spec.program, &desc);
-    if (from_file) {
-        char err[SCENE_ERROR_SIZE];
-        if (!accel_mesh_from_desc(&m, &desc, spec.program, &sc.first, &sc.object_count, err, sizeof err)) {
-            fprintf(stderr, "%s: %s\n", spec.program, err);
-            scene_desc_free(&desc);
-            return 1;
-        }
-    } else {
-        mesh_tori_field(&m, 10240);
-        /* mesh_tori_field builds the tori one after another, each with the
-         * same number of triangles. */
-        sc.object_count = TORI;
-        sc.first = memory_allocate(TORI + 1, sizeof(int));
-        int per_torus = m.face_count / TORI;
-        for (int k = 0; k <= TORI; k++)
-            sc.first[k] = k * per_torus;
-    }
-    triangle_set_from_mesh(&sc.set, &m);
-    sc.use_boxes = !no_boxes;
-    sc.draw_boxes = !no_boxes && !hide_boxes;
-    sc.boxes = memory_allocate((size_t)sc.object_count, sizeof(aabb));
-    for (int k = 0; k < sc.object_count; k++) {
-        sc.boxes[k] = aabb_empty();
-        for (int i = sc.first[k]; i < sc.first[k + 1]; i++)
-            sc.boxes[k] = aabb_union(sc.boxes[k], sc.set.boxes[i]);
-    }
-
-    /* The same view as the Embree harness's coherent ray set. */
-    camera cam = accel_scene_camera(&desc, sc.set.bounds, opts.width, opts.height);
-    scene_desc_free(&desc);
+    boxed_scene sc = {.use_boxes = !no_boxes, .draw_boxes = !no_boxes && !hide_boxes};
+    camera cam;
+    if (!boxed_scene_load(&sc, &m, &opts, spec.program, &cam))
+        return 1;
     render_stats stats;
     int status = program_render(&opts, spec.program, boxed_radiance, &sc, &cam, &stats);
-    if (status == 0 && !opts.quiet) {
-        double rays = (double)stats.counters.camera_rays;
-        if (sc.use_boxes)
-            printf("with boxes: %.1f box tests and %.1f triangle tests per ray (without: %d triangle tests per ray)\n",
-                   (double)stats.counters.box_tests / rays, (double)stats.counters.primitive_tests / rays, sc.set.count);
-        else
-            printf("without boxes: %.1f triangle tests per ray\n", (double)stats.counters.primitive_tests / rays);
-    }
-    triangle_set_free(&sc.set);
-    free(sc.boxes);
-    free(sc.first);
-    mesh_free(&m);
+    if (status == 0 && !opts.quiet)
+        boxed_scene_report(&sc, &stats);
+    boxed_scene_free(&sc, &m);
     return status;
 }

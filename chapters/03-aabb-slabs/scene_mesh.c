@@ -1,9 +1,10 @@
 /* scene_mesh.c -- what chapters 03-06 take from a scene file: triangles and
- * the camera (see accel.h). */
+ * the camera (see accel_program.h). */
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "03-aabb-slabs/accel.h"
+#include "03-aabb-slabs/accel_program.h"
+#include "03-aabb-slabs/accel_view.h"
 #include "memory.h"
 #include "program.h"
 

@@ -1,7 +1,7 @@
 /* grid.c -- the uniform grid (lecture 14) and its 3D-DDA traversal
  * (Amanatides and Woo, "A Fast Voxel Traversal Algorithm for Ray Tracing",
  * 1987). */
-#include "grid.h"
+#include "04-uniform-grid/grid.h"
 
 #include <stdint.h>
 #include <stdlib.h>

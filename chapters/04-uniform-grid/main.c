@@ -9,6 +9,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "03-aabb-slabs/accel_program.h"
+#include "03-aabb-slabs/accel_view.h"
 #include "04-uniform-grid/grid.h"
 #include "cli.h"
 #include "program.h"
@@ -56,53 +58,39 @@ static void print_grid(const accel *a)
     printf(" triangles\n");
 }
 
-int main(int argc, char **argv)
-{
-    cli_options opts = cli_defaults("build/out/ch04.exr", 640, 480, 1);
-    const char *mesh_name = "tori", *obj_path = NULL;
-    int triangles = 102400, probe_rays = 10000;
-    float density = GRID_DEFAULT_DENSITY, heatmap_max = 200.0f;
-    bool heatmap = false;
-    const cli_flag extras[] = {
-        {"--density", CLI_FLOAT, &density, "C", "cells per triangle: #cells = C * #triangles (default 27)", 1e-3,
-         1e6},
-        {"--mesh", CLI_STRING, &mesh_name, "tori|stadium|icosphere",
-         "the procedural mesh (default tori); stadium: a dense sphere (the teapot) in a huge sparse stadium", 0,
-         0},
-        {"--triangles", CLI_INT, &triangles, "N", "tori field size: 1024, 10240, 102400 (default) or 1048576", 1,
-         1048576},
-        {"--obj", CLI_STRING, &obj_path, "FILE", "load a Wavefront OBJ file instead", 0, 0},
-        {"--heatmap", CLI_BOOL, &heatmap, NULL, "show the cost of each ray: cells visited + triangles tested", 0, 0},
-        {"--heatmap-max", CLI_FLOAT, &heatmap_max, "COST", "the cost shown as white (default 200)", 1, 1e7},
-        {"--probe-rays", CLI_INT, &probe_rays, "N",
-         "also trace N rays aimed at random triangles, one thread (default 10000; 0: none)", 0, 1 << 24},
-    };
-    cli_spec spec = {"04-uniform-grid",
-                     "Uniform spatial partitions (GAMES101 lecture 14): find the bounding box, create a grid of\n"
-                     "#cells = C * #objects (C about 27), store each object in the cells it overlaps, then step\n"
-                     "each ray through the cells it pierces (3D-DDA) and test only the objects stored there.\n"
-                     "Prints the grid's resolution, empty cells, the fullest cell, and tests per ray.\n"
-                     "--mesh stadium shows the teapot in a stadium, where a uniform grid fails.",
-                     extras, (int)(sizeof extras / sizeof extras[0])};
-    cli_parse_or_exit(argc, argv, &spec, &opts);
+/* The program's own flags. */
+typedef struct {
+    cli_choice mesh;
+    const char *obj_path;
+    int triangles, probe_rays;
+    float density, heatmap_max;
+    bool heatmap;
+    camera_override view; /* --eye, --target, --fov */
+} grid_flags;
 
+/* Builds the grid over the mesh the flags ask for, prints what it looks
+ * like inside and what aimed rays cost, renders it and prints what each
+ * camera ray cost. Returns the exit status. */
+static int run(cli_options *opts, const char *program, const grid_flags *f)
+{
     accel_input in;
-    int load_status = accel_input_load(&in, &opts, spec.program, mesh_name, obj_path, triangles, 6);
+    int load_status = accel_input_load(&in, opts, program, cli_choice_name(&f->mesh), f->obj_path, f->triangles, 6);
     if (load_status != 0)
         return load_status;
     triangle_set set;
     triangle_set_from_mesh(&set, &in.m);
-    accel *a = grid_build(&set, density);
-    if (!opts.quiet)
+    accel *a = grid_build(&set, f->density);
+    if (!opts->quiet)
         print_grid(a);
-    if (probe_rays > 0 && !opts.quiet)
-        probe(a, probe_rays, opts.seed);
+    if (f->probe_rays > 0 && !opts->quiet)
+        probe(a, f->probe_rays, opts->seed);
 
-    accel_view view = {a, heatmap, heatmap_max};
-    camera cam = accel_input_camera(&in, set.bounds, opts.width, opts.height);
+    accel_view view = {a, f->heatmap, f->heatmap_max};
+    camera cam = accel_input_camera(&in, set.bounds, opts->width, opts->height);
+    cam = camera_overridden(&cam, &f->view);
     render_stats stats;
-    int status = program_render(&opts, spec.program, accel_view_radiance, &view, &cam, &stats);
-    if (status == 0 && !opts.quiet) {
+    int status = program_render(opts, program, accel_view_radiance, &view, &cam, &stats);
+    if (status == 0 && !opts->quiet) {
         double rays = (double)stats.counters.camera_rays;
         printf("per camera ray: %.2f cells visited, %.2f triangles tested (plus 1 slab test of the bounds)\n",
                (double)stats.counters.box_tests / rays - 1.0, (double)stats.counters.primitive_tests / rays);
@@ -111,4 +99,35 @@ int main(int argc, char **argv)
     triangle_set_free(&set);
     accel_input_free(&in);
     return status;
+}
+
+int main(int argc, char **argv)
+{
+    cli_options opts = cli_defaults("build/out/ch04.exr", 640, 480, 1);
+    grid_flags f = {{accel_mesh_names, NULL, 0}, NULL, 102400, 10000, GRID_DEFAULT_DENSITY, 200.0f, false,
+                    CAMERA_NOT_OVERRIDDEN};
+    const cli_flag extras[] = {
+        {"--density", CLI_FLOAT, &f.density, "C", "cells per triangle: #cells = C * #triangles (default 27)", 1e-3,
+         1e6},
+        {"--mesh", CLI_CHOICE, &f.mesh, NULL,
+         "the procedural mesh (default tori); stadium: a dense sphere (the teapot) in a huge sparse stadium", 0,
+         0},
+        {"--triangles", CLI_INT, &f.triangles, "N", "tori field size: 1024, 10240, 102400 (default) or 1048576", 1,
+         1048576},
+        {"--obj", CLI_STRING, &f.obj_path, "FILE", "load a Wavefront OBJ file instead", 0, 0},
+        CLI_CAMERA_FLAGS(f.view),
+        {"--heatmap", CLI_BOOL, &f.heatmap, NULL, "show the cost of each ray: cells visited + triangles tested", 0, 0},
+        {"--heatmap-max", CLI_FLOAT, &f.heatmap_max, "COST", "the cost shown as white (default 200)", 1, 1e7},
+        {"--probe-rays", CLI_INT, &f.probe_rays, "N",
+         "also trace N rays aimed at random triangles, one thread (default 10000; 0: none)", 0, 1 << 24},
+    };
+    cli_spec spec = {"04-uniform-grid",
+                     "Uniform spatial partitions (GAMES101 lecture 14): find the bounding box, create a grid of\n"
+                     "#cells = C * #objects (C about 27), store each object in the cells it overlaps, then step\n"
+                     "each ray through the cells it pierces (3D-DDA) and test only the objects stored there.\n"
+                     "Prints the grid's resolution, empty cells, the fullest cell, and tests per ray.\n"
+                     "--mesh stadium shows the teapot in a stadium, where a uniform grid fails.",
+                     extras, (int)(sizeof extras / sizeof extras[0]), "its camera ray (the cells it visits and the triangles it tests)"};
+    cli_parse_or_exit(argc, argv, &spec, &opts);
+    return run(&opts, spec.program, &f);
 }

@@ -29,7 +29,7 @@
  * just its bounding box, so a cell the triangle's box reaches but the
  * triangle does not gets no reference to it.
  */
-#include "kdtree.h"
+#include "05-kd-tree/kdtree.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -17,7 +17,7 @@
  * a triangle that straddles into later cells, and a later cell may hold
  * something closer.
  */
-#include "kdtree.h"
+#include "05-kd-tree/kdtree.h"
 
 #include <math.h>
 #include <stdlib.h>

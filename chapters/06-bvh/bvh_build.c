@@ -1,13 +1,13 @@
 /* bvh_build.c -- building a BVH: the lecture's recursive partition of the
  * objects, split at the median object or by the surface area heuristic,
  * written straight into one flat array of nodes. */
-#include "bvh.h"
+#include "06-bvh/bvh.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "bvh_internal.h"
+#include "06-bvh/bvh_internal.h"
 #include "memory.h"
 #include "timer.h"
 

@@ -4,7 +4,7 @@
 #ifndef BVH_INTERNAL_H
 #define BVH_INTERNAL_H
 
-#include "bvh.h"
+#include "06-bvh/bvh.h"
 
 /* ---- the slab test, tuned: what the iterative traversals run ----------------
  * The lecture's slab test is chapter 03's aabb_slab_test() (aabb.h); the

@@ -4,8 +4,8 @@
  * found so far. */
 #include <stdlib.h>
 
-#include "bvh.h"
-#include "bvh_internal.h"
+#include "06-bvh/bvh.h"
+#include "06-bvh/bvh_internal.h"
 
 /* Moller-Trumbore with the edges stored (bvh_triangle): the lecture's
  *     [t, b1, b2] = 1 / (S1 . E1) [S2 . E2, S1 . S, S2 . D]

@@ -8,6 +8,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "03-aabb-slabs/accel_program.h"
+#include "03-aabb-slabs/accel_view.h"
 #include "06-bvh/bvh.h"
 #include "cli.h"
 #include "program.h"
@@ -20,6 +22,7 @@ typedef struct {
     int triangles;
     bool heatmap, bench;
     float heatmap_max;
+    camera_override view; /* --eye, --target, --fov */
 } chapter_flags;
 
 static const char *const SPLITS[] = {"median", "sah", NULL};
@@ -51,6 +54,7 @@ static int render(const cli_options *opts, const chapter_flags *f, const accel_i
     accel_view view = {a, f->heatmap, f->heatmap_max};
     program_note_accel(a->stats.name);
     camera cam = accel_input_camera(in, a->set->bounds, opts->width, opts->height);
+    cam = camera_overridden(&cam, &f->view);
     render_stats stats;
     int status = program_render(opts, "06-bvh", accel_view_radiance, &view, &cam, &stats);
     if (status == 0 && !opts->quiet) {
@@ -66,7 +70,7 @@ int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch06.exr", 640, 480, 1);
     chapter_flags f = {{SPLITS, SPLIT_NOTES, BVH_SPLIT_SAH}, {ORDERS, ORDER_NOTES, BVH_ORDER_AXIS_SIGN},
-                       {MESHES, NULL, 0}, NULL, 102400, false, false, 120.0f};
+                       {MESHES, NULL, 0}, NULL, 102400, false, false, 120.0f, CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--split", CLI_CHOICE, &f.split, NULL, "where a node's objects are split in two", 0, 0},
         {"--order", CLI_CHOICE, &f.order, NULL, "which child a ray visits first", 0, 0},
@@ -74,6 +78,7 @@ int main(int argc, char **argv)
         {"--triangles", CLI_INT, &f.triangles, "N", "tori field size: 1024, 10240, 102400 (default) or 1048576", 1,
          1048576},
         {"--obj", CLI_STRING, &f.obj, "FILE", "load a Wavefront OBJ file instead", 0, 0},
+        CLI_CAMERA_FLAGS(f.view),
         {"--heatmap", CLI_BOOL, &f.heatmap, NULL, "show the cost of each ray: nodes visited + triangles tested", 0, 0},
         {"--heatmap-max", CLI_FLOAT, &f.heatmap_max, "COST", "the cost shown as white (default 120)", 1, 1e6},
         {"--bench", CLI_BOOL, &f.bench, NULL, "also time the Embree harness's ray sets on one thread", 0, 0},
@@ -85,7 +90,7 @@ int main(int argc, char **argv)
                      "the longest axis at the median object; --split sah where the surface area heuristic says.\n"
                      "Prints the tree's figures and the box and triangle tests per ray. (Wider nodes, as\n"
                      "production kernels use: chapter 13.)",
-                     extras, (int)(sizeof extras / sizeof extras[0])};
+                     extras, (int)(sizeof extras / sizeof extras[0]), "its camera ray (the nodes it visits and the triangles it tests)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     accel_input in;
     int status = accel_input_load(&in, &opts, spec.program, cli_choice_name(&f.mesh), f.obj, f.triangles, 7);

@@ -3,490 +3,31 @@
  * reflection equation, the rendering equation as L = E + K L) is computed
  * twice: by deterministic quadrature of its defining integral, and by its
  * closed form. The program prints both, their relative difference and the
- * quadrature's own error estimate.
+ * quadrature's own error estimate (the tables: experiments_radiometry.c).
  *
  * Its picture is a false-colour map of the irradiance on a floor under a
  * square area light (Lambert's polygon formula), with contour lines every
  * 10% of the maximum. With --data DIR it writes the CSV files that the
  * gnuplot scripts plots/ch07_*.gp draw. */
 #include <errno.h>
-#include <float.h>
-#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
-#include <unistd.h>
 
+#include "07-radiometry/experiments_radiometry.h"
 #include "07-radiometry/radiometry.h"
 #include "cli.h"
-#include "program.h"
-#include "scene_file.h"
 #include "image.h"
 #include "memory.h"
+#include "program.h"
+#include "scene_file.h"
 #include "timer.h"
 #include "vec3.h"
 
 static const char *PROGRAM = "07-radiometry";
 
-/* Quadrature sizes used throughout (points per dimension on the coarse grid;
- * the fine grid has twice as many). Chosen so that every smooth integral
- * below is resolved to about twelve digits, which the printed error
- * estimates show. */
-enum {
-    DIRECTIONS_N = 32,   /* integrals over cones of directions */
-    DISK_N = 32,         /* integrals over a disk */
-    TRIANGLE_N = 8,      /* Gauss-Legendre points per side of each triangle piece */
-    BRDF_N = 64,         /* albedo and reflection integrals (narrow lobes need more) */
-    FURNACE_RINGS = 16,  /* the furnace sphere's patches: rings x segments */
-    FURNACE_SEGMENTS = 32,
-};
-
-/* Agreement of a quadrature with a closed form is judged by the quadrature's
- * own error estimate, plus this relative floor: the two are sums of ~100
- * doubles each and can differ by rounding (a few 1e-16) even where the
- * estimate is 0. Twelve digits is the accuracy the sizes above aim for. */
-static const double AGREEMENT_ROUNDING_FLOOR = 1e-12;
-
-static bool verbose = true;
-
-/* ---- printing ------------------------------------------------------------- */
-
-static void heading(const char *title)
-{
-    if (verbose)
-        printf("\n%s\n", title);
-}
-
-static void table_header(void)
-{
-    if (verbose)
-        printf("  %-54s %17s %17s %9s %9s %9s  %s\n", "quantity", "numeric", "closed form", "rel.err", "estimate",
-               "evals", "agrees");
-}
-
-/* One quantity: the quadrature, its closed form, and whether they agree
- * within the quadrature's error estimate. Returns that verdict. */
-static bool row(const char *name, quadrature_result q, double exact)
-{
-    bool agrees = fabs(q.value - exact) <= q.error_estimate;
-    if (verbose)
-        printf("  %-54s %17.12f %17.12f %9.1e %9.1e %9ld  %s\n", name, q.value, exact, relative_error(q.value, exact),
-               q.error_estimate / fmax(fabs(exact), 1e-300), q.evaluations, agrees ? "yes" : "NO");
-    return agrees;
-}
-
-/* ---- CSV files, written under a temporary name and renamed into place ----- */
-
-typedef struct {
-    FILE *file;
-    char path[PATH_MAX];
-    char temp[PATH_MAX + 32];
-} csv_file;
-
-static bool csv_open(csv_file *c, const char *dir, const char *name, const char *header)
-{
-    snprintf(c->path, sizeof c->path, "%s/%s", dir, name);
-    snprintf(c->temp, sizeof c->temp, "%s.tmp.%ld", c->path, (long)getpid());
-    c->file = fopen(c->temp, "w");
-    if (c->file == NULL) {
-        fprintf(stderr, "%s: %s: %s\n", PROGRAM, c->path, strerror(errno));
-        return false;
-    }
-    fprintf(c->file, "%s\n", header);
-    return true;
-}
-
-static bool csv_close(csv_file *c)
-{
-    const char *reason = NULL;
-    if (ferror(c->file))
-        reason = "write error";
-    if (fclose(c->file) != 0 && reason == NULL)
-        reason = strerror(errno);
-    if (reason == NULL && rename(c->temp, c->path) != 0)
-        reason = strerror(errno);
-    if (reason != NULL) {
-        fprintf(stderr, "%s: %s: %s\n", PROGRAM, c->path, reason);
-        remove(c->temp);
-        return false;
-    }
-    return true;
-}
-
-/* ---- integrands of the program's own ---------------------------------------- */
-
-static double constant(const void *ctx, dvec3 w)
-{
-    (void)w;
-    return *(const double *)ctx;
-}
-
-static double cosine(const void *ctx, dvec3 w)
-{
-    (void)ctx;
-    return w.z;
-}
-
-/* A sky brighter at the zenith: L_i(theta) = L0 (1 + cos theta). */
-static double graded_sky(const void *ctx, dvec3 w)
-{
-    return *(const double *)ctx * (1.0 + w.z);
-}
-
-/* ---- Quadrature: how the integrals are computed ---------------------------- */
-
-static void show_quadrature(void)
-{
-    heading("Quadrature: the integral of cos theta over the hemisphere (exact: pi), error and estimate\n"
-            "(theta on n nodes, phi on 2n midpoints; the estimate is |I(2n) - I(n)| plus a rounding bound)");
-    if (verbose)
-        printf("  %4s %14s %14s %18s %14s\n", "n", "midpoint err", "estimate", "Gauss-Legendre err", "estimate");
-    for (int n = 2; n <= 64; n *= 2) {
-        quadrature_result m = integrate_over_hemisphere(cosine, NULL, dvec3_make(0, 0, 1), QUADRATURE_MIDPOINT, n);
-        quadrature_result g =
-            integrate_over_hemisphere(cosine, NULL, dvec3_make(0, 0, 1), QUADRATURE_GAUSS_LEGENDRE, n);
-        if (verbose)
-            printf("  %4d %14.2e %14.2e %18.2e %14.2e\n", n, fabs(m.value - PI), m.error_estimate, fabs(g.value - PI),
-                   g.error_estimate);
-    }
-}
-
-/* An estimate is only as good as the grid: a triangle 1/32 below the point
- * has an integrand (1/r^3) that changes on the scale 1/32, and until the
- * pieces are that small the two grids can agree with each other and both be
- * wrong. */
-static void show_resolution(void)
-{
-    dvec3 p = dvec3_make(0, 0, 0);
-    dvec3 a = dvec3_make(-4, -3, -0.03125), b = dvec3_make(5, -3, -0.03125), c = dvec3_make(0, 5, -0.03125);
-    double exact = solid_angle_triangle(p, a, b, c);
-    heading("Quadrature needs a resolved grid: solid angle of a 9-unit triangle 1/32 below the point\n"
-            "(4^level pieces of 8 x 8 Gauss-Legendre points; estimate from level + 1)");
-    if (verbose)
-        printf("  %5s %12s %17s %12s %12s %s\n", "level", "piece side", "numeric", "error", "estimate", "");
-    for (int level = 2; level <= 7; level++) {
-        quadrature_result q = solid_angle_triangle_numeric(p, a, b, c, level, TRIANGLE_N);
-        double error = fabs(q.value - exact);
-        if (verbose)
-            printf("  %5d %12.4f %17.12f %12.2e %12.2e %s\n", level, 9.0 / (1 << level), q.value, error, q.error_estimate,
-                   error <= q.error_estimate ? "" : "<- the estimate is wrong: the grid does not resolve 1/r^3");
-    }
-    if (verbose)
-        printf("  Van Oosterom-Strackee: %.12f\n", exact);
-}
-
-/* ---- Solid angle ----------------------------------------------------------- */
-
-static bool show_solid_angle(void)
-{
-    bool ok = true;
-    double one = 1.0;
-    dvec3 up = dvec3_make(0, 0, 1);
-    heading("Solid angle: Omega = A / r^2 on the unit sphere; d omega = sin theta d theta d phi");
-    table_header();
-    ok &= row("sphere (4 pi)", integrate_over_sphere(constant, &one, QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N),
-              4.0 * PI);
-    const double alphas[] = {30.0, 90.0, 180.0};
-    for (int i = 0; i < 3; i++) {
-        char name[64];
-        double alpha = alphas[i] * PI / 180.0;
-        snprintf(name, sizeof name, "cone, half-angle %g deg: 2 pi (1 - cos alpha)", alphas[i]);
-        ok &= row(name, integrate_over_cone(constant, &one, up, alpha, QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N),
-                  solid_angle_cone(alpha));
-    }
-    ok &= row("sphere r=1 seen from d=3 (cone asin(r/d))",
-              integrate_over_cone(constant, &one, up, asin(1.0 / 3.0), QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N),
-              solid_angle_sphere(1.0, 3.0));
-
-    /* Triangles: Van Oosterom-Strackee against the integral of cos theta' / r^2 dA. */
-    dvec3 p = dvec3_make(0, 0, 0);
-    dvec3 a = dvec3_make(-1, -1, 2), b = dvec3_make(2, -0.5, 2.5), c = dvec3_make(0, 1.5, 1.5);
-    ok &= row("triangle, 2 away (Van Oosterom-Strackee)", solid_angle_triangle_numeric(p, a, b, c, 3, TRIANGLE_N),
-              solid_angle_triangle(p, a, b, c));
-    dvec3 A = dvec3_make(-4, -3, -0.25), B = dvec3_make(5, -3, -0.25), C = dvec3_make(0, 5, -0.25);
-    ok &= row("large triangle 0.25 below the point (> pi)", solid_angle_triangle_numeric(p, A, B, C, 6, TRIANGLE_N),
-              solid_angle_triangle(p, A, B, C));
-    if (verbose)
-        printf("  %-54s %17s %17.12f   (2 atan(num/den) loses 2 pi when den < 0)\n", "  ... the same by 2 atan(num/den)",
-               "", solid_angle_triangle_naive(p, A, B, C));
-    dvec3 E1 = dvec3_make(1, 0, 0), E2 = dvec3_make(3, 0, 0), E3 = dvec3_make(2, 2, 0);
-    ok &= row("triangle seen edge-on (in its plane)", solid_angle_triangle_numeric(p, E1, E2, E3, 2, TRIANGLE_N),
-              solid_angle_triangle(p, E1, E2, E3));
-    return ok;
-}
-
-/* ---- Radiant flux and intensity ------------------------------------------- */
-
-static bool show_intensity(void)
-{
-    bool ok = true;
-    heading("Radiant intensity I = d Phi / d omega, flux Phi");
-    table_header();
-    double flux = 100.0, I = intensity_isotropic_point(flux);
-    ok &= row("isotropic point, Phi=100: integral of I d omega",
-              integrate_over_sphere(constant, &I, QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N), flux);
-    ok &= row("flat Lambertian emitter L=2 A=3: Phi = pi L A", flux_lambertian_emitter_numeric(2.0, 3.0, DIRECTIONS_N),
-              flux_lambertian_emitter(2.0, 3.0));
-    ok &= row("sphere emitter L=2 r=0.5: I = pi r^2 L", intensity_sphere_emitter_numeric(2.0, 0.5, DIRECTIONS_N),
-              intensity_sphere_emitter(2.0, 0.5));
-    return ok;
-}
-
-/* ---- Irradiance ------------------------------------------------------------ */
-
-static bool show_irradiance(void)
-{
-    bool ok = true;
-    dvec3 up = dvec3_make(0, 0, 1), origin = dvec3_make(0, 0, 0);
-    heading("Irradiance E = integral of L_i cos theta d omega (all lights radiance L = 1)");
-    table_header();
-    ok &= row("uniform sky: pi L",
-              irradiance_from_cone(1.0, up, up, 0.5 * PI, QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N),
-              irradiance_uniform_sky(1.0));
-    double R = 1.0, h = 2.0;
-    ok &= row("disk R=1 at h=2, solid-angle form", irradiance_from_cone(1.0, up, up, atan(R / h),
-                                                                        QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N),
-              irradiance_disk_on_axis(1.0, R, h));
-    ok &= row("disk R=1 at h=2, area form cos cos' / r^2 dA",
-              irradiance_from_disk_area(1.0, dvec3_make(0, 0, h), dvec3_make(0, 0, -1), R, origin, up,
-                                        QUADRATURE_GAUSS_LEGENDRE, DISK_N),
-              irradiance_disk_on_axis(1.0, R, h));
-    double r = 0.5, d = 3.0;
-    ok &= row("sphere r=0.5 at d=3, on axis: pi L (r/d)^2",
-              irradiance_from_cone(1.0, up, up, asin(r / d), QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N),
-              irradiance_sphere_light(1.0, r, d, 1.0));
-    double tilt = 40.0 * PI / 180.0;
-    ok &= row("the same sphere 40 deg off the normal",
-              irradiance_from_cone(1.0, up, direction_at_polar_angle(tilt), asin(r / d), QUADRATURE_GAUSS_LEGENDRE,
-                                   DIRECTIONS_N),
-              irradiance_sphere_light(1.0, r, d, cos(tilt)));
-    /* A point light as the limit of a small sphere with the same intensity:
-     * I = pi r^2 L, so L = I / (pi r^2). */
-    double small = 1e-3, I = 1.0, L_small = I / (PI * small * small), theta = 60.0 * PI / 180.0;
-    ok &= row("point I=1 at d=2, 60 deg (sphere r=1e-3): I cos/d^2",
-              irradiance_from_cone(L_small, up, direction_at_polar_angle(theta), asin(small / 2.0),
-                                   QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N),
-              irradiance_point_light(I, 2.0, cos(theta)));
-    ok &= row("the same point light behind the surface (120 deg)",
-              irradiance_from_cone(L_small, up, direction_at_polar_angle(PI - theta), asin(small / 2.0),
-                                   QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N),
-              irradiance_point_light(I, 2.0, cos(PI - theta)));
-    /* A unit square light at height 1, seen from the floor below its corner. */
-    dvec3 square[4] = {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-    quadrature_result q1 = irradiance_from_triangle_area(1.0, square[0], square[1], square[2], origin, up, 3, TRIANGLE_N);
-    quadrature_result q2 = irradiance_from_triangle_area(1.0, square[0], square[2], square[3], origin, up, 3, TRIANGLE_N);
-    quadrature_result both = {q1.value + q2.value, q1.coarse + q2.coarse, q1.error_estimate + q2.error_estimate,
-                              q1.evaluations + q2.evaluations};
-    ok &= row("unit square at height 1, below a corner (Lambert)", both, irradiance_polygon(1.0, square, 4, origin, up));
-    return ok;
-}
-
-/* ---- The BRDF and its energy check ---------------------------------------- */
-
-/* The BRDFs the program and the albedo plot look at. */
-static brdf brdf_example(int i)
-{
-    switch (i) {
-    case 0: return brdf_lambertian(0.8);
-    case 1: return brdf_blinn_phong(0.5, 0.5, 32.0);
-    case 2: return brdf_blinn_phong(0.5, 2.0, 32.0);
-    case 3: return brdf_glossy_mirror(0.9, 200.0);
-    default: return brdf_blinn_phong_as_shaded(0.75, 0.5, 64.0); /* chapter 01's red sphere, red channel */
-    }
-}
-enum { BRDF_EXAMPLES = 5 };
-
-static bool show_brdf(void)
-{
-    bool ok = true;
-    heading("BRDF energy check: albedo(theta_o) = integral of f_r cos theta_i d omega_i must stay <= 1");
-    if (verbose)
-        printf("  %-36s %17s %17s %9s %9s  %s\n", "BRDF", "albedo(0)", "closed form", "rel.err", "estimate",
-               "worst over theta_o (18 angles)");
-    for (int i = 0; i < BRDF_EXAMPLES; i++) {
-        brdf f = brdf_example(i);
-        char name[64];
-        brdf_describe(&f, name, sizeof name);
-        quadrature_result a = brdf_albedo(&f, 0.0, BRDF_N);
-        double exact = brdf_albedo_at_normal(&f);
-        ok &= fabs(a.value - exact) <= a.error_estimate;
-        energy_check e = brdf_check_energy(&f, 18, BRDF_N);
-        if (verbose)
-            printf("  %-36s %17.12f %17.12f %9.1e %9.1e  %.4f at %4.1f deg: %s\n", name, a.value, exact,
-                   relative_error(a.value, exact), a.error_estimate / exact, e.worst_albedo,
-                   e.worst_theta_o * 180.0 / PI, e.conserves_energy ? "conserves energy" : "GAINS ENERGY");
-    }
-    brdf lambert = brdf_lambertian(0.8);
-    quadrature_result wrong = brdf_albedo_without_cosine(&lambert, 0.0, BRDF_N);
-    if (verbose)
-        printf("  %-36s %17.12f %17.12f   (forgot cos theta_i: 2 rho instead of rho)\n",
-               "Lambertian rho=0.8, no cos theta_i", wrong.value, 0.8);
-    return ok;
-}
-
-/* ---- The reflection equation ----------------------------------------------- */
-
-static bool show_reflection(void)
-{
-    bool ok = true;
-    double one = 1.0;
-    dvec3 normal_view = dvec3_make(0, 0, 1);
-    heading("Reflection equation L_r = integral of f_r L_i cos theta_i d omega_i (viewed along the normal)");
-    table_header();
-    brdf lambert = brdf_lambertian(0.8);
-    ok &= row("Lambertian 0.8, uniform sky 1: rho L", reflected_radiance(&lambert, constant, &one, normal_view, BRDF_N),
-              0.8);
-    ok &= row("Lambertian 0.8, sky 1 + cos theta: 5/3 rho",
-              reflected_radiance(&lambert, graded_sky, &one, normal_view, BRDF_N), 0.8 * 5.0 / 3.0);
-    brdf glossy = brdf_glossy_mirror(0.9, 200.0);
-    ok &= row("glossy mirror .9 p=200, sky 1+cos: rho(1+(p+2)/(p+3))",
-              reflected_radiance(&glossy, graded_sky, &one, normal_view, BRDF_N), 0.9 * (1.0 + 202.0 / 203.0));
-    brdf phong = brdf_blinn_phong(0.5, 0.5, 32.0);
-    ok &= row("Blinn-Phong .5/.5/32, uniform sky: its albedo",
-              reflected_radiance(&phong, constant, &one, normal_view, BRDF_N), brdf_albedo_at_normal(&phong));
-    return ok;
-}
-
-/* ---- The rendering equation: the closed furnace ----------------------------- */
-
-/* Rounding of the patch iteration, relative: each step sums `count` terms
- * (at most count eps of relative error) and adds E (one more rounding); the
- * errors of earlier steps are carried along (times rho <= 1), so after k
- * steps at most (count + 2) (k + 1) eps. The closed form's pow and division
- * add a few ulps; 8 more per step covers them. */
-static double furnace_rounding_bound(int count, int k) { return (count + 8.0) * (k + 1.0) * DBL_EPSILON; }
-
-/* The furnace iterated three ways for bounces 0..bounces: the series summed
- * bounce by bounce, L_{k+1} = E + K L_k on the discretized sphere, and the
- * same with K by quadrature of the reflection equation. Writes a CSV row per
- * bounce if csv is not NULL; prints the table if `print`. */
-static bool furnace(double Le, double rho, int bounces, FILE *csv, bool main_rho, bool print)
-{
-    bool ok = true;
-    sphere_patches s;
-    sphere_patches_build(&s, 1.0, FURNACE_RINGS, FURNACE_SEGMENTS);
-    double *E = memory_allocate((size_t)s.count, sizeof *E);
-    double *L = memory_allocate((size_t)s.count, sizeof *L);
-    double *next = memory_allocate((size_t)s.count, sizeof *next);
-    for (int i = 0; i < s.count; i++)
-        E[i] = L[i] = Le; /* L_0 = E: bounce 0 is the emission itself */
-    double L_quadrature = Le;
-    double limit = furnace_radiance(Le, rho);
-    if (print && verbose)
-        printf("  %3s %14s %16s %16s %16s %16s %10s\n", "k", "Le rho^k", "partial sum", "closed form",
-               "patches L_k", "quadrature L_k", "limit - L_k");
-    for (int k = 0; k <= bounces; k++) {
-        if (k > 0) {
-            rendering_operator_apply(&s, rho, E, L, next);
-            double *swap = L;
-            L = next;
-            next = swap;
-            L_quadrature = furnace_step_quadrature(Le, rho, L_quadrature, DIRECTIONS_N).value;
-        }
-        double patch_min = L[0], patch_max = L[0];
-        for (int i = 1; i < s.count; i++) {
-            patch_min = fmin(patch_min, L[i]);
-            patch_max = fmax(patch_max, L[i]);
-        }
-        double sum = furnace_partial_sum(Le, rho, k), closed = furnace_partial_sum_closed(Le, rho, k);
-        double bound = furnace_rounding_bound(s.count, k);
-        ok &= relative_error(patch_max, closed) <= bound && relative_error(patch_min, closed) <= bound;
-        if (print && verbose && (k <= 10 || k % 10 == 0))
-            printf("  %3d %14.10f %16.12f %16.12f %16.12f %16.12f %10.2e\n", k, furnace_bounce(Le, rho, k), sum,
-                   closed, patch_max, L_quadrature, limit - sum);
-        if (csv != NULL)
-            fprintf(csv, "%.17g,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%d\n", rho, k, furnace_bounce(Le, rho, k), sum, L[0],
-                    L_quadrature, limit, main_rho ? 1 : 0);
-    }
-    free(E);
-    free(L);
-    free(next);
-    sphere_patches_free(&s);
-    return ok;
-}
-
-/* A lamp in the furnace: only a cap around the north pole emits. Every patch
- * sees the same average, so the indirect light is the same everywhere:
- * L_i = E_i + <E> rho / (1 - rho). */
-static void furnace_lamp(double rho, int bounces)
-{
-    sphere_patches s;
-    sphere_patches_build(&s, 1.0, FURNACE_RINGS, FURNACE_SEGMENTS);
-    double *E = memory_allocate((size_t)s.count, sizeof *E);
-    double *L = memory_allocate((size_t)s.count, sizeof *L);
-    double *next = memory_allocate((size_t)s.count, sizeof *next);
-    double average = 0.0;
-    for (int i = 0; i < s.count; i++) {
-        E[i] = s.centre[i].z > cos(30.0 * PI / 180.0) ? 1.0 : 0.0;
-        L[i] = E[i];
-        average += E[i] * s.area[i] / (4.0 * PI);
-    }
-    for (int k = 1; k <= bounces; k++) {
-        rendering_operator_apply(&s, rho, E, L, next);
-        double *swap = L;
-        L = next;
-        next = swap;
-    }
-    double indirect = average * rho * (1.0 - pow(rho, bounces)) / (1.0 - rho);
-    if (verbose)
-        printf("  lamp cap (30 deg) only: after %d bounces, lamp patch %.12f (E + indirect %.12f), dark patch %.12f\n"
-               "  (indirect closed form <E> rho (1 - rho^k) / (1 - rho) = %.12f: the same on every patch)\n",
-               bounces, L[0], 1.0 + indirect, L[s.count - 1], indirect);
-    free(E);
-    free(L);
-    free(next);
-    sphere_patches_free(&s);
-}
-
-/* ---- Data for the plots ----------------------------------------------------- */
-
-static bool write_data(const char *dir, double rho_main)
-{
-    csv_file c;
-    /* The furnace series for rho_main (column main = 1, the plot's left
-     * panel) and, for comparison, 0.5 and 0.95 (the right panel's errors). */
-    if (!csv_open(&c, dir, "ch07_furnace.csv", "rho,k,bounce,partial_sum,patch_iterate,quadrature_iterate,limit,main"))
-        return false;
-    const double rhos[3] = {0.5, rho_main, 0.95};
-    for (int i = 0; i < 3; i++)
-        if (i != 1 || (rho_main != 0.5 && rho_main != 0.95))
-            furnace(1.0, rhos[i], 60, c.file, i == 1 || rhos[i] == rho_main, false);
-    if (!csv_close(&c))
-        return false;
-
-    /* Irradiance from a disk light against height: both numeric forms, the
-     * closed form, and the point-light approximation I / h^2 with I = pi R^2 L. */
-    if (!csv_open(&c, dir, "ch07_disk_irradiance.csv",
-                  "h_over_R,numeric_solid_angle,numeric_area,closed_form,point_light,error_estimate"))
-        return false;
-    dvec3 up = dvec3_make(0, 0, 1), origin = dvec3_make(0, 0, 0);
-    for (int i = 0; i <= 40; i++) {
-        double h = pow(10.0, -1.5 + 3.5 * i / 40.0);
-        quadrature_result cone = irradiance_from_cone(1.0, up, up, atan(1.0 / h), QUADRATURE_GAUSS_LEGENDRE, DIRECTIONS_N);
-        quadrature_result area = irradiance_from_disk_area(1.0, dvec3_make(0, 0, h), dvec3_make(0, 0, -1), 1.0, origin,
-                                                           up, QUADRATURE_GAUSS_LEGENDRE, DISK_N);
-        fprintf(c.file, "%.17g,%.17g,%.17g,%.17g,%.17g,%.3g\n", h, cone.value, area.value,
-                irradiance_disk_on_axis(1.0, 1.0, h), irradiance_point_light(PI, h, 1.0),
-                fmax(cone.error_estimate, area.error_estimate));
-    }
-    if (!csv_close(&c))
-        return false;
-
-    /* Albedo against viewing angle for the example BRDFs. */
-    if (!csv_open(&c, dir, "ch07_albedo.csv",
-                  "theta_o_deg,lambertian_0.8,blinn_phong_0.5_0.5_32,blinn_phong_0.5_2_32,glossy_mirror_0.9_200,"
-                  "ch01_shading_0.75_0.5_64"))
-        return false;
-    for (int t = 0; t <= 89; t++) {
-        fprintf(c.file, "%d", t);
-        for (int i = 0; i < BRDF_EXAMPLES; i++) {
-            brdf f = brdf_example(i);
-            fprintf(c.file, ",%.17g", brdf_albedo(&f, t * PI / 180.0, BRDF_N).value);
-        }
-        fprintf(c.file, "\n");
-    }
-    return csv_close(&c);
-}
+/* Gauss-Legendre points per side of each triangle piece, for the check of
+ * the picture's closed form against the area integral (as in the tables). */
+enum { TRIANGLE_N = 8 };
 
 /* ---- The picture: irradiance on a floor under a square light ---------------- */
 
@@ -512,37 +53,40 @@ static vec3 false_colour(double t)
  * that it draws no contour of its own). */
 static int contour_band(double t) { return t >= 0.9 ? 9 : (int)(10.0 * t); }
 
-/* The floor z = 0 seen from straight above, 4 units across the wider side;
- * a unit square light at height 0.75, tilted 30 degrees about the x axis. */
-static bool render_floor(const cli_options *opts)
+/* The light: a unit square at height 0.75, tilted 30 degrees about the x axis. */
+static const double LIGHT_TILT = 30.0 * PI / 180.0, LIGHT_HEIGHT = 0.75;
+
+static void floor_light(dvec3 light[4])
 {
-    double tilt = 30.0 * PI / 180.0, height = 0.75;
-    dvec3 light[4];
     const double corners[4][2] = {{-0.5, -0.5}, {0.5, -0.5}, {0.5, 0.5}, {-0.5, 0.5}};
     for (int i = 0; i < 4; i++)
-        light[i] = dvec3_make(corners[i][0], corners[i][1] * cos(tilt), height + corners[i][1] * sin(tilt));
-    int w = opts->width, h = opts->height;
-    double scale = 4.0 / (w > h ? w : h);
+        light[i] = dvec3_make(corners[i][0], corners[i][1] * cos(LIGHT_TILT),
+                              LIGHT_HEIGHT + corners[i][1] * sin(LIGHT_TILT));
+}
+
+/* Lambert's closed form at every pixel of the floor z = 0 seen from straight
+ * above, `scale` units per pixel; *E_max gets the largest value. */
+static double *floor_irradiance(int w, int h, double scale, const dvec3 light[4], double *E_max)
+{
     double *E = memory_allocate((size_t)w * (size_t)h, sizeof *E);
-    double E_max = 0.0;
     dvec3 up = dvec3_make(0, 0, 1);
-    double start = timer_seconds();
+    *E_max = 0.0;
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             dvec3 p = dvec3_make((x + 0.5 - 0.5 * w) * scale, (0.5 * h - y - 0.5) * scale, 0.0);
             E[(size_t)y * (size_t)w + (size_t)x] = irradiance_polygon(1.0, light, 4, p, up);
-            E_max = fmax(E_max, E[(size_t)y * (size_t)w + (size_t)x]);
+            *E_max = fmax(*E_max, E[(size_t)y * (size_t)w + (size_t)x]);
         }
-    image img = image_make(w, h);
-    if (img.rgb == NULL) {
-        fprintf(stderr, "%s: out of memory for a %dx%d image\n", PROGRAM, w, h);
-        free(E);
-        return false;
-    }
-    /* Contour lines every 10% of the maximum: where the band index changes
-     * between a pixel and its right or lower neighbour. The light's outline,
-     * seen from straight above, in white. */
-    double half_x = 0.5, half_y = 0.5 * cos(tilt), half_pixel = 0.5 * scale;
+    return E;
+}
+
+/* Contour lines every 10% of the maximum: where the band index changes
+ * between a pixel and its right or lower neighbour. The light's outline,
+ * seen from straight above, in white. */
+static void floor_draw(image *img, const double *E, double E_max, double scale)
+{
+    int w = img->width, h = img->height;
+    double half_x = 0.5, half_y = 0.5 * cos(LIGHT_TILT), half_pixel = 0.5 * scale;
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
             double t = E[(size_t)y * (size_t)w + (size_t)x] / E_max;
@@ -552,103 +96,94 @@ static bool render_floor(const cli_options *opts)
             double px = fabs((x + 0.5 - 0.5 * w) * scale), py = fabs((0.5 * h - y - 0.5) * scale);
             bool outline = px <= half_x + half_pixel && py <= half_y + half_pixel &&
                            (fabs(px - half_x) <= half_pixel || fabs(py - half_y) <= half_pixel);
-            image_set(&img, x, y, outline ? vec3_splat(1.0f) : edge ? vec3_splat(0.02f) : false_colour(t));
+            image_set(img, x, y, outline ? vec3_splat(1.0f) : edge ? vec3_splat(0.02f) : false_colour(t));
         }
+}
+
+/* What the picture shows, and its closed form checked below the light's
+ * centre against the area integral. */
+static void floor_report(const cli_options *opts, const dvec3 light[4], double E_max, double seconds)
+{
+    dvec3 centre = dvec3_make(0, 0, 0), up = dvec3_make(0, 0, 1);
+    printf("\nPicture: irradiance on the floor under a unit square light (L = 1) at height %.2f, tilted 30 deg;\n"
+           "  viridis from 0 to E_max = %.4f, contour lines every 10%%, the light's outline in white. %dx%d, %.3f s -> %s\n"
+           "  E below the light's centre: %.12f (Lambert's polygon formula)\n",
+           LIGHT_HEIGHT, E_max, opts->width, opts->height, seconds, opts->out,
+           irradiance_polygon(1.0, light, 4, centre, up));
+    quadrature_result q1 = irradiance_from_triangle_area(1.0, light[0], light[1], light[2], centre, up, 3, TRIANGLE_N);
+    quadrature_result q2 = irradiance_from_triangle_area(1.0, light[0], light[2], light[3], centre, up, 3, TRIANGLE_N);
+    printf("                             %.12f (area integral, estimate %.1e)\n", q1.value + q2.value,
+           q1.error_estimate + q2.error_estimate);
+}
+
+/* The floor z = 0 seen from straight above, 4 units across the wider side,
+ * under the tilted square light. */
+static bool render_floor(const cli_options *opts)
+{
+    dvec3 light[4];
+    floor_light(light);
+    int w = opts->width, h = opts->height;
+    double scale = 4.0 / (w > h ? w : h), E_max;
+    double start = timer_seconds();
+    double *E = floor_irradiance(w, h, scale, light, &E_max);
+    image img = image_make(w, h);
+    if (img.rgb == NULL) {
+        fprintf(stderr, "%s: out of memory for a %dx%d image\n", PROGRAM, w, h);
+        free(E);
+        return false;
+    }
+    floor_draw(&img, E, E_max, scale);
     double seconds = timer_seconds() - start;
     char err[IMAGE_ERROR_SIZE];
-    bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err);
+    ray_counters none = {0}; /* quadrature, not rays: the record is the run's */
+    bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err) &&
+              program_write_record(opts, PROGRAM, &none, seconds, err, sizeof err);
     if (!ok)
         fprintf(stderr, "%s: %s\n", PROGRAM, err);
-    else if (verbose) {
-        dvec3 centre = dvec3_make(0, 0, 0);
-        printf("\nPicture: irradiance on the floor under a unit square light (L = 1) at height %.2f, tilted 30 deg;\n"
-               "  viridis from 0 to E_max = %.4f, contour lines every 10%%, the light's outline in white. %dx%d, %.3f s -> %s\n"
-               "  E below the light's centre: %.12f (Lambert's polygon formula)\n",
-               height, E_max, w, h, seconds, opts->out, irradiance_polygon(1.0, light, 4, centre, up));
-        quadrature_result q1 = irradiance_from_triangle_area(1.0, light[0], light[1], light[2], centre, up, 3, TRIANGLE_N);
-        quadrature_result q2 = irradiance_from_triangle_area(1.0, light[0], light[2], light[3], centre, up, 3, TRIANGLE_N);
-        printf("                             %.12f (area integral, estimate %.1e)\n", q1.value + q2.value,
-               q1.error_estimate + q2.error_estimate);
-    }
+    else if (!opts->quiet)
+        floor_report(opts, light, E_max, seconds);
     image_free(&img);
     free(E);
     return ok;
 }
 
-/* ---- --scene: the irradiance a scene's lights deliver --------------------------
- * The honest use of a scene file in a chapter without a renderer: at the
- * camera's target, on a surface facing the eye, the irradiance from each
- * light, by its closed form (inverse square and cosine law for a point
- * light, Lambert's polygon formula for an area light) and, for area lights,
- * by quadrature of the area integral. Occlusion is not considered: this is
- * radiometry, not visibility (that is chapter 01's shadow ray). */
-static dvec3 to_dvec3(vec3 v) { return dvec3_make(v.x, v.y, v.z); }
+/* ---- the program ------------------------------------------------------------ */
 
-static bool scene_irradiance(const scene_desc *d)
+/* --rho is read as a double (a float flag would make 0.8 into 0.800000012). */
+static bool parse_rho(const char *text, double *rho)
 {
-    if (!d->has_camera) {
-        fprintf(stderr, "%s: %s: no camera: the irradiance is computed at the camera's target\n", PROGRAM, d->source);
+    char *end;
+    errno = 0;
+    *rho = strtod(text, &end);
+    if (errno != 0 || end == text || *end != '\0' || !(*rho >= 0.0 && *rho < 1.0)) {
+        fprintf(stderr, "%s: --rho: expected an albedo 0 <= X < 1, got '%s'\n(try '%s --help')\n", PROGRAM, text,
+                PROGRAM);
         return false;
     }
-    dvec3 p = to_dvec3(d->target);
-    dvec3 n = dvec3_normalize(dvec3_sub(to_dvec3(d->eye), p));
-    printf("%s: irradiance at the camera's target (%g, %g, %g), on a surface facing the eye, from each light of\n"
-           "%s (no occlusion: radiometry only). Per unit radiance or intensity, then per RGB channel.\n",
-           PROGRAM, p.x, p.y, p.z, d->source);
-    bool ok = true;
-    dvec3 total = dvec3_make(0, 0, 0);
-    for (int i = 0; i < d->light_count; i++) {
-        const scene_light *l = &d->lights[i];
-        double geometric;
-        dvec3 colour;
-        if (l->kind == SCENE_LIGHT_POINT) {
-            dvec3 to_light = dvec3_sub(to_dvec3(l->position), p);
-            double distance = dvec3_length(to_light);
-            geometric = irradiance_point_light(1.0, distance, dvec3_dot(n, to_light) / distance);
-            colour = to_dvec3(l->intensity);
-            printf("  line %d, point light: E = I cos(theta) / d^2 = %.12g x I (d = %g; a delta light, no integral)\n",
-                   l->line, geometric, distance);
-        } else {
-            dvec3 c[4];
-            for (int k = 0; k < 4; k++)
-                c[k] = to_dvec3(l->corners[k]);
-            colour = to_dvec3(l->emission);
-            dvec3 light_normal = dvec3_cross(dvec3_sub(c[1], c[0]), dvec3_sub(c[2], c[0]));
-            int above = 0;
-            for (int k = 0; k < 4; k++)
-                above += dvec3_dot(n, dvec3_sub(c[k], p)) > 0.0;
-            if (dvec3_dot(light_normal, dvec3_sub(p, c[0])) <= 0.0) {
-                geometric = 0.0;
-                printf("  line %d, area light: the point is behind it (lights emit from their front): E = 0\n", l->line);
-            } else {
-                quadrature_result q1 = irradiance_from_triangle_area(1.0, c[0], c[1], c[2], p, n, 3, TRIANGLE_N);
-                quadrature_result q2 = irradiance_from_triangle_area(1.0, c[0], c[2], c[3], p, n, 3, TRIANGLE_N);
-                double numeric = q1.value + q2.value, estimate = q1.error_estimate + q2.error_estimate;
-                geometric = numeric;
-                if (above == 4) {
-                    double closed = irradiance_polygon(1.0, c, 4, p, n);
-                    bool agrees = fabs(numeric - closed) <= estimate + AGREEMENT_ROUNDING_FLOOR * fabs(closed);
-                    ok &= agrees;
-                    geometric = closed;
-                    printf("  line %d, area light: Lambert's formula %.12g x L, area integral %.12g "
-                           "(estimate %.1e): %s\n", l->line, closed, numeric, estimate, agrees ? "agrees" : "NO");
-                } else {
-                    printf("  line %d, area light: straddles the surface's horizon, so Lambert's formula does not "
-                           "apply; area integral %.12g x L (estimate %.1e)\n", l->line, numeric, estimate);
-                }
-            }
-        }
-        dvec3 e = dvec3_make(geometric * colour.x, geometric * colour.y, geometric * colour.z);
-        total = dvec3_add(total, e);
-        printf("      E = (%.6g, %.6g, %.6g)\n", e.x, e.y, e.z);
+    return true;
+}
+
+/* The tables, the CSV (with --data) and the picture. */
+static int run_tables(const cli_options *opts, double rho, int bounces, const char *data_dir)
+{
+    double start = timer_seconds();
+    if (!opts->quiet)
+        printf("%s: every quantity by quadrature and in closed form. 'estimate' is the quadrature's own\n"
+               "relative error estimate; 'agrees' says |numeric - closed form| <= estimate.\n",
+               PROGRAM);
+    bool ok = radiometry_experiments_print(rho, bounces, !opts->quiet);
+    char err[1024];
+    if (data_dir != NULL && !radiometry_experiments_write_csv(data_dir, rho, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", PROGRAM, err);
+        return 1;
     }
-    if (d->light_count == 0)
-        printf("  the scene has no point or area light (emissive shapes are not counted here)\n");
-    printf("  total E = (%.6g, %.6g, %.6g); a white Lambertian surface there reflects L = E / pi = (%.6g, %.6g, "
-           "%.6g)\n", total.x, total.y, total.z, total.x / PI, total.y / PI, total.z / PI);
-    if (d->shape_count > 0 || d->material_count > 0)
-        printf("  (shapes and materials are not used: chapter 07 computes radiometric quantities, it renders nothing)\n");
-    return ok;
+    if (!render_floor(opts))
+        return 1;
+    if (!opts->quiet)
+        printf("\n%s: %s, %.2f s%s%s\n", PROGRAM,
+               ok ? "every numeric value agrees with its closed form" : "SOME VALUES DISAGREE (see 'NO' above)",
+               timer_seconds() - start, data_dir ? "; data in " : "", data_dir ? data_dir : "");
+    return ok ? 0 : 1;
 }
 
 int main(int argc, char **argv)
@@ -670,59 +205,20 @@ int main(int argc, char **argv)
                      "The picture is the irradiance on a floor under a square area light, in false colour.\n"
                      "--scene FILE instead prints the irradiance at the camera's target from the scene's lights,\n"
                      "closed form against quadrature, and writes no image.",
-                     extras, 3};
+                     extras, 3, NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
-    verbose = !opts.quiet;
     if (opts.explain) {
         fprintf(stderr, "%s: --explain: this chapter traces no rays, so there is no path to explain\n", PROGRAM);
         return 2;
     }
     scene_desc desc;
     if (program_load_scene(&opts, PROGRAM, &desc)) {
-        bool scene_ok = scene_irradiance(&desc);
+        bool scene_ok = radiometry_scene_irradiance(&desc, PROGRAM);
         scene_desc_free(&desc);
         return scene_ok ? 0 : 1;
     }
-    /* --rho is read as a double (a float flag would make 0.8 into 0.800000012). */
-    char *end;
-    errno = 0;
-    double rho = strtod(rho_text, &end);
-    if (errno != 0 || end == rho_text || *end != '\0' || !(rho >= 0.0 && rho < 1.0)) {
-        fprintf(stderr, "%s: --rho: expected an albedo 0 <= X < 1, got '%s'\n(try '%s --help')\n", PROGRAM, rho_text,
-                PROGRAM);
+    double rho;
+    if (!parse_rho(rho_text, &rho))
         return 2;
-    }
-
-    double start = timer_seconds();
-    if (verbose)
-        printf("%s: every quantity by quadrature and in closed form. 'estimate' is the quadrature's own\n"
-               "relative error estimate; 'agrees' says |numeric - closed form| <= estimate.\n",
-               PROGRAM);
-    bool ok = true;
-    show_quadrature();
-    show_resolution();
-    ok &= show_solid_angle();
-    ok &= show_intensity();
-    ok &= show_irradiance();
-    ok &= show_brdf();
-    ok &= show_reflection();
-
-    heading("Rendering equation, closed furnace: L = E + K L = E + K E + K^2 E + ...");
-    if (verbose)
-        printf("  Le = 1, rho = %g: bounce k adds Le rho^k; limit Le / (1 - rho) = %.12f\n"
-               "  patches: the sphere cut into %d x %d patches, F_ij = A_j / (4 pi R^2), L_{k+1} = E + rho F L_k\n",
-               rho, furnace_radiance(1.0, rho), FURNACE_RINGS, FURNACE_SEGMENTS);
-    ok &= furnace(1.0, rho, bounces, NULL, true, true);
-    furnace_lamp(rho, bounces);
-
-    if (data_dir != NULL && !write_data(data_dir, rho))
-        return 1;
-    if (!render_floor(&opts))
-        return 1;
-    if (verbose) {
-        printf("\n%s: %s, %.2f s%s%s\n", PROGRAM,
-               ok ? "every numeric value agrees with its closed form" : "SOME VALUES DISAGREE (see 'NO' above)",
-               timer_seconds() - start, data_dir ? "; data in " : "", data_dir ? data_dir : "");
-    }
-    return ok ? 0 : 1;
+    return run_tables(&opts, rho, bounces, data_dir);
 }

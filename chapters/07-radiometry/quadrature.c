@@ -2,7 +2,7 @@
  * Gauss-Legendre rules, and the integrals over cones of directions,
  * triangles and disks built from them, each with its error estimate (see
  * quadrature.h). */
-#include "quadrature.h"
+#include "07-radiometry/quadrature.h"
 
 #include <float.h>
 #include <stdlib.h>

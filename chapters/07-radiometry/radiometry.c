@@ -1,6 +1,6 @@
 /* radiometry.c -- lectures 14-15's quantities, each as a closed form and as
  * the integral that defines it (see radiometry.h). */
-#include "radiometry.h"
+#include "07-radiometry/radiometry.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -25,7 +25,7 @@
 
 #include <stdbool.h>
 
-#include "quadrature.h"
+#include "07-radiometry/quadrature.h"
 
 /* ---- Solid angle ---------------------------------------------------------- */
 

@@ -8,16 +8,14 @@
  * the variance, the time per estimate and the efficiency 1 / (variance x
  * time). With --data DIR it writes them as CSV for the plots. Its picture
  * shows 256 points of each point set, on the square and on the disk. */
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include "08-monte-carlo/estimators.h"
+#include "atomic_file.h"
 #include "cli.h"
+#include "program.h"
 #include "image.h"
 #include "memory.h"
 #include "progress.h"
@@ -31,50 +29,19 @@ static const int SLOPE_FIT_FIRST_LOG2N = 6;
 /* Efficiency is compared at this N (or the largest run, if smaller). */
 static const int EFFICIENCY_LOG2N = 12;
 
+/* The whole measurement: every (integral, estimator) pair of the
+ * catalogue at N = 2^0 .. 2^max_log2n, `runs` estimates each. */
+typedef struct {
+    experiment_catalogue catalogue; /* not to be copied (estimators.h) */
+    convergence_point results[EXPERIMENT_COUNT][EXPERIMENT_MAX_ESTIMATORS][MAX_LOG2N + 1];
+    int runs, max_log2n;
+    int k_fit; /* the RMSE slope is fitted over N = 2^k_fit .. 2^max_log2n */
+    int k_eff; /* efficiency is compared at N = 2^k_eff */
+} study;
+
 typedef struct {
     int experiment, estimator;
 } cell;
-
-/* ---- CSV output ------------------------------------------------------------- */
-
-/* Written under a temporary name and renamed into place, so a failed run
- * never leaves a half-written file that the plots would read. */
-typedef struct {
-    FILE *file;
-    char path[1024], temporary[1040];
-} csv_file;
-
-static bool csv_open(csv_file *c, const char *dir, const char *name, const char *header)
-{
-    snprintf(c->path, sizeof c->path, "%s/%s", dir, name);
-    snprintf(c->temporary, sizeof c->temporary, "%s.tmp", c->path);
-    c->file = fopen(c->temporary, "w");
-    if (c->file == NULL) {
-        fprintf(stderr, "%s: %s\n", c->temporary, strerror(errno));
-        return false;
-    }
-    fprintf(c->file, "%s\n", header);
-    return true;
-}
-
-static bool csv_close(csv_file *c)
-{
-    bool ok = !ferror(c->file);
-    int saved = errno;
-    if (fclose(c->file) != 0) {
-        ok = false;
-        saved = errno;
-    }
-    if (ok && rename(c->temporary, c->path) != 0) {
-        ok = false;
-        saved = errno;
-    }
-    if (!ok) {
-        fprintf(stderr, "%s: %s\n", c->path, strerror(saved));
-        remove(c->temporary);
-    }
-    return ok;
-}
 
 /* ---- the picture: what the point sets look like ------------------------------ */
 
@@ -137,7 +104,167 @@ static void draw_point_sets(image *img, uint64_t seed)
     }
 }
 
-/* ---- main ---------------------------------------------------------------------- */
+/* ---- the measurement ---------------------------------------------------------- */
+
+/* Each (integral, estimator) pair is one job; a thread runs all its N in
+ * turn. Every estimate has its own random stream, so the numbers do not
+ * depend on the thread count (the timings do, a little). */
+static void study_run(study *st, uint64_t seed, int threads, bool quiet)
+{
+    cell cells[EXPERIMENT_COUNT * EXPERIMENT_MAX_ESTIMATORS];
+    int cell_count = 0;
+    for (int e = 0; e < EXPERIMENT_COUNT; e++)
+        for (int j = 0; j < st->catalogue.experiments[e].estimator_count; j++)
+            cells[cell_count++] = (cell){e, j};
+    progress bar;
+    progress_begin(&bar, "ch08", cell_count, quiet);
+#pragma omp parallel num_threads(threads)
+    {
+        double *scratch = memory_allocate((size_t)2 << st->max_log2n, sizeof(double));
+#pragma omp for schedule(dynamic, 1)
+        for (int c = 0; c < cell_count; c++) {
+            const experiment *ex = &st->catalogue.experiments[cells[c].experiment];
+            const estimator *es = &ex->estimators[cells[c].estimator];
+            for (int k = 0; k <= st->max_log2n; k++) {
+                int n = 1 << k;
+                uint64_t stream = experiment_stream_seed(seed, cells[c].experiment, cells[c].estimator, n);
+                st->results[cells[c].experiment][cells[c].estimator][k] =
+                    estimator_run(ex->integrand, es, n, st->runs, stream, scratch);
+            }
+            progress_advance(&bar, 1);
+        }
+        free(scratch);
+    }
+    progress_end(&bar);
+}
+
+/* 1 / (variance x CPU seconds per estimate) */
+static double efficiency(const convergence_point *r) { return 1.0 / (r->variance * r->cpu_seconds); }
+
+/* One integral's table: RMSE at three N, the slope, the time and the
+ * efficiency relative to the first estimator (independent uniform). */
+static void print_experiment(const study *st, int e)
+{
+    const experiment *ex = &st->catalogue.experiments[e];
+    printf("\n%s (exact %.10g)\n", ex->integrand->description, ex->integrand->exact);
+    printf("  %-44s %11s %11s %11s %7s %12s %9s\n", "estimator", "RMSE N=1", "RMSE N=2^8", "RMSE N=max", "slope",
+           "CPU us/est", "rel.eff.");
+    double base = efficiency(&st->results[e][0][st->k_eff]);
+    for (int j = 0; j < ex->estimator_count; j++) {
+        const convergence_point *r = st->results[e][j];
+        double ns[MAX_LOG2N + 1], rmse[MAX_LOG2N + 1];
+        int m = 0;
+        for (int k = st->k_fit; k <= st->max_log2n; k++) {
+            ns[m] = r[k].n;
+            rmse[m] = r[k].rmse;
+            m++;
+        }
+        double slope = m >= 2 ? stats_loglog_slope(ns, rmse, m) : NAN;
+        printf("  %-44s %11.3e %11.3e %11.3e %7.2f %12.3f %9.3g\n", ex->estimators[j].description, r[0].rmse,
+               r[8 < st->max_log2n ? 8 : st->max_log2n].rmse, r[st->max_log2n].rmse, slope,
+               1e6 * r[st->k_eff].cpu_seconds, efficiency(&r[st->k_eff]) / base);
+    }
+}
+
+static void print_summary(const study *st)
+{
+    printf("%d runs per N; RMSE slope fitted over N = 2^%d .. 2^%d; efficiency = 1/(variance x CPU seconds) "
+           "at N = 2^%d,\nrelative to independent uniform sampling of the same integral.\n",
+           st->runs, st->k_fit, st->max_log2n, st->k_eff);
+    for (int e = 0; e < EXPERIMENT_COUNT; e++)
+        print_experiment(st, e);
+    printf("\n(slope: of log RMSE against log N. Independent samples: -0.5. A zero-variance estimator\n"
+           "shows float rounding, not noise.)\n");
+}
+
+/* ---- CSV for the plots (each written whole or not at all: atomic_file.h) ---- */
+
+static bool write_convergence_csv(const study *st, const char *dir, char *err, size_t err_size)
+{
+    atomic_file f;
+    if (!atomic_file_open_in(&f, dir, "ch08_convergence.csv", err, err_size))
+        return false;
+    fprintf(f.stream, "integral,estimator,log2n,n,runs,mean,rmse,variance,cpu_seconds_per_estimate,"
+                      "wall_seconds_per_estimate,efficiency\n");
+    for (int e = 0; e < EXPERIMENT_COUNT; e++)
+        for (int j = 0; j < st->catalogue.experiments[e].estimator_count; j++)
+            for (int k = 0; k <= st->max_log2n; k++) {
+                const convergence_point *r = &st->results[e][j][k];
+                fprintf(f.stream, "%s,%s,%d,%d,%d,%.17g,%.6e,%.6e,%.6e,%.6e,%.6e\n",
+                        st->catalogue.experiments[e].integrand->name, st->catalogue.experiments[e].estimators[j].name,
+                        k, r->n, r->runs, r->mean, r->rmse, r->variance, r->cpu_seconds, r->seconds, efficiency(r));
+            }
+    return atomic_file_commit(&f, err, err_size);
+}
+
+static bool write_efficiency_csv(const study *st, const char *dir, char *err, size_t err_size)
+{
+    atomic_file f;
+    if (!atomic_file_open_in(&f, dir, "ch08_efficiency.csv", err, err_size))
+        return false;
+    fprintf(f.stream, "integral,estimator,index,n,variance,cpu_seconds_per_estimate,efficiency,relative\n");
+    for (int e = 0; e < EXPERIMENT_COUNT; e++) {
+        double base = efficiency(&st->results[e][0][st->k_eff]);
+        for (int j = 0; j < st->catalogue.experiments[e].estimator_count; j++) {
+            const convergence_point *r = &st->results[e][j][st->k_eff];
+            fprintf(f.stream, "%s,%s,%d,%d,%.6e,%.6e,%.6e,%.6e\n", st->catalogue.experiments[e].integrand->name,
+                    st->catalogue.experiments[e].estimators[j].name, e, r->n, r->variance, r->cpu_seconds,
+                    efficiency(r), efficiency(r) / base);
+        }
+    }
+    return atomic_file_commit(&f, err, err_size);
+}
+
+/* ---- the program ----------------------------------------------------------------- */
+
+static bool write_picture(const cli_options *opts, const char *program)
+{
+    image img = image_make(opts->width, opts->height);
+    if (img.rgb == NULL) {
+        fprintf(stderr, "%s: out of memory for a %dx%d image\n", program, opts->width, opts->height);
+        return false;
+    }
+    draw_point_sets(&img, opts->seed);
+    char err[IMAGE_ERROR_SIZE];
+    ray_counters none = {0}; /* points drawn, not rays traced: the record is the run's */
+    bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err) &&
+              program_write_record(opts, program, &none, 0.0, err, sizeof err);
+    if (!ok)
+        fprintf(stderr, "%s: %s\n", program, err);
+    else if (!opts->quiet)
+        printf("wrote %s (256 points: independent, jittered, Owen-scrambled Sobol; square and disk)\n", opts->out);
+    image_free(&img);
+    return ok;
+}
+
+/* The measurement, its table, its CSV (with --data) and the picture. */
+static int run(const cli_options *opts, const char *program, int runs, int max_log2n, const char *data_dir)
+{
+    static study st; /* about 30 KB of results: not on the stack */
+    experiment_catalogue_init(&st.catalogue);
+    st.runs = runs;
+    st.max_log2n = max_log2n;
+    st.k_fit = SLOPE_FIT_FIRST_LOG2N < max_log2n ? SLOPE_FIT_FIRST_LOG2N : 0;
+    st.k_eff = EFFICIENCY_LOG2N < max_log2n ? EFFICIENCY_LOG2N : max_log2n;
+    study_run(&st, opts->seed, opts->threads, opts->quiet);
+    if (!opts->quiet)
+        print_summary(&st);
+    int status = 0;
+    char err[1024];
+    if (data_dir != NULL) {
+        if (!write_convergence_csv(&st, data_dir, err, sizeof err) ||
+            !write_efficiency_csv(&st, data_dir, err, sizeof err)) {
+            fprintf(stderr, "%s: %s\n", program, err);
+            status = 1;
+        } else if (!opts->quiet) {
+            printf("wrote %s/ch08_convergence.csv and %s/ch08_efficiency.csv\n", data_dir, data_dir);
+        }
+    }
+    if (!write_picture(opts, program))
+        status = 1;
+    experiment_catalogue_free(&st.catalogue);
+    return status;
+}
 
 int main(int argc, char **argv)
 {
@@ -156,7 +283,7 @@ int main(int argc, char **argv)
                      "integrals with known values, with independent, jittered, importance-sampled and\n"
                      "Owen-scrambled Sobol samples; RMSE, time and efficiency for N = 1 .. 2^16. The picture\n"
                      "shows 256 points of each point set on the square and warped onto the disk.",
-                     extras, 4};
+                     extras, 4, NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     /* The shared flags --scene and --explain have nothing to act on here:
      * this chapter integrates four functions with known integrals, not a
@@ -172,143 +299,9 @@ int main(int argc, char **argv)
         fprintf(stderr, "%s: --explain: this chapter traces no rays, so there is no path to explain\n", spec.program);
         return 2;
     }
-    /* A typo in --data should not cost the whole run: check it first. */
-    struct stat info;
-    if (data_dir != NULL && (stat(data_dir, &info) != 0 || !S_ISDIR(info.st_mode) || access(data_dir, W_OK | X_OK) != 0)) {
-        fprintf(stderr, "%s: --data '%s': not a writable directory\n", spec.program, data_dir);
-        return 2;
-    }
     if (quick) {
         runs = 64;
         max_log2n = max_log2n < 12 ? max_log2n : 12;
     }
-
-    experiment_catalogue catalogue;
-    experiment_catalogue_init(&catalogue);
-    cell cells[EXPERIMENT_COUNT * EXPERIMENT_MAX_ESTIMATORS];
-    int cell_count = 0;
-    for (int e = 0; e < EXPERIMENT_COUNT; e++)
-        for (int j = 0; j < catalogue.experiments[e].estimator_count; j++)
-            cells[cell_count++] = (cell){e, j};
-    static convergence_point results[EXPERIMENT_COUNT][EXPERIMENT_MAX_ESTIMATORS][MAX_LOG2N + 1];
-
-    /* Each (integral, estimator) pair is one job; a thread runs all its N in
-     * turn. Every estimate has its own random stream, so the numbers do not
-     * depend on the thread count (the timings do, a little). */
-    progress bar;
-    progress_begin(&bar, "ch08", cell_count, opts.quiet);
-#pragma omp parallel num_threads(opts.threads)
-    {
-        double *scratch = memory_allocate((size_t)2 << max_log2n, sizeof(double));
-#pragma omp for schedule(dynamic, 1)
-        for (int c = 0; c < cell_count; c++) {
-            const experiment *ex = &catalogue.experiments[cells[c].experiment];
-            const estimator *es = &ex->estimators[cells[c].estimator];
-            for (int k = 0; k <= max_log2n; k++) {
-                int n = 1 << k;
-                uint64_t stream = experiment_stream_seed(opts.seed, cells[c].experiment, cells[c].estimator, n);
-                results[cells[c].experiment][cells[c].estimator][k] =
-                    estimator_run(ex->integrand, es, n, runs, stream, scratch);
-            }
-            progress_advance(&bar, 1);
-        }
-        free(scratch);
-    }
-    progress_end(&bar);
-
-    /* ---- the summary table ---- */
-    int k_fit = SLOPE_FIT_FIRST_LOG2N < max_log2n ? SLOPE_FIT_FIRST_LOG2N : 0;
-    int k_eff = EFFICIENCY_LOG2N < max_log2n ? EFFICIENCY_LOG2N : max_log2n;
-    if (!opts.quiet) {
-        printf("%d runs per N; RMSE slope fitted over N = 2^%d .. 2^%d; efficiency = 1/(variance x CPU seconds) "
-               "at N = 2^%d,\nrelative to independent uniform sampling of the same integral.\n",
-               runs, k_fit, max_log2n, k_eff);
-        for (int e = 0; e < EXPERIMENT_COUNT; e++) {
-            const experiment *ex = &catalogue.experiments[e];
-            printf("\n%s (exact %.10g)\n", ex->integrand->description, ex->integrand->exact);
-            printf("  %-44s %11s %11s %11s %7s %12s %9s\n", "estimator", "RMSE N=1", "RMSE N=2^8", "RMSE N=max",
-                   "slope", "CPU us/est", "rel.eff.");
-            double base = 0.0;
-            for (int j = 0; j < ex->estimator_count; j++) {
-                const convergence_point *r = results[e][j];
-                double ns[MAX_LOG2N + 1], rmse[MAX_LOG2N + 1];
-                int m = 0;
-                for (int k = k_fit; k <= max_log2n; k++) {
-                    ns[m] = r[k].n;
-                    rmse[m] = r[k].rmse;
-                    m++;
-                }
-                double slope = m >= 2 ? stats_loglog_slope(ns, rmse, m) : NAN;
-                double efficiency = 1.0 / (r[k_eff].variance * r[k_eff].cpu_seconds);
-                if (j == 0)
-                    base = efficiency;
-                printf("  %-44s %11.3e %11.3e %11.3e %7.2f %12.3f %9.3g\n", ex->estimators[j].description, r[0].rmse,
-                       r[8 < max_log2n ? 8 : max_log2n].rmse, r[max_log2n].rmse, slope, 1e6 * r[k_eff].cpu_seconds,
-                       efficiency / base);
-            }
-        }
-        printf("\n(slope: of log RMSE against log N. Independent samples: -0.5. A zero-variance estimator\n"
-               "shows float rounding, not noise.)\n");
-    }
-
-    /* ---- CSV for the plots ---- */
-    int status = 0;
-    if (data_dir != NULL) {
-        csv_file conv, eff;
-        if (!csv_open(&conv, data_dir, "ch08_convergence.csv",
-                      "integral,estimator,log2n,n,runs,mean,rmse,variance,cpu_seconds_per_estimate,"
-                      "wall_seconds_per_estimate,efficiency"))
-            status = 1;
-        else {
-            for (int e = 0; e < EXPERIMENT_COUNT; e++)
-                for (int j = 0; j < catalogue.experiments[e].estimator_count; j++)
-                    for (int k = 0; k <= max_log2n; k++) {
-                        const convergence_point *r = &results[e][j][k];
-                        fprintf(conv.file, "%s,%s,%d,%d,%d,%.17g,%.6e,%.6e,%.6e,%.6e,%.6e\n",
-                                catalogue.experiments[e].integrand->name, catalogue.experiments[e].estimators[j].name,
-                                k, r->n, r->runs, r->mean, r->rmse, r->variance, r->cpu_seconds, r->seconds,
-                                1.0 / (r->variance * r->cpu_seconds));
-                    }
-            if (!csv_close(&conv))
-                status = 1;
-        }
-        if (status == 0 && csv_open(&eff, data_dir, "ch08_efficiency.csv",
-                                    "integral,estimator,index,n,variance,cpu_seconds_per_estimate,efficiency,relative")) {
-            for (int e = 0; e < EXPERIMENT_COUNT; e++) {
-                double base = 1.0 / (results[e][0][k_eff].variance * results[e][0][k_eff].cpu_seconds);
-                for (int j = 0; j < catalogue.experiments[e].estimator_count; j++) {
-                    const convergence_point *r = &results[e][j][k_eff];
-                    double efficiency = 1.0 / (r->variance * r->cpu_seconds);
-                    fprintf(eff.file, "%s,%s,%d,%d,%.6e,%.6e,%.6e,%.6e\n", catalogue.experiments[e].integrand->name,
-                            catalogue.experiments[e].estimators[j].name, e, r->n, r->variance, r->cpu_seconds, efficiency,
-                            efficiency / base);
-                }
-            }
-            if (!csv_close(&eff))
-                status = 1;
-        } else {
-            status = 1;
-        }
-        if (status == 0 && !opts.quiet)
-            printf("wrote %s/ch08_convergence.csv and %s/ch08_efficiency.csv\n", data_dir, data_dir);
-    }
-
-    /* ---- the picture ---- */
-    image img = image_make(opts.width, opts.height);
-    if (img.rgb == NULL) {
-        fprintf(stderr, "%s: out of memory for a %dx%d image\n", spec.program, opts.width, opts.height);
-        status = 1;
-    } else {
-        draw_point_sets(&img, opts.seed);
-        char err[IMAGE_ERROR_SIZE];
-        if (!image_write(&img, opts.out, opts.exposure, err, sizeof err)) {
-            fprintf(stderr, "%s\n", err);
-            status = 1;
-        } else if (!opts.quiet) {
-            printf("wrote %s (256 points: independent, jittered, Owen-scrambled Sobol; square and disk)\n", opts.out);
-        }
-        image_free(&img);
-    }
-    experiment_catalogue_free(&catalogue);
-    return status;
+    return run(&opts, spec.program, runs, max_log2n, data_dir);
 }

@@ -5,7 +5,7 @@
  * of the first coordinate (the marginal) and of the second given the first
  * (the conditional), and set each equal to a uniform number. The chapter
  * text derives each one; the comments name the step. */
-#include "sampling.h"
+#include "08-monte-carlo/sampling.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,5 +1,5 @@
 /* bsdf.c -- Lambertian, GGX microfacet, smooth glass, mirror. */
-#include "bsdf.h"
+#include "09-path-tracing/bsdf.h"
 
 #include "02-whitted/whitted.h"
 

@@ -21,31 +21,13 @@
 
 #include "09-path-tracing/path_tracer.h"
 #include "image.h"
+#include "progressive.h"
 #include "render.h"
 
-/* A render whose error can be estimated: the mean and, per pixel, the
- * standard error of that mean. */
-typedef struct {
-    image mean;
-    image standard_error;
-    long spp;
-    double seconds;
-    ray_counters counters;
-} estimate_image;
-
-void estimate_image_free(estimate_image *e);
-
-/* Renders with `spp` samples per pixel; seed picks the random streams. */
+/* progressive.h's estimate_render and progressive_render (estimate_image,
+ * estimate_relative_error, estimate_image_free are there too), with the
+ * path tracer as the integrator. */
 estimate_image render_estimate(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int threads);
-
-/* The error the image's own variance predicts: sqrt of the mean over pixels
- * and channels of standard_error^2 / (mean^2 + eps), a relative RMSE. */
-double estimate_relative_error(const estimate_image *e);
-
-/* Renders passes of 1, 1, 2, 4, ... samples per pixel (each with its own
- * seed), merging them, until `seconds` have passed or the estimated relative
- * error is below `target_error` (either may be 0: not used). Prints one line
- * per pass to `log` (if not NULL). */
 estimate_image render_progressive(const path_tracer *pt, const camera *cam, uint64_t seed, int threads,
                                   double seconds, double target_error, FILE *log);
 

@@ -9,6 +9,7 @@
 #include "cli.h"
 #include "effects.h"
 #include "program.h"
+#include "run_record.h"
 
 #define PROGRAM "09-path-tracing"
 
@@ -18,6 +19,7 @@ typedef struct {
     const char *obj, *data;
     float rr_probability, time_budget, target_error;
     int max_depth, rr_start, experiment_size, reference_spp, experiment_spp;
+    camera_override view; /* --eye, --target, --fov */
 } chapter_flags;
 
 /* The scene the flags name (a scene file, an OBJ file or a built-in one),
@@ -52,6 +54,7 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     }
     if (!from_file && f->obj == NULL)
         pt_scene_build_builtin(sc, cli_choice_name(&f->builtin));
+    camera_override_apply(&f->view, &sc->eye, &sc->target, &sc->vertical_fov_degrees);
     if (pt_scene_has_no_light(sc, err, sizeof err))
         fprintf(stderr, PROGRAM ": warning: %s\n", err);
     if (!from_file)
@@ -66,6 +69,7 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     if (f->accel.index != 0) /* the default, chapter 06's BVH, is built already */
         pt_scene_use_accel(sc, pt_accel_builder_named(cli_choice_name(&f->accel)), NULL);
     program_note_accel(sc->bvh->stats.name);
+    pt_scene_check_scale(sc, PROGRAM, stderr);
     *pt = path_tracer_defaults(sc);
     pt->effects = f->data != NULL ? EFFECT_ALL : effects_decide(&e, EFFECT_ALL);
     pt->integrator = integrator;
@@ -74,6 +78,11 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     pt->rr_probability = f->rr_probability;
     pt->rr_start_depth = f->rr_start;
     pt->max_depth = f->max_depth >= 0 ? f->max_depth : from_file && desc.max_depth >= 0 ? desc.max_depth : 64;
+    char depth[32];
+    snprintf(depth, sizeof depth, "%d", pt->max_depth);
+    run_record_note("integrator", pt_integrator_name(pt->integrator));
+    run_record_note("russian_roulette", pt_russian_roulette_name(pt->russian_roulette));
+    run_record_note("max_depth", depth);
     scene_desc_free(&desc);
     return 0;
 }
@@ -171,7 +180,8 @@ int main(int argc, char **argv)
     /* --integrator and --max-depth not given (-1): the scene file's, else lecture and 64 */
     chapter_flags f = {{PT_INTEGRATOR_NAMES, NULL, -1}, {PT_ROULETTE_NAMES, NULL, RR_FIXED},
                        {PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {PT_ACCEL_NAMES, ACCEL_NOTES, 0},
-                       {PT_SAMPLER_NAMES, SAMPLER_NOTES, PT_SAMPLER_RANDOM}, NULL, NULL, 0.8f, 0.0f, 0.0f, -1, 3, 96, 4096, 256};
+                       {PT_SAMPLER_NAMES, SAMPLER_NOTES, PT_SAMPLER_RANDOM}, NULL, NULL, 0.8f, 0.0f, 0.0f, -1, 3, 96, 4096,
+                       256, CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--integrator", CLI_CHOICE, &f.integrator, NULL, "the rung of the ladder (default lecture)", 0, 0},
         {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed P_RR (default), pbrt's on the throughput, "
@@ -182,7 +192,8 @@ int main(int argc, char **argv)
         {"--sampler", CLI_CHOICE, &f.sampler, NULL, "where a path's numbers come from (default random)", 0, 0},
         {"--max-depth", CLI_INT, &f.max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
         {"--builtin", CLI_CHOICE, &f.builtin, NULL, "the built-in scene (default cornell)", 0, 0},
-        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
+        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file with its MTL materials instead", 0, 0},
+        CLI_CAMERA_FLAGS(f.view),
         {"--accel", CLI_CHOICE, &f.accel, NULL, "the structure the rays are traced through", 0, 0},
         {"--time-budget", CLI_FLOAT, &f.time_budget, "SECONDS", "progressive: passes until this much time is spent",
          0.0, 1e6},
@@ -203,7 +214,7 @@ int main(int argc, char **argv)
                      "--target-error render progressively; --data DIR measures error against time. The built-in\n"
                      "Cornell box is chapters/09-path-tracing/scenes/cornell.scene. The same path tracer made\n"
                      "fast: chapter 13 (13-production).",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
     pt_scene sc;

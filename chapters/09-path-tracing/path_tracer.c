@@ -7,7 +7,7 @@
  * depth), many paths per pixel; light from the emitters is sampled directly
  * at every bounce, and rays that bounce on to hit an emitter do not count its
  * emission again. */
-#include "path_tracer.h"
+#include "09-path-tracing/path_tracer.h"
 
 #include <string.h>
 
@@ -126,7 +126,7 @@ static vec3 point_lights(const path_tracer *pt, const hit_record *p, vec3 wo, co
         if (vec3_is_black(f))
             continue;
         const vec3 no_surface = vec3_splat(0.0f); /* nothing to stop short of at a point light */
-        if ((pt->effects & EFFECT_SHADOWS) && !pt_scene_visible(sc, p, &light->position, &no_surface, counters)) {
+        if ((pt->effects & EFFECT_SHADOWS) && !pt_scene_visible(sc, p, &light->position, 0.0f, &no_surface, counters)) {
             explain_line(explain_depth, "point light %d: shadow ray blocked", i);
             continue;
         }
@@ -176,7 +176,7 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
         explain_line(explain_depth, "light sample: faces away, lies below the surface or f = 0: no shadow ray");
         return radiance;
     }
-    if ((pt->effects & EFFECT_SHADOWS) && !pt_scene_visible(sc, hit, &x.point, &x.normal, counters)) {
+    if ((pt->effects & EFFECT_SHADOWS) && !pt_scene_visible(sc, hit, &x.point, x.point_error, &x.normal, counters)) {
         explain_line(explain_depth, "light sample: shadow ray blocked");
         return radiance;
     }
@@ -218,7 +218,8 @@ static void count_continuation(ray_counters *counters, const bsdf_sample_result 
 static bool light_visible(const path_tracer *pt, const hit_record *p, const pt_light_sample *x,
                           ray_counters *counters)
 {
-    return !(pt->effects & EFFECT_SHADOWS) || pt_scene_visible(pt->scene, p, &x->point, &x->normal, counters);
+    return !(pt->effects & EFFECT_SHADOWS) ||
+           pt_scene_visible(pt->scene, p, &x->point, x->point_error, &x->normal, counters);
 }
 
 /* Does the path go on from p (bounce depth + 1 to a vertex whose light
@@ -283,7 +284,7 @@ static vec3 shade_delta(const path_tracer *pt, const hit_record *p, vec3 wo, int
         return vec3_splat(0.0f);
     vec3 weight = vec3_scale(s.weight, 1.0f / p_rr);
     count_continuation(counters, &s);
-    ray r = ray_spawn(p->point, p->normal_geometric, s.wi);
+    ray r = ray_spawn(p->point, p->point_error, p->normal_geometric, s.wi);
     hit_record q;
     bool hit = pt_scene_intersect(sc, r, &q, counters);
     explain_shade(pt, depth, s.is_transmission ? "refracted" : "reflected", weight, r, &q, hit);
@@ -344,7 +345,7 @@ static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth
     vec3 wi = frame_to_world(n, local);
     vec3 f_cos_pdf = vec3_scale(bsdf_eval(m, n, wo, wi), local.z / uniform_hemisphere_pdf() / p_rr);
     /* trace a ray r(p, wi); if it hits q: L_indir = shade(q, -wi) f_r cos(theta) / pdf_hemi / P_RR */
-    ray r = ray_spawn(p->point, p->normal_geometric, wi);
+    ray r = ray_spawn(p->point, p->point_error, p->normal_geometric, wi);
     counters->indirect_rays++;
     hit_record q;
     bool hit = pt_scene_intersect(sc, r, &q, counters);
@@ -486,12 +487,12 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_co
                      !s.is_delta ? "indirect" : s.is_transmission ? "refracted" : "reflected", depth + 1, (double)s.pdf,
                      explain_vec3(w, s.weight));
             explain_line(indent, "radiance so far %s", explain_vec3(total, radiance));
-            explain_ray(indent, label, ray_spawn(hit.point, hit.normal_geometric, s.wi));
+            explain_ray(indent, label, ray_spawn(hit.point, hit.point_error, hit.normal_geometric, s.wi));
         }
         previous_point = hit.point;
         previous_pdf = s.pdf;
         emission_counts = s.is_delta;
-        r = ray_spawn(hit.point, hit.normal_geometric, s.wi);
+        r = ray_spawn(hit.point, hit.point_error, hit.normal_geometric, s.wi);
     }
     return radiance;
 }

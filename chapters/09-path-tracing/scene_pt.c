@@ -162,6 +162,89 @@ void pt_scene_finish(pt_scene *sc)
     }
 }
 
+static vec3 transformed(vec3 p, float scale, vec3 offset) { return vec3_add(vec3_scale(p, scale), offset); }
+
+void pt_scene_transform(pt_scene *sc, float scale, vec3 offset)
+{
+    for (int i = 0; i < sc->geometry.position_count; i++)
+        sc->geometry.positions[i] = transformed(sc->geometry.positions[i], scale, offset);
+    for (int i = 0; i < sc->sphere_count; i++) {
+        sc->spheres[i].center = transformed(sc->spheres[i].center, scale, offset);
+        sc->spheres[i].radius *= scale;
+    }
+    for (int i = 0; i < sc->point_light_count; i++) {
+        sc->point_lights[i].position = transformed(sc->point_lights[i].position, scale, offset);
+        sc->point_lights[i].intensity = vec3_scale(sc->point_lights[i].intensity, scale * scale);
+    }
+    sc->eye = transformed(sc->eye, scale, offset);
+    sc->target = transformed(sc->target, scale, offset);
+    /* what pt_scene_finish builds, built again from the moved points */
+    accel_destroy(sc->bvh);
+    sc->bvh = NULL;
+    triangle_set_free(&sc->triangles);
+    free(sc->emitters);
+    free(sc->emitter_normals);
+    free(sc->emitter_cdf);
+    pt_scene_finish(sc);
+}
+
+/* ---- what float can place ------------------------------------------------------ */
+
+/* The warning's common part: how many steps, and what to do. */
+static void warn_too_small(FILE *out, float extent, float magnitude)
+{
+    float step = ray_float_step(magnitude);
+    fprintf(out,
+            " is only %.3g float steps across at its distance from the origin (a step there is %.3g; below %.0f its "
+            "shape is rounded by, and rays leave it, a visible part of its size): its shading and shadows may be "
+            "wrong; move the scene near the origin (subtract its centre from every coordinate)\n",
+            (double)(extent / step), (double)step, (double)RAY_MIN_STEPS_ACROSS);
+}
+
+int pt_scene_check_scale(const pt_scene *sc, const char *label, FILE *out)
+{
+    int warnings = 0;
+    for (int i = 0; i < sc->sphere_count; i++) {
+        const pt_sphere *s = &sc->spheres[i];
+        float extent = 2.0f * s->radius, magnitude = vec3_max_component(vec3_abs(s->center)) + s->radius;
+        if (!ray_too_small_for_position(extent, magnitude))
+            continue;
+        fprintf(out, "%s: warning: sphere #%d at (%.7g, %.7g, %.7g), radius %.7g,", label, i, (double)s->center.x,
+                (double)s->center.y, (double)s->center.z, (double)s->radius);
+        warn_too_small(out, extent, magnitude);
+        warnings++;
+    }
+    for (int m = 0; m < sc->material_count; m++) {
+        vec3 lo = vec3_splat(INFINITY), hi = vec3_splat(-INFINITY);
+        int count = 0, first = -1;
+        for (int f = 0; f < sc->geometry.face_count; f++) {
+            if (sc->geometry.faces[f].material != m)
+                continue;
+            for (int k = 0; k < 3; k++) {
+                vec3 p = mesh_vertex(&sc->geometry, f, k);
+                lo = vec3_min(lo, p);
+                hi = vec3_max(hi, p);
+            }
+            first = count++ == 0 ? f : first;
+        }
+        if (count == 0)
+            continue;
+        float extent = vec3_max_component(vec3_sub(hi, lo));
+        float magnitude = vec3_max_component(vec3_max(vec3_abs(lo), vec3_abs(hi)));
+        if (!ray_too_small_for_position(extent, magnitude))
+            continue;
+        fprintf(out,
+                "%s: warning: the %d triangle%s of material #%d%s (the first is triangle #%d), "
+                "from (%.7g, %.7g, %.7g) to (%.7g, %.7g, %.7g),",
+                label, count, count == 1 ? "" : "s", m,
+                vec3_max_component(sc->materials[m].emission) > 0.0f ? ", a light" : "", first, (double)lo.x,
+                (double)lo.y, (double)lo.z, (double)hi.x, (double)hi.y, (double)hi.z);
+        warn_too_small(out, extent, magnitude);
+        warnings++;
+    }
+    return warnings;
+}
+
 /* ---- intersection ---------------------------------------------------------- */
 
 bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters)
@@ -204,10 +287,11 @@ static bool occluded(const pt_scene *sc, const ray *r, ray_counters *counters)
 
 bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters) { return occluded(sc, &r, counters); }
 
-bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, const vec3 *target_normal,
-                      ray_counters *counters)
+bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, float target_error,
+                      const vec3 *target_normal, ray_counters *counters)
 {
-    ray shadow = ray_spawn_to(from->point, from->normal_geometric, *target, *target_normal);
+    ray shadow = ray_spawn_to(from->point, from->point_error, from->normal_geometric, *target, target_error,
+                              *target_normal);
     counters->shadow_rays++;
     return !occluded(sc, &shadow, counters);
 }

@@ -100,6 +100,23 @@ void pt_scene_finish(pt_scene *sc);
 /* Trace the triangles through another structure: build(set, context)
  * replaces the BVH (after pt_scene_finish). */
 void pt_scene_use_accel(pt_scene *sc, pt_accel_builder build, const void *context);
+/* Every point of a finished scene p -> scale p + offset (vertices, spheres'
+ * centres and radii, point lights, the camera's eye and target), point
+ * lights' intensities times scale^2 (so that the irradiance I / r^2 stays),
+ * then rebuilt as pt_scene_finish builds it (chapter 06's BVH). The same
+ * picture at another scale and place, as far as float can hold it: how the
+ * tests put the Cornell box at 1e-7 or far from the origin. */
+void pt_scene_transform(pt_scene *sc, float scale, vec3 offset);
+/* Objects too small for where they are (ray.h's ray_too_small_for_position:
+ * fewer than RAY_MIN_STEPS_ACROSS float steps across at the magnitude of
+ * their coordinates), which no ray offset can render right: each sphere,
+ * and the triangles of each material together (the scene keeps no other
+ * grouping). Writes one warning per object to `out`,
+ * "label: warning: <the object> is only N float steps across at that
+ * distance from the origin ...; move the scene near the origin", and
+ * returns how many. The programs of chapters 09-13 call it before
+ * rendering. */
+int pt_scene_check_scale(const pt_scene *sc, const char *label, FILE *out);
 /* The structures of chapters 03-06 as builders: --accel's brute, grid,
  * kdtree and bvh (the default), by name; NULL for an unknown name. The
  * names, NULL-terminated, for --help and messages. */
@@ -116,21 +133,23 @@ bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters
 /* Is anything hit in (r.t_min, r.t_max)? An any-hit query of the BVH,
  * then the spheres. */
 bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters);
-/* Can the hit point `from` see `target` (a point on a light whose normal is
- * *target_normal, or a point light: normal 0)? One shadow ray,
- * ray_spawn_to(from->point, from->normal_geometric, *target, *target_normal)
- * (ray.h), counted in counters->shadow_rays. */
-bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, const vec3 *target_normal,
-                      ray_counters *counters);
+/* Can the hit point `from` see `target` (a point on a light, with its error
+ * bound target_error and its normal *target_normal, or a point light: error
+ * and normal 0)? One shadow ray, ray_spawn_to(from->point,
+ * from->point_error, from->normal_geometric, *target, target_error,
+ * *target_normal) (ray.h), counted in counters->shadow_rays. */
+bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, float target_error,
+                      const vec3 *target_normal, ray_counters *counters);
 
-/* A point on the emitting triangles, with the emitter's front normal and
- * material. Picked by power: the density per unit area at a point of an
+/* A point on the emitting triangles, with its error bound (ray.h's
+ * ray_point_error, as a hit there would have), the emitter's front normal
+ * and material. Picked by power: the density per unit area at a point of an
  * emitter of radiance L_e is pt_scene_emitter_pdf_area(), mean(L_e) /
  * emitter_power -- for lights that all have the same L_e (the Cornell box)
  * that is the lecture's 1 / A. False if there are none. Inline: chapter
  * 13's renderer calls it for eight paths at every step. */
 static inline bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, float u1, float u2, vec3 *point,
-                                           vec3 *normal, int *material)
+                                           float *point_error, vec3 *normal, int *material)
 {
     if (sc->emitter_count == 0)
         return false;
@@ -150,11 +169,14 @@ static inline bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, flo
     }
     int index = sc->emitters[lo];
     const triangle *t = &sc->triangles.triangles[index];
-    /* A uniform point on a triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1). */
+    /* A uniform point on a triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1);
+     * the point as a hit's (triangle_fill_hit_normal), P0 + (b1 E1 + b2 E2). */
     float s = sqrtf(u1);
     float b1 = (1.0f - u2) * s, b2 = u2 * s;
-    *point = vec3_add(vec3_add(vec3_scale(t->p0, 1.0f - b1 - b2), vec3_scale(t->p1, b1)), vec3_scale(t->p2, b2));
+    vec3 e1 = vec3_sub(t->p1, t->p0), e2 = vec3_sub(t->p2, t->p0);
+    *point = vec3_add(t->p0, vec3_add(vec3_scale(e1, b1), vec3_scale(e2, b2)));
     *normal = sc->emitter_normals[lo];
+    *point_error = ray_point_error(*point, *normal, triangle_edge_size(e1, e2));
     *material = sc->geometry.faces[index].material;
     return true;
 }
@@ -167,13 +189,14 @@ float pt_scene_emitter_pdf_area(const pt_scene *sc, int material);
  * lights draws them here, from three uniform numbers. */
 typedef struct {
     vec3 point, normal, emission;
+    float point_error; /* for the shadow ray's far end (ray_spawn_to) */
     float pdf_light;
 } pt_light_sample;
 
 static inline bool pt_scene_sample_light(const pt_scene *sc, float u_pick, float u1, float u2, pt_light_sample *x)
 {
     int material;
-    if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x->point, &x->normal, &material))
+    if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x->point, &x->point_error, &x->normal, &material))
         return false;
     x->emission = sc->materials[material].emission;
     x->pdf_light = pt_scene_emitter_pdf_area(sc, material);

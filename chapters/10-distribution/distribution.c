@@ -1,6 +1,6 @@
 /* distribution.c -- Cook's distribution ray tracing, in the shape of
  * chapter 02's recursion. */
-#include "distribution.h"
+#include "10-distribution/distribution.h"
 
 #include "02-whitted/whitted.h"
 #include "09-path-tracing/bsdf.h"
@@ -100,9 +100,10 @@ static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, v
     vec3 sum = vec3_splat(0.0f);
     for (int k = 0; k < dt->light_samples; k++) {
         vec3 x_light, n_light;
+        float x_error;
         int light_material;
         float u_pick = pcg32_float(rng), u1 = pcg32_float(rng), u2 = pcg32_float(rng);
-        if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &n_light, &light_material))
+        if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &x_error, &n_light, &light_material))
             break;
         vec3 to_light = vec3_sub(x_light, hit->point);
         float distance2 = vec3_length_squared(to_light);
@@ -115,7 +116,8 @@ static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, v
             continue;
         if (dt->effects & EFFECT_SHADOWS) {
             counters->shadow_rays++;
-            timed_ray shadow = {ray_spawn_to(hit->point, hit->normal_geometric, x_light, n_light), time};
+            timed_ray shadow = {
+                ray_spawn_to(hit->point, hit->point_error, hit->normal_geometric, x_light, x_error, n_light), time};
             if (motion_scene_occluded(dt->scene, shadow, counters))
                 continue;
         }
@@ -137,7 +139,8 @@ static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, v
             continue;
         if (dt->effects & EFFECT_SHADOWS) {
             counters->shadow_rays++;
-            timed_ray shadow = {ray_spawn_to(hit->point, hit->normal_geometric, light->position, vec3_splat(0.0f)),
+            timed_ray shadow = {ray_spawn_to(hit->point, hit->point_error, hit->normal_geometric, light->position,
+                                             0.0f, vec3_splat(0.0f)),
                                 time};
             if (motion_scene_occluded(dt->scene, shadow, counters))
                 continue;
@@ -219,7 +222,7 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
             if (!bsdf_sample(m, n, wo, u, 0.0f, hit.front_face, &s) || vec3_is_black(s.weight))
                 continue;
             counters->indirect_rays++;
-            timed_ray next = {ray_spawn(hit.point, hit.normal_geometric, s.wi), tr.time};
+            timed_ray next = {ray_spawn(hit.point, hit.point_error, hit.normal_geometric, s.wi), tr.time};
             if (explain_on()) {
                 char label[64];
                 snprintf(label, sizeof label, "glossy ray %d of %d (pdf %.4g)", k + 1, dt->glossy_samples, (double)s.pdf);
@@ -262,7 +265,7 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
 static vec3 trace_branch(const distribution_tracer *dt, const hit_record *hit, vec3 direction, const char *what,
                          float time, int depth, pcg32 *rng, ray_counters *counters)
 {
-    timed_ray next = {ray_spawn(hit->point, hit->normal_geometric, direction), time};
+    timed_ray next = {ray_spawn(hit->point, hit->point_error, hit->normal_geometric, direction), time};
     if (explain_on())
         explain_ray(2 * depth + 2, what, next.r);
     return trace(dt, next, depth + 1, (arrival){true, 0.0f, hit->point}, rng, counters);

@@ -1,5 +1,5 @@
 /* motion_scene.c -- moving spheres and meshes over the shutter interval. */
-#include "motion_scene.h"
+#include "10-distribution/motion_scene.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -104,9 +104,11 @@ bool motion_scene_intersect(const motion_scene *ms, timed_ray tr, hit_record *hi
             continue;
         hit_record local;
         if (accel_closest_hit(m->bvh, ray_into_mesh(m, (timed_ray){r, tr.time}), &local, counters)) {
-            /* Same direction, so the same t; the point moves back with the mesh. */
+            /* Same direction, so the same t; the point moves back with the
+             * mesh, rounded once more in its new coordinates. */
             *hit = local;
             hit->point = vec3_add(local.point, moving_mesh_offset(m, tr.time));
+            hit->point_error = local.point_error + ray_point_error(hit->point, hit->normal_geometric, 0.0f);
             hit->shape_id = moving_shape_id(ms, ms->sphere_count + i);
             found = true;
             r.t_max = hit->t;

@@ -47,6 +47,7 @@ typedef struct {
     vec3 point;
     vec3 normal;          /* shading normal, on the side the path arrived from (light: its front) */
     vec3 normal_geometric; /* for leaving the surface (ray_spawn) */
+    float point_error;    /* the point's error bound (ray.h; 0 at the eye, which is exact) */
     int material;
     bool front_face;      /* a camera vertex on an emitter sees its emission only from the front */
     vec3 beta;            /* throughput: the product of the weights up to and including this vertex */

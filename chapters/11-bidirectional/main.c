@@ -9,20 +9,45 @@
 #include "cli.h"
 #include "program.h"
 
-static bool build_scene(pt_scene *sc, const char *name, char *err, size_t err_size)
+/* The built-in scenes (--builtin), each with the line --help shows. */
+typedef struct {
+    const char *name;
+    void (*build)(pt_scene *sc);
+    const char *description;
+} builtin_scene;
+
+static const builtin_scene BUILTINS[] = {
+    {"cornell", pt_scene_build_cornell_box, "the Cornell box (default)"},
+    {"ceiling-lamp", bdpt_scene_build_ceiling_lamp, "a lamp shining at the ceiling: where BDPT wins"},
+    {"veach", pt_scene_build_veach, "four glossy plates under four lights of growing size (chapter 09's)"},
+};
+enum { BUILTIN_COUNT = sizeof BUILTINS / sizeof BUILTINS[0] };
+
+/* The --builtin choice, its names and notes taken from the table. */
+static cli_choice builtin_choice(void)
 {
-    if (strcmp(name, "cornell") == 0)
-        pt_scene_build_cornell_box(sc);
-    else if (strcmp(name, "ceiling-lamp") == 0)
-        bdpt_scene_build_ceiling_lamp(sc);
-    else if (strcmp(name, "veach") == 0)
-        pt_scene_build_veach(sc);
-    else {
-        snprintf(err, err_size, "--builtin: unknown scene '%s' (cornell, ceiling-lamp, veach)", name);
-        return false;
+    static const char *names[BUILTIN_COUNT + 1], *notes[BUILTIN_COUNT];
+    for (int k = 0; k < BUILTIN_COUNT; k++) {
+        names[k] = BUILTINS[k].name;
+        notes[k] = BUILTINS[k].description;
     }
-    return true;
+    return (cli_choice){names, notes, 0};
 }
+
+static const char *const INTEGRATOR_NAMES[] = {"bdpt", "pt", NULL};
+enum { INTEGRATOR_BDPT, INTEGRATOR_PT };
+/* In bdpt_heuristic's order. */
+static const char *const HEURISTIC_NAMES[] = {"power", "balance", NULL};
+
+/* The program's own flags. */
+typedef struct {
+    cli_choice builtin, integrator, heuristic;
+    const char *strategy, *data;
+    bool unweighted;
+    int max_depth; /* -1: the scene file's, else BDPT_MAX_DEPTH */
+    int experiment_size, reference_spp;
+    float experiment_seconds;
+} bdpt_flags;
 
 /* "S,T" with each a number or '*' (any). */
 static bool parse_strategy(const char *text, int *s, int *t)
@@ -48,62 +73,168 @@ static bool parse_strategy(const char *text, int *s, int *t)
     return true;
 }
 
-static int run_experiments(const char *data, int size, int reference_spp, double seconds, int threads)
+/* --data: equal-time error against chapter 09's path tracer, on the Cornell
+ * box and the ceiling lamp. */
+static int run_experiments(const bdpt_flags *f, int threads, const char *program)
 {
-    const char *names[2] = {"cornell", "ceiling-lamp"};
+    const builtin_scene *measured[2] = {&BUILTINS[0], &BUILTINS[1]};
     char err[1024];
     for (int k = 0; k < 2; k++) {
         pt_scene sc;
-        build_scene(&sc, names[k], err, sizeof err);
-        camera cam = pt_scene_camera(&sc, size, size);
+        measured[k]->build(&sc);
+        camera cam = pt_scene_camera(&sc, f->experiment_size, f->experiment_size);
         char reference_path[4096];
-        snprintf(reference_path, sizeof reference_path, "%s/ch11_reference_%s_%d.exr", data, names[k], size);
+        snprintf(reference_path, sizeof reference_path, "%s/ch11_reference_%s_%d.exr", f->data, measured[k]->name,
+                 f->experiment_size);
         path_tracer pt = path_tracer_defaults(&sc);
         estimate_image reference;
         memset(&reference, 0, sizeof reference);
         bdpt_experiment_result result;
-        printf("\n== scene %s\n", names[k]);
-        bool ok = experiment_reference(&pt, &cam, reference_spp, threads, reference_path, &reference, err, sizeof err);
-        if (ok)
-            ok = bdpt_experiment_equal_time(&sc, names[k], &cam, &reference, seconds, threads, data, &result, err,
-                                            sizeof err);
+        printf("\n== scene %s\n", measured[k]->name);
+        bool ok = experiment_reference(&pt, &cam, f->reference_spp, threads, reference_path, &reference, err,
+                                       sizeof err) &&
+                  bdpt_experiment_equal_time(&sc, measured[k]->name, &cam, &reference, f->experiment_seconds, threads,
+                                             f->data, &result, err, sizeof err);
         /* filled even when writing it failed */
         estimate_image_free(&reference);
         pt_scene_free(&sc);
         if (!ok) {
-            fprintf(stderr, "11-bidirectional: %s\n", err);
+            fprintf(stderr, "%s: %s\n", program, err);
             return 1;
         }
     }
     return 0;
 }
 
+/* What the flags cannot combine into; the strategy as (s, t). Returns 0,
+ * or 2 after printing why. */
+static int check_flags(const cli_options *opts, const bdpt_flags *f, int *only_s, int *only_t, const char *program)
+{
+    const char *why = NULL;
+    if (opts->explain)
+        why = "--explain is not supported (a pixel's light arrives from other pixels' light paths too)";
+    else if (f->integrator.index == INTEGRATOR_PT && f->strategy != NULL)
+        why = "--strategy: only with --integrator bdpt";
+    else if (f->unweighted && f->strategy == NULL)
+        why = "--unweighted: only with --strategy";
+    if (why != NULL) {
+        fprintf(stderr, "%s: %s\n", program, why);
+        return 2;
+    }
+    *only_s = *only_t = -1;
+    if (f->strategy != NULL && !parse_strategy(f->strategy, only_s, only_t)) {
+        fprintf(stderr, "%s: --strategy: '%s' is not S,T (numbers or '*')\n", program, f->strategy);
+        return 2;
+    }
+    return 0;
+}
+
+/* --scene FILE or the built-in scene; *max_depth becomes the file's (if
+ * --max-depth was not given and the file's is in range) or the default.
+ * Returns 0, or 1 after printing why. */
+static int load_scene(pt_scene *sc, cli_options *opts, const char *program, const bdpt_flags *f, int *max_depth)
+{
+    char err[1024];
+    scene_desc desc;
+    int max_depth_file = -1;
+    if (program_load_scene(opts, program, &desc)) {
+        max_depth_file = desc.max_depth;
+        bool ok = pt_scene_from_desc(sc, &desc, program, err, sizeof err);
+        scene_desc_free(&desc);
+        if (!ok) {
+            fprintf(stderr, "%s: %s\n", program, err);
+            return 1;
+        }
+    } else {
+        BUILTINS[f->builtin.index].build(sc);
+    }
+    if (!bdpt_supports(sc, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", program, err);
+        pt_scene_free(sc);
+        return 1;
+    }
+    *max_depth = f->max_depth;
+    if (*max_depth < 0)
+        *max_depth = max_depth_file >= 0 && max_depth_file <= BDPT_MAX_DEPTH ? max_depth_file : BDPT_MAX_DEPTH;
+    return 0;
+}
+
+/* The image and its counters file; the report. Returns the exit status. */
+static int write_render(const cli_options *opts, const char *program, const estimate_image *e, bool path_trace)
+{
+    char err[1024], counters_path[4096];
+    if (!image_write(&e->mean, opts->out, opts->exposure, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", program, err);
+        return 1;
+    }
+    counters_path_for_image(opts->out, counters_path, sizeof counters_path);
+    if (!counters_write_json(counters_path, &e->counters, e->seconds, NULL, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", program, err);
+        return 1;
+    }
+    if (!opts->quiet) {
+        printf("%s: %s, %dx%d, %d spp, %.2f s -> %s\n", program, path_trace ? "path tracing" : "bidirectional",
+               opts->width, opts->height, opts->spp, e->seconds, opts->out);
+        counters_print(stdout, &e->counters, e->seconds);
+    }
+    return 0;
+}
+
+/* The picture: bidirectional (all strategies, or the one of --strategy),
+ * or chapter 09's path tracer on the same scene. */
+static int render(const cli_options *opts, const char *program, const pt_scene *sc, const bdpt_flags *f,
+                  int max_depth, int only_s, int only_t)
+{
+    camera cam = pt_scene_camera(sc, opts->width, opts->height);
+    bool path_trace = f->integrator.index == INTEGRATOR_PT;
+    estimate_image e;
+    if (path_trace) {
+        path_tracer pt = path_tracer_defaults(sc);
+        pt.integrator = PT_MIS;
+        pt.russian_roulette = RR_THROUGHPUT;
+        pt.max_depth = max_depth;
+        e = render_estimate(&pt, &cam, opts->spp, opts->seed, opts->threads);
+    } else {
+        bdpt b = bdpt_defaults(sc, &cam);
+        b.max_depth = max_depth;
+        b.heuristic = (bdpt_heuristic)f->heuristic.index;
+        b.only_s = only_s;
+        b.only_t = only_t;
+        b.unweighted = f->unweighted;
+        if (!bdpt_render(&b, opts->spp, opts->seed, opts->threads, opts->quiet, &e)) {
+            fprintf(stderr, "%s: out of memory\n", program);
+            return 1;
+        }
+    }
+    int status = write_render(opts, program, &e, path_trace);
+    estimate_image_free(&e);
+    return status;
+}
+
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch11.exr", 256, 256, 16);
-    const char *scene_name = "cornell", *strategy = NULL, *heuristic = "power", *data = NULL, *integrator = "bdpt";
-    bool unweighted = false;
-    int max_depth = -1, experiment_size = 32, reference_spp = 32768;
-    float experiment_seconds = 8.0f;
+    bdpt_flags f = {builtin_choice(), {INTEGRATOR_NAMES, NULL, INTEGRATOR_BDPT}, {HEURISTIC_NAMES, NULL, BDPT_POWER},
+                    NULL, NULL, false, -1, 32, 32768, 8.0f};
     const cli_flag extras[] = {
-        {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, BDPT_MAX_DEPTH},
-        {"--builtin", CLI_STRING, &scene_name, "NAME",
-         "cornell (default), ceiling-lamp (a lamp shining at the ceiling: where BDPT wins), veach", 0, 0},
-        {"--strategy", CLI_STRING, &strategy, "S,T",
+        {"--max-depth", CLI_INT, &f.max_depth, "N", "bounces counted at most (default 64)", 0, BDPT_MAX_DEPTH},
+        {"--builtin", CLI_CHOICE, &f.builtin, "NAME", "the built-in scene, when there is no --scene:", 0, 0},
+        {"--strategy", CLI_STRING, &f.strategy, "S,T",
          "only strategy (s, t): s light vertices, t camera vertices ('*' for any), MIS-weighted unless "
          "--unweighted", 0, 0},
-        {"--unweighted", CLI_BOOL, &unweighted, NULL, "with --strategy: each strategy's full estimate, no MIS weight",
-         0, 0},
-        {"--integrator", CLI_STRING, &integrator, "NAME",
+        {"--unweighted", CLI_BOOL, &f.unweighted, NULL,
+         "with --strategy: each strategy's full estimate, no MIS weight", 0, 0},
+        {"--integrator", CLI_CHOICE, &f.integrator, NULL,
          "bdpt (default), or pt: chapter 09's path tracer (MIS, RR on throughput) on the same scene, for "
          "equal-time pictures", 0, 0},
-        {"--heuristic", CLI_STRING, &heuristic, "NAME", "MIS weights: power (default) or balance", 0, 0},
-        {"--data", CLI_DIR, &data, "DIR",
+        {"--heuristic", CLI_CHOICE, &f.heuristic, NULL, "MIS weights: power (default) or balance", 0, 0},
+        {"--data", CLI_DIR, &f.data, "DIR",
          "equal-time error against chapter 09's path tracer (Cornell box and ceiling-lamp), CSV into DIR", 0, 0},
-        {"--experiment-size", CLI_INT, &experiment_size, "N", "image side of the experiments (default 32)", 8, 1024},
-        {"--reference-spp", CLI_INT, &reference_spp, "N", "samples of the cached references (default 32768)", 16,
+        {"--experiment-size", CLI_INT, &f.experiment_size, "N", "image side of the experiments (default 32)", 8,
+         1024},
+        {"--reference-spp", CLI_INT, &f.reference_spp, "N", "samples of the cached references (default 32768)", 16,
          1 << 20},
-        {"--experiment-seconds", CLI_FLOAT, &experiment_seconds, "S",
+        {"--experiment-seconds", CLI_FLOAT, &f.experiment_seconds, "S",
          "CPU seconds each method gets per scene (default 8)", 0.1, 1e5},
     };
     cli_spec spec = {"11-bidirectional",
@@ -111,104 +242,19 @@ int main(int argc, char **argv)
                      "joined in every way (s light vertices, t camera vertices), each join weighted by multiple\n"
                      "importance sampling. --strategy S,T renders one strategy; --data DIR measures error against\n"
                      "CPU time beside chapter 09's path tracer. Diffuse and glossy surfaces, emitting triangles.",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
-    if (data != NULL)
-        return run_experiments(data, experiment_size, reference_spp, experiment_seconds, opts.threads);
-    if (opts.explain) {
-        fprintf(stderr, "11-bidirectional: --explain is not supported (a pixel's light arrives from other pixels' "
-                        "light paths too)\n");
-        return 2;
-    }
-
-    bdpt_heuristic chosen_heuristic;
-    if (strcmp(heuristic, "power") == 0)
-        chosen_heuristic = BDPT_POWER;
-    else if (strcmp(heuristic, "balance") == 0)
-        chosen_heuristic = BDPT_BALANCE;
-    else {
-        fprintf(stderr, "11-bidirectional: --heuristic: unknown '%s' (power, balance)\n", heuristic);
-        return 2;
-    }
-    bool path_trace = strcmp(integrator, "pt") == 0;
-    if (!path_trace && strcmp(integrator, "bdpt") != 0) {
-        fprintf(stderr, "11-bidirectional: --integrator: unknown '%s' (bdpt, pt)\n", integrator);
-        return 2;
-    }
-    if (path_trace && strategy != NULL) {
-        fprintf(stderr, "11-bidirectional: --strategy: only with --integrator bdpt\n");
-        return 2;
-    }
-    int only_s = -1, only_t = -1;
-    if (strategy != NULL && !parse_strategy(strategy, &only_s, &only_t)) {
-        fprintf(stderr, "11-bidirectional: --strategy: '%s' is not S,T (numbers or '*')\n", strategy);
-        return 2;
-    }
-    if (unweighted && strategy == NULL) {
-        fprintf(stderr, "11-bidirectional: --unweighted: only with --strategy\n");
-        return 2;
-    }
-
-    char err[1024];
+    if (f.data != NULL)
+        return run_experiments(&f, opts.threads, spec.program);
+    int only_s, only_t, max_depth;
+    int status = check_flags(&opts, &f, &only_s, &only_t, spec.program);
     pt_scene sc;
-    scene_desc desc;
-    int max_depth_file = -1;
-    if (program_load_scene(&opts, spec.program, &desc)) {
-        max_depth_file = desc.max_depth;
-        bool ok = pt_scene_from_desc(&sc, &desc, spec.program, err, sizeof err);
-        scene_desc_free(&desc);
-        if (!ok) {
-            fprintf(stderr, "11-bidirectional: %s\n", err);
-            return 1;
-        }
-    } else if (!build_scene(&sc, scene_name, err, sizeof err)) {
-        fprintf(stderr, "11-bidirectional: %s\n", err);
-        return 2;
-    }
-    if (!bdpt_supports(&sc, err, sizeof err)) {
-        fprintf(stderr, "11-bidirectional: %s\n", err);
-        pt_scene_free(&sc);
-        return 1;
-    }
-    if (max_depth < 0)
-        max_depth = max_depth_file >= 0 && max_depth_file <= BDPT_MAX_DEPTH ? max_depth_file : BDPT_MAX_DEPTH;
-
-    camera cam = pt_scene_camera(&sc, opts.width, opts.height);
-    bdpt b = bdpt_defaults(&sc, &cam);
-    b.max_depth = max_depth;
-    b.heuristic = chosen_heuristic;
-    b.only_s = only_s;
-    b.only_t = only_t;
-    b.unweighted = unweighted;
-    estimate_image e;
-    int status = 0;
-    if (path_trace) {
-        path_tracer pt = path_tracer_defaults(&sc);
-        pt.integrator = PT_MIS;
-        pt.russian_roulette = RR_THROUGHPUT;
-        pt.max_depth = max_depth;
-        e = render_estimate(&pt, &cam, opts.spp, opts.seed, opts.threads);
-    } else if (!bdpt_render(&b, opts.spp, opts.seed, opts.threads, opts.quiet, &e)) {
-        fprintf(stderr, "11-bidirectional: out of memory\n");
-        pt_scene_free(&sc);
-        return 1;
-    }
-    if (!image_write(&e.mean, opts.out, opts.exposure, err, sizeof err)) {
-        fprintf(stderr, "11-bidirectional: %s\n", err);
-        status = 1;
-    }
-    char counters_path[4096];
-    counters_path_for_image(opts.out, counters_path, sizeof counters_path);
-    if (status == 0 && !counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err)) {
-        fprintf(stderr, "11-bidirectional: %s\n", err);
-        status = 1;
-    }
-    if (status == 0 && !opts.quiet) {
-        printf("11-bidirectional: %s, %dx%d, %d spp, %.2f s -> %s\n", path_trace ? "path tracing" : "bidirectional",
-               opts.width, opts.height, opts.spp, e.seconds, opts.out);
-        counters_print(stdout, &e.counters, e.seconds);
-    }
-    estimate_image_free(&e);
+    if (status == 0)
+        status = load_scene(&sc, &opts, spec.program, &f, &max_depth);
+    if (status != 0)
+        return status;
+    pt_scene_check_scale(&sc, spec.program, stderr);
+    status = render(&opts, spec.program, &sc, &f, max_depth, only_s, only_t);
     pt_scene_free(&sc);
     return status;
 }

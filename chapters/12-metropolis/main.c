@@ -11,40 +11,170 @@
 #include "cli.h"
 #include "program.h"
 
-static bool build_scene(pt_scene *sc, const char *name)
+/* The built-in scenes (--builtin), each with the line --help shows. */
+typedef struct {
+    const char *name;
+    void (*build)(pt_scene *sc);
+    const char *description;
+} builtin_scene;
+
+static const builtin_scene BUILTINS[] = {
+    {"lamp", mlt_scene_build_lamp,
+     "the ceiling light shut in a housing; light leaves only down a 2 cm channel (default)"},
+    {"cornell", pt_scene_build_cornell_box, "the Cornell box"},
+    {"materials", pt_scene_build_cornell_box_materials, "the Cornell box with a metal block and a glass sphere"},
+};
+enum { BUILTIN_COUNT = sizeof BUILTINS / sizeof BUILTINS[0] };
+
+/* The --builtin choice, its names and notes taken from the table. */
+static cli_choice builtin_choice(void)
 {
-    if (strcmp(name, "cornell") == 0)
-        pt_scene_build_cornell_box(sc);
-    else if (strcmp(name, "materials") == 0)
-        pt_scene_build_cornell_box_materials(sc);
-    else if (strcmp(name, "lamp") == 0)
-        mlt_scene_build_lamp(sc);
-    else
-        return false;
-    return true;
+    static const char *names[BUILTIN_COUNT + 1], *notes[BUILTIN_COUNT];
+    for (int k = 0; k < BUILTIN_COUNT; k++) {
+        names[k] = BUILTINS[k].name;
+        notes[k] = BUILTINS[k].description;
+    }
+    return (cli_choice){names, notes, 0};
+}
+
+/* In mlt_start's order. */
+static const char *const START_NAMES[] = {"bootstrap", "fixed", NULL};
+
+/* The program's own flags. */
+typedef struct {
+    cli_choice builtin, start;
+    const char *data;
+    float p_large;
+    int bootstrap, chains, max_depth;
+    bool path_trace;
+} mlt_flags;
+
+/* --scene FILE or the built-in scene. Returns 0, or the exit status after
+ * printing why. */
+static int load_scene(pt_scene *sc, cli_options *opts, const char *program, const mlt_flags *f)
+{
+    scene_desc desc;
+    char err[1024];
+    if (!program_load_scene(opts, program, &desc)) {
+        BUILTINS[f->builtin.index].build(sc);
+        return 0;
+    }
+    if (f->data != NULL) {
+        fprintf(stderr, "%s: --scene does not combine with --data\n", program);
+        scene_desc_free(&desc);
+        return 2;
+    }
+    bool ok = pt_scene_from_desc(sc, &desc, program, err, sizeof err);
+    scene_desc_free(&desc);
+    if (!ok) {
+        fprintf(stderr, "%s: %s\n", program, err);
+        return 1;
+    }
+    return 0;
+}
+
+/* --data: equal time against path tracing, start-up bias, which method. */
+static int run_experiments(const char *dir, int threads, const char *program)
+{
+    char err[1024];
+    if (!mlt_experiments_run(dir, threads, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", program, err);
+        return 1;
+    }
+    return 0;
+}
+
+static void print_mlt(const cli_options *opts, const mlt_flags *f, const mlt_result *r, double acceptance)
+{
+    printf("12-metropolis: %s, %d mutations per pixel, %d chains, p_large %.2f: %.2f s (bootstrap %.2f s) -> %s\n",
+           opts->scene != NULL ? opts->scene : cli_choice_name(&f->builtin), opts->spp, f->chains,
+           (double)f->p_large, r->seconds, r->bootstrap_seconds, opts->out);
+    printf("b = %.5g +- %.2g (%d bootstrap paths), acceptance %.3f\n", r->b, r->b_standard_error, f->bootstrap,
+           acceptance);
+    counters_print(stdout, &r->counters, r->seconds);
+}
+
+/* The image, the report, and the counters with b and the acceptance. */
+static int write_mlt(const cli_options *opts, const char *program, const mlt_flags *f, const image *img,
+                     const mlt_result *r)
+{
+    char err[1024], counters_path[4096], extra[256];
+    if (!image_write(img, opts->out, opts->exposure, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", program, err);
+        return 1;
+    }
+    double acceptance = r->proposed > 0 ? (double)r->accepted / (double)r->proposed : 0.0;
+    if (!opts->quiet)
+        print_mlt(opts, f, r, acceptance);
+    counters_path_for_image(opts->out, counters_path, sizeof counters_path);
+    snprintf(extra, sizeof extra, "\"b\": %.9g, \"b_standard_error\": %.9g, \"acceptance\": %.6f", r->b,
+             r->b_standard_error, acceptance);
+    if (!counters_write_json(counters_path, &r->counters, r->seconds, extra, err, sizeof err)) {
+        fprintf(stderr, "%s: %s\n", program, err);
+        return 1;
+    }
+    return 0;
+}
+
+/* The picture by Metropolis: --spp mutations per pixel. */
+static int render_mlt(const cli_options *opts, const char *program, const mlt_flags *f, const path_tracer *pt,
+                      const camera *cam)
+{
+    mlt_options o = mlt_defaults(pt, cam);
+    o.mutations_per_pixel = opts->spp;
+    o.p_large = f->p_large;
+    o.bootstrap = f->bootstrap;
+    o.chains = f->chains;
+    o.seed = opts->seed;
+    o.threads = opts->threads;
+    o.start = (mlt_start)f->start.index;
+    o.quiet = opts->quiet;
+    image img = image_make(cam->width, cam->height);
+    mlt_result r;
+    int status = 0;
+    if (!mlt_render(&o, &img, &r)) {
+        fprintf(stderr, "%s: out of memory\n", program);
+        status = 1;
+    } else {
+        status = write_mlt(opts, program, f, &img, &r);
+    }
+    image_free(&img);
+    return status;
+}
+
+/* The picture by Metropolis, or by chapter 09's path tracer with
+ * --path-trace (MIS, Russian roulette on throughput, as MLT uses it). */
+static int render(cli_options *opts, const char *program, const mlt_flags *f, const pt_scene *sc)
+{
+    path_tracer pt = path_tracer_defaults(sc);
+    pt.integrator = PT_MIS;
+    pt.russian_roulette = RR_THROUGHPUT;
+    pt.max_depth = f->max_depth;
+    camera cam = pt_scene_camera(sc, opts->width, opts->height);
+    if (!f->path_trace)
+        return render_mlt(opts, program, f, &pt, &cam);
+    opts->jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
+    return program_render(opts, program, path_trace_radiance, &pt, &cam, NULL);
 }
 
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch12.exr", 256, 256, 64);
-    const char *scene_name = "lamp", *start = "bootstrap", *data = NULL;
-    float p_large = 0.3f;
-    int bootstrap = 100000, chains = 256, max_depth = 64;
-    bool path_trace = false;
+    mlt_flags f = {builtin_choice(), {START_NAMES, NULL, MLT_START_BOOTSTRAP}, NULL, 0.3f, 100000, 256, 64, false};
     const cli_flag extras[] = {
-        {"--p-large", CLI_FLOAT, &p_large, "P", "probability of a large step (all new numbers; default 0.3)", 0.0, 1.0},
-        {"--bootstrap", CLI_INT, &bootstrap, "N", "paths that estimate the normalization b (default 100000)", 1,
+        {"--p-large", CLI_FLOAT, &f.p_large, "P", "probability of a large step (all new numbers; default 0.3)", 0.0,
+         1.0},
+        {"--bootstrap", CLI_INT, &f.bootstrap, "N", "paths that estimate the normalization b (default 100000)", 1,
          1 << 30},
-        {"--chains", CLI_INT, &chains, "N", "Markov chains, run in parallel (default 256)", 1, 1 << 20},
-        {"--start", CLI_STRING, &start, "HOW",
+        {"--chains", CLI_INT, &f.chains, "N", "Markov chains, run in parallel (default 256)", 1, 1 << 20},
+        {"--start", CLI_CHOICE, &f.start, NULL,
          "bootstrap (default: chains start at bootstrap paths picked in proportion to f) or fixed (all at the "
          "first path with f > 0: start-up bias)", 0, 0},
-        {"--builtin", CLI_STRING, &scene_name, "NAME",
-         "lamp (default: the ceiling light shut in a housing; light leaves only down a 2 cm channel), cornell, materials", 0, 0},
-        {"--path-trace", CLI_BOOL, &path_trace, NULL,
+        {"--builtin", CLI_CHOICE, &f.builtin, "NAME", "the built-in scene, when there is no --scene:", 0, 0},
+        {"--path-trace", CLI_BOOL, &f.path_trace, NULL,
          "render the same scene with chapter 09's path tracer instead (--spp samples per pixel), to compare", 0, 0},
-        {"--max-depth", CLI_INT, &max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
-        {"--data", CLI_DIR, &data, "DIR",
+        {"--max-depth", CLI_INT, &f.max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
+        {"--data", CLI_DIR, &f.data, "DIR",
          "run the experiments (equal-time error of MLT and path tracing; start-up bias; which method for which "
          "scene: path tracing, BDPT and MLT on three scenes) and write CSV into DIR", 0,
          0},
@@ -55,99 +185,24 @@ int main(int argc, char **argv)
                      "path's luminance f over b = E[f]. --spp is mutations per pixel; b is estimated from\n"
                      "--bootstrap paths. Uses chapter 09's path tracer (MIS, Russian roulette on throughput).\n"
                      "--data DIR measures error against time against chapter 09's path tracer and chapter 11's BDPT.",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
-    mlt_start start_mode;
-    if (strcmp(start, "bootstrap") == 0)
-        start_mode = MLT_START_BOOTSTRAP;
-    else if (strcmp(start, "fixed") == 0)
-        start_mode = MLT_START_FIXED;
-    else {
-        fprintf(stderr, "12-metropolis: --start: unknown '%s' (bootstrap, fixed)\ntry --help\n", start);
-        return 2;
-    }
     if (opts.explain) {
-        fprintf(stderr, "12-metropolis: --explain is not supported (a chain has no per-pixel paths; try "
-                        "09-path-tracing --explain)\ntry --help\n");
+        fprintf(stderr, "%s: --explain is not supported (a chain has no per-pixel paths; try "
+                        "09-path-tracing --explain)\ntry --help\n", spec.program);
         return 2;
     }
     pt_scene sc;
-    scene_desc desc;
-    char err[1024];
-    if (program_load_scene(&opts, "12-metropolis", &desc)) {
-        if (data != NULL) {
-            fprintf(stderr, "12-metropolis: --scene does not combine with --data\n");
-            scene_desc_free(&desc);
-            return 2;
-        }
-        bool ok = pt_scene_from_desc(&sc, &desc, "12-metropolis", err, sizeof err);
-        scene_desc_free(&desc);
-        if (!ok) {
-            fprintf(stderr, "12-metropolis: %s\n", err);
-            return 1;
-        }
-    } else if (!build_scene(&sc, scene_name)) {
-        fprintf(stderr, "12-metropolis: --builtin: unknown scene '%s' (lamp, cornell, materials)\ntry --help\n",
-                scene_name);
-        return 2;
-    }
-    path_tracer pt = path_tracer_defaults(&sc);
-    pt.integrator = PT_MIS;
-    pt.russian_roulette = RR_THROUGHPUT;
-    pt.max_depth = max_depth;
-
-    int status = 0;
-    if (data != NULL) {
-        pt_scene_free(&sc);
-        if (!mlt_experiments_run(data, opts.threads, err, sizeof err)) {
-            fprintf(stderr, "12-metropolis: %s\n", err);
-            return 1;
-        }
-        return 0;
-    }
-    camera cam = pt_scene_camera(&sc, opts.width, opts.height);
-    if (path_trace) {
-        opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */
-        status = program_render(&opts, spec.program, path_trace_radiance, &pt, &cam, NULL);
-        pt_scene_free(&sc);
+    int status = load_scene(&sc, &opts, spec.program, &f);
+    if (status == 0)
+        pt_scene_check_scale(&sc, spec.program, stderr);
+    if (status != 0)
         return status;
+    if (f.data != NULL) {
+        pt_scene_free(&sc);
+        return run_experiments(f.data, opts.threads, spec.program);
     }
-    mlt_options o = mlt_defaults(&pt, &cam);
-    o.mutations_per_pixel = opts.spp;
-    o.p_large = p_large;
-    o.bootstrap = bootstrap;
-    o.chains = chains;
-    o.seed = opts.seed;
-    o.threads = opts.threads;
-    o.start = start_mode;
-    o.quiet = opts.quiet;
-    image img = image_make(cam.width, cam.height);
-    mlt_result r;
-    if (!mlt_render(&o, &img, &r)) {
-        fprintf(stderr, "12-metropolis: out of memory\n");
-        status = 1;
-    } else if (!image_write(&img, opts.out, opts.exposure, err, sizeof err)) {
-        fprintf(stderr, "12-metropolis: %s\n", err);
-        status = 1;
-    } else {
-        double acceptance = r.proposed > 0 ? (double)r.accepted / (double)r.proposed : 0.0;
-        if (!opts.quiet) {
-            printf("12-metropolis: %s, %d mutations per pixel, %d chains, p_large %.2f: %.2f s (bootstrap %.2f s) "
-                   "-> %s\n", opts.scene != NULL ? opts.scene : scene_name, opts.spp, chains, (double)p_large, r.seconds, r.bootstrap_seconds, opts.out);
-            printf("b = %.5g +- %.2g (%d bootstrap paths), acceptance %.3f\n", r.b, r.b_standard_error, bootstrap,
-                   acceptance);
-            counters_print(stdout, &r.counters, r.seconds);
-        }
-        char counters_path[4096], extra[256];
-        counters_path_for_image(opts.out, counters_path, sizeof counters_path);
-        snprintf(extra, sizeof extra, "\"b\": %.9g, \"b_standard_error\": %.9g, \"acceptance\": %.6f", r.b,
-                 r.b_standard_error, acceptance);
-        if (!counters_write_json(counters_path, &r.counters, r.seconds, extra, err, sizeof err)) {
-            fprintf(stderr, "12-metropolis: %s\n", err);
-            status = 1;
-        }
-    }
-    image_free(&img);
+    status = render(&opts, spec.program, &f, &sc);
     pt_scene_free(&sc);
     return status;
 }

@@ -1,5 +1,5 @@
 /* mlt.c -- primary-sample-space Metropolis light transport (see mlt.h). */
-#include "mlt.h"
+#include "12-metropolis/mlt.h"
 
 #include <math.h>
 #include <omp.h>

@@ -1,6 +1,6 @@
 /* mlt_experiments.c -- equal-time error of Metropolis and path tracing, and
  * start-up bias (see mlt_experiments.h). */
-#include "mlt_experiments.h"
+#include "12-metropolis/mlt_experiments.h"
 
 #include <errno.h>
 #include <math.h>
@@ -13,6 +13,7 @@
 #include "timer.h"
 #include "12-metropolis/mlt.h"
 #include "12-metropolis/mlt_scene.h"
+#include "atomic_file.h"
 
 /* Images of 128 x 128: small, so the whole run stays near two minutes on
  * two cores, but not tiny -- on a 48 x 48 image Kelemen's small steps
@@ -41,34 +42,34 @@ typedef struct {
     int reference_spp;
 } experiment_scene;
 
-/* Opens DIR/NAME and writes its header at once: a disk that cannot take
- * the table fails here, before minutes of rendering the reference. */
-static FILE *open_table(const char *dir, const char *name, const char *header, char *path, size_t path_size,
-                        char *err, size_t err_size)
+/* Opens DIR/NAME (atomic_file.h) and writes its header at once: a disk
+ * that cannot take the table fails here, before minutes of rendering the
+ * reference. */
+static bool open_table(atomic_file *table, const char *dir, const char *name, const char *header, char *err,
+                       size_t err_size)
 {
-    FILE *csv = experiment_csv_open(dir, name, path, path_size, err, err_size);
-    if (csv == NULL)
-        return NULL;
-    if (fprintf(csv, "%s\n", header) < 0 || fflush(csv) != 0) {
-        snprintf(err, err_size, "%s: write failed (%s)", path, strerror(errno));
-        experiment_csv_discard(csv, path);
-        return NULL;
+    if (!atomic_file_open_in(table, dir, name, err, err_size))
+        return false;
+    if (fprintf(table->stream, "%s\n", header) < 0 || fflush(table->stream) != 0) {
+        snprintf(err, err_size, "cannot write '%s': %s", table->path, strerror(errno));
+        atomic_file_abandon(table);
+        return false;
     }
-    return csv;
+    return true;
 }
 
 /* The end of an experiment: frees its reference and scene, and keeps its
  * table only if everything went well. */
-static bool finish_table(FILE *csv, const char *path, bool ok, estimate_image *reference, pt_scene *sc, char *err,
+static bool finish_table(atomic_file *table, bool ok, estimate_image *reference, pt_scene *sc, char *err,
                          size_t err_size)
 {
     estimate_image_free(reference);
     pt_scene_free(sc);
     if (!ok) {
-        experiment_csv_discard(csv, path);
+        atomic_file_abandon(table);
         return false;
     }
-    return experiment_csv_close(csv, path, err, err_size);
+    return atomic_file_commit(table, err, err_size);
 }
 
 static const double TARGETS[] = {1.0, 0.3, 0.1, 0.03};
@@ -82,21 +83,22 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
     pt.integrator = PT_MIS;
     pt.russian_roulette = RR_THROUGHPUT;
     camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
-    char reference_path[4096], file[256], path[4096];
+    char reference_path[4096], file[256];
     snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_%s_%d.exr", dir, es->name, EXPERIMENT_SIZE);
     printf("\n== scene %s (%dx%d)\n", es->name, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
     snprintf(file, sizeof file, "ch12_equal_time_%s.csv", es->name);
-    FILE *csv = open_table(dir, file, "method,label,samples_per_pixel,wall_seconds,cpu_seconds,rmse,relmse,acceptance",
-                           path, sizeof path, err, err_size);
-    if (csv == NULL) {
+    atomic_file table;
+    if (!open_table(&table, dir, file, "method,label,samples_per_pixel,wall_seconds,cpu_seconds,rmse,relmse,acceptance",
+                    err, err_size)) {
         pt_scene_free(&sc);
         return false;
     }
+    FILE *csv = table.stream;
     /* Freed on failure too: a reference that was rendered but could not be
      * saved is still held. */
     estimate_image reference = {0};
     if (!experiment_reference(&pt, &cam, es->reference_spp, threads, reference_path, &reference, err, err_size))
-        return finish_table(csv, path, false, &reference, &sc, err, err_size);
+        return finish_table(&table, false, &reference, &sc, err, err_size);
     static const char *const labels[2] = {"path tracing (MIS + RR on throughput)", "Metropolis (PSSMLT)"};
     double seconds[2][MAX_POINTS], relmses[2][MAX_POINTS];
     int samples[2][MAX_POINTS], count[2] = {0, 0};
@@ -141,8 +143,8 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
         }
     }
     if (!ok)
-        return finish_table(csv, path, false, &reference, &sc, err, err_size);
-    printf("CPU seconds to reach relMSE (from %s):\n", path);
+        return finish_table(&table, false, &reference, &sc, err, err_size);
+    printf("CPU seconds to reach relMSE (from %s):\n", table.path);
     printf("  %-40s", "");
     for (int t = 0; t < TARGET_COUNT; t++)
         printf("  relMSE %-6g", TARGETS[t]);
@@ -162,7 +164,7 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
     }
     printf("  relMSE at the largest run: path tracing %.4g in %.2f s, Metropolis %.4g in %.2f s\n",
            relmses[0][count[0] - 1], seconds[0][count[0] - 1], relmses[1][count[1] - 1], seconds[1][count[1] - 1]);
-    return finish_table(csv, path, true, &reference, &sc, err, err_size);
+    return finish_table(&table, true, &reference, &sc, err, err_size);
 }
 
 /* Short runs of many chains, each started at a bootstrap path picked in
@@ -176,19 +178,19 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     pt.integrator = PT_MIS;
     pt.russian_roulette = RR_THROUGHPUT;
     camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
-    char reference_path[4096], path[4096];
+    char reference_path[4096];
     snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_cornell_%d.exr", dir, EXPERIMENT_SIZE);
     printf("\n== start-up bias (Cornell box, %d chains, mean of %d runs)\n", STARTUP_CHAINS, STARTUP_REPLICAS);
-    FILE *csv = open_table(dir, "ch12_startup_bias.csv",
-                           "start,label,mutations_per_pixel,mutations_per_chain,cpu_seconds,relmse", path, sizeof path,
-                           err, err_size);
-    if (csv == NULL) {
+    atomic_file table;
+    if (!open_table(&table, dir, "ch12_startup_bias.csv",
+                    "start,label,mutations_per_pixel,mutations_per_chain,cpu_seconds,relmse", err, err_size)) {
         pt_scene_free(&sc);
         return false;
     }
+    FILE *csv = table.stream;
     estimate_image reference = {0};
     if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size))
-        return finish_table(csv, path, false, &reference, &sc, err, err_size);
+        return finish_table(&table, false, &reference, &sc, err, err_size);
     static const char *const labels[2] = {"bootstrap start", "fixed start"};
     printf("  %-18s %-18s %-14s %s\n", "mutations/pixel", "mutations/chain", "bootstrap", "fixed start");
     bool ok = true;
@@ -229,7 +231,7 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     for (int k = 0, mpp = 1; ok && k < points; k++, mpp *= 2)
         printf("  %-18d %-18lld %-14.4g %.4g\n", mpp, (long long)mpp * cam.width * cam.height / STARTUP_CHAINS,
                mean_relmse[0][k], mean_relmse[1][k]);
-    return finish_table(csv, path, ok, &reference, &sc, err, err_size);
+    return finish_table(&table, ok, &reference, &sc, err, err_size);
 }
 
 /* ---- which method for which scene ---------------------------------------------- */
@@ -355,7 +357,7 @@ typedef struct {
     int count;
 } method_curve;
 
-static bool methods_scene_run(const methods_scene *ms, const char *dir, int threads, FILE *table, char *err,
+static bool methods_scene_run(const methods_scene *ms, const char *dir, int threads, FILE *time_table, char *err,
                               size_t err_size)
 {
     pt_scene sc;
@@ -369,18 +371,18 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
         return false;
     }
     camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
-    char file[256], path[4096];
+    char file[256];
     printf("\n== which method: %s (%dx%d)\n", ms->title, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
     snprintf(file, sizeof file, "ch12_methods_%s.csv", ms->name);
-    FILE *csv = open_table(dir, file, "method,label,samples,cpu_seconds,relmse,rmse", path, sizeof path, err,
-                           err_size);
-    if (csv == NULL) {
+    atomic_file table;
+    if (!open_table(&table, dir, file, "method,label,samples,cpu_seconds,relmse,rmse", err, err_size)) {
         pt_scene_free(&sc);
         return false;
     }
+    FILE *csv = table.stream;
     estimate_image reference = {0};
     if (!methods_reference(ms, &sc, &cam, threads, dir, &reference, err, err_size))
-        return finish_table(csv, path, false, &reference, &sc, err, err_size);
+        return finish_table(&table, false, &reference, &sc, err, err_size);
     method_curve curves[MLT_METHOD_COUNT];
     double smallest = INFINITY;
     bool ok = true;
@@ -425,17 +427,17 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
                                                 ms->target_relmse, &samples);
             if (s < 0.0) {
                 printf("  %s not reached;", mlt_method_names[m]);
-                fprintf(table, "%s,%d,%s,%g,,,%.4g\n", ms->name, m, mlt_method_names[m], ms->target_relmse,
+                fprintf(time_table, "%s,%d,%s,%g,,,%.4g\n", ms->name, m, mlt_method_names[m], ms->target_relmse,
                         reference_relmse);
             } else {
                 printf("  %s %.2f s;", mlt_method_names[m], s);
-                fprintf(table, "%s,%d,%s,%g,%.4f,%d,%.4g\n", ms->name, m, mlt_method_names[m], ms->target_relmse, s,
+                fprintf(time_table, "%s,%d,%s,%g,%.4f,%d,%.4g\n", ms->name, m, mlt_method_names[m], ms->target_relmse, s,
                         samples, reference_relmse);
             }
         }
         printf("\n");
     }
-    return finish_table(csv, path, ok, &reference, &sc, err, err_size);
+    return finish_table(&table, ok, &reference, &sc, err, err_size);
 }
 
 /* The three unbiased methods on the three scenes, each against one
@@ -452,21 +454,19 @@ static bool methods_compare(const char *dir, int threads, char *err, size_t err_
         {"lamp", "lamp in a housing (light only through a 2 cm channel)", mlt_scene_build_lamp,
          MLT_METHOD_BIDIRECTIONAL, 128, 0.3},
     };
-    char path[4096];
-    FILE *table = open_table(dir, "ch12_methods_time_to_error.csv",
-                             "scene,method,label,target_relmse,cpu_seconds,samples,reference_relmse", path,
-                             sizeof path, err, err_size);
-    if (table == NULL)
+    atomic_file table;
+    if (!open_table(&table, dir, "ch12_methods_time_to_error.csv",
+                    "scene,method,label,target_relmse,cpu_seconds,samples,reference_relmse", err, err_size))
         return false;
     double start = experiment_cpu_seconds(), wall_start = timer_seconds();
     for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
-        if (!methods_scene_run(&scenes[i], dir, threads, table, err, err_size)) {
-            experiment_csv_discard(table, path);
+        if (!methods_scene_run(&scenes[i], dir, threads, table.stream, err, err_size)) {
+            atomic_file_abandon(&table);
             return false;
         }
     printf("\nwhich method for which scene: %.1f CPU s, %.1f s wall in all\n", experiment_cpu_seconds() - start,
            timer_seconds() - wall_start);
-    return experiment_csv_close(table, path, err, err_size);
+    return atomic_file_commit(&table, err, err_size);
 }
 
 bool mlt_experiments_run(const char *dir, int threads, char *err, size_t err_size)

@@ -1,5 +1,5 @@
 /* mlt_scene.c -- the lamp in a housing (see mlt_scene.h). */
-#include "mlt_scene.h"
+#include "12-metropolis/mlt_scene.h"
 
 #include <math.h>
 

@@ -12,12 +12,14 @@
 #include "cli.h"
 #include "effects.h"
 #include "program.h"
+#include "run_record.h"
 
 typedef struct {
     cli_choice builtin, walls, rr;
     const char *obj, *bench_csv;
     bool bench, one_path;
     int rr_start;
+    camera_override view; /* --eye, --target, --fov */
 } production_flags;
 
 static const char *const ON_OFF[] = {"on", "off", NULL};
@@ -60,8 +62,10 @@ static int render(cli_options *opts, const production_flags *f)
         scene_desc_free(&desc);
         return 1;
     }
+    pt_scene_check_scale(&sc, "13-production", stderr);
     if (!from_file)
         pt_scene_describe(&sc, &desc);
+    camera_override_apply(&f->view, &sc.eye, &sc.target, &sc.vertical_fov_degrees);
     if (pt_scene_has_no_light(&sc, err, sizeof err))
         fprintf(stderr, "13-production: warning: %s\n", err);
     effects_report e = effects_analyse(&desc);
@@ -76,11 +80,14 @@ static int render(cli_options *opts, const production_flags *f)
     camera cam = pt_scene_camera(&sc, opts->width, opts->height);
     char why[160];
     int status;
+    run_record_note("russian_roulette", pt_russian_roulette_name(pt.russian_roulette));
     if (!f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why)) {
+        run_record_note("integrator", "lecture, eight paths at a time");
         status = render_eight_paths(opts, &pt, &cam);
     } else {
         if (!f->one_path && !opts->quiet && !opts->explain)
             printf("13-production: one path at a time (eight at a time: %s)\n", why);
+        run_record_note("integrator", "lecture, one path at a time");
         status = program_render(opts, "13-production", path_trace_radiance, &pt, &cam, NULL);
     }
     pt_scene_free(&sc);
@@ -91,10 +98,11 @@ int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch13.exr", 512, 512, 16);
     production_flags f = {{PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {ON_OFF, NULL, 0},
-                          {PT_ROULETTE_NAMES, NULL, RR_FIXED}, NULL, NULL, false, false, 3};
+                          {PT_ROULETTE_NAMES, NULL, RR_FIXED}, NULL, NULL, false, false, 3, CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--builtin", CLI_CHOICE, &f.builtin, NULL, "a scene of chapter 09 (default cornell)", 0, 0},
-        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file (MTL Kd, Ke, Ni) instead", 0, 0},
+        {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file with its MTL materials instead", 0, 0},
+        CLI_CAMERA_FLAGS(f.view),
         {"--walls", CLI_CHOICE, &f.walls, NULL, "on (default): shadow rays inside a room skip its walls", 0, 0},
         {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed (P_RR 0.8, default), throughput, albedo or off", 0,
          0},
@@ -108,7 +116,7 @@ int main(int argc, char **argv)
                      "What production renderers do: chapter 09's lecture path tracer on the flat set or the\n"
                      "4-wide BVH, shadow rays that skip a room's walls, eight paths at a time where the scene\n"
                      "allows (at most 64 diffuse triangles, no spheres or point lights). --bench measures each step.",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision, one path at a time)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.jitter = true;
     if (f.bench_csv != NULL && !f.bench) {

@@ -19,8 +19,8 @@
 
 #include "13-production/spawn_avx.h"
 
-/* The lanes' arithmetic in AVX needs AVX2 for the rays' offsets
- * (spawn_avx.h); without it, lane by lane. */
+/* The lanes' arithmetic in AVX needs AVX2 for the hit records' gathers
+ * (spawn_avx.h's target); without it, lane by lane. */
 #define WIDE_HAVE_AVX SPAWN_HAVE_AVX2
 
 enum { LANES = FLAT_LANES };
@@ -55,11 +55,12 @@ bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_siz
  * copied between steps. What each path carries from vertex to vertex: the
  * ray to trace next, the direction back along it (wo) and the throughput
  * before the vertex it will hit. What light_math reads at a vertex (the
- * hit point p, geometric normal ng, shading normal n and albedo, from the
- * hit records; wo and throughput; the point on the light, its normal,
- * radiance and pdf per unit area) and writes (each lane's contribution,
- * times its throughput, and its shadow ray); what bounce_math reads (p,
- * ng, n, wo, albedo, throughput again; the hemisphere's two numbers,
+ * hit point p and its error bound, geometric normal ng, shading normal n
+ * and albedo, from the hit records; wo and throughput; the point on the
+ * light, its error bound, normal, radiance and pdf per unit area) and
+ * writes (each lane's contribution, times its throughput, and its shadow
+ * ray); what bounce_math reads (p and its error bound, ng, n, wo, albedo,
+ * throughput again; the hemisphere's two numbers,
  * 1 / P_RR) and writes (the next ray, its wo, and the throughput after the
  * bounce, in place). bounce_math_avx writes all eight lanes; a lane whose
  * path ends there is given its next camera ray (start_sample) before the
@@ -67,9 +68,10 @@ bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_siz
 typedef struct {
     flat_rays8 ray;
     _Alignas(32) float wo[3][LANES], throughput[3][LANES];
-    _Alignas(32) float p[3][LANES], ng[3][LANES], n[3][LANES], albedo[3][LANES];
-    _Alignas(32) float x_light[3][LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];
+    _Alignas(32) float p[3][LANES], p_error[LANES], ng[3][LANES], n[3][LANES], albedo[3][LANES];
+    _Alignas(32) float x_light[3][LANES], x_error[LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];
     _Alignas(32) float contribution[3][LANES], shadow_origin[3][LANES], shadow_direction[3][LANES];
+    _Alignas(32) float shadow_t_min[LANES], shadow_t_max[LANES];
     _Alignas(32) float u_x[LANES], u_y[LANES], rr_scale[LANES];
 } vertex_lanes;
 
@@ -276,7 +278,7 @@ static bool pick_light(lane *l, const pt_scene *sc, const float *pdf_area, verte
     vec3 x_light, n_light;
     int light_material;
     float u_pick = pcg32_float(&l->rng), u1 = pcg32_float(&l->rng), u2 = pcg32_float(&l->rng);
-    if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &n_light, &light_material))
+    if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &L->x_error[k], &n_light, &light_material))
         return false;
     lanes_set(L->x_light, k, x_light);
     lanes_set(L->n_light, k, n_light);
@@ -309,9 +311,11 @@ static int light_math_lane(vertex_lanes *L, int k)
     float pdf_light = distance2 * L->pdf_area[k] / cos_theta_light;
     vec3 contribution = vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * 1.0f));
     lanes_set(L->contribution, k, contribution);
-    ray shadow = ray_spawn_to(AT(p), AT(ng), AT(x_light), AT(n_light));
+    ray shadow = ray_spawn_to(AT(p), L->p_error[k], AT(ng), AT(x_light), L->x_error[k], AT(n_light));
     lanes_set(L->shadow_origin, k, shadow.origin);
     lanes_set(L->shadow_direction, k, shadow.direction);
+    L->shadow_t_min[k] = shadow.t_min;
+    L->shadow_t_max[k] = shadow.t_max;
     return 1 << k;
 #undef AT
 }
@@ -355,12 +359,15 @@ SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes)
     const __m256 p[3] = {LOAD3(p, 0), LOAD3(p, 1), LOAD3(p, 2)}, ng[3] = {LOAD3(ng, 0), LOAD3(ng, 1), LOAD3(ng, 2)};
     const __m256 x_light[3] = {LOAD3(x_light, 0), LOAD3(x_light, 1), LOAD3(x_light, 2)};
     const __m256 n_light[3] = {LOAD3(n_light, 0), LOAD3(n_light, 1), LOAD3(n_light, 2)};
-    __m256 origin[3], direction[3];
-    ray_spawn_to8(p, ng, x_light, n_light, origin, direction);
+    __m256 origin[3], direction[3], t_min, t_max;
+    ray_spawn_to8(p, _mm256_load_ps(L->p_error), ng, x_light, _mm256_load_ps(L->x_error), n_light, origin, direction,
+                  &t_min, &t_max);
     for (int c = 0; c < 3; c++) {
         _mm256_store_ps(L->shadow_origin[c], origin[c]);
         _mm256_store_ps(L->shadow_direction[c], direction[c]);
     }
+    _mm256_store_ps(L->shadow_t_min, t_min);
+    _mm256_store_ps(L->shadow_t_max, t_max);
     int mask = _mm256_movemask_ps(ok) & lanes;
     _mm256_zeroupper();
     return mask;
@@ -401,7 +408,9 @@ static int bounce_math_lane(vertex_lanes *L, int k)
     vec3 weight = vec3_scale(f, local.z / uniform_hemisphere_pdf());
     if (vec3_is_black(weight))
         return 0;
-    lanes_set(L->ray.origin, k, ray_spawn(AT(p), AT(ng), wi).origin);
+    ray next = ray_spawn(AT(p), L->p_error[k], AT(ng), wi);
+    lanes_set(L->ray.origin, k, next.origin);
+    L->ray.t_min[k] = next.t_min;
     lanes_set(L->ray.direction, k, wi);
     lanes_set(L->throughput, k, vec3_scale(vec3_mul(AT(throughput), weight), L->rr_scale[k]));
     lanes_set(L->wo, k, vec3_neg(wi));
@@ -466,12 +475,13 @@ SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
     /* the next ray's origin: ray_spawn() */
     const __m256 point[3] = {LOAD3(p, 0), LOAD3(p, 1), LOAD3(p, 2)}, ng[3] = {LOAD3(ng, 0), LOAD3(ng, 1), LOAD3(ng, 2)};
     const __m256 wi[3] = {wx, wy, wz};
-    __m256 origin[3];
-    ray_spawn8(point, ng, wi, origin);
+    __m256 origin[3], t_min;
+    ray_spawn8(point, _mm256_load_ps(L->p_error), ng, wi, origin, &t_min);
     for (int c = 0; c < 3; c++) {
         _mm256_store_ps(L->ray.origin[c], origin[c]);
         _mm256_store_ps(L->ray.direction[c], wi[c]);
     }
+    _mm256_storeu_ps(L->ray.t_min, t_min);
     __m256 rr_scale = _mm256_load_ps(L->rr_scale);
     _mm256_store_ps(L->throughput[0], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 0), weight_x), rr_scale));
     _mm256_store_ps(L->throughput[1], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 1), weight_y), rr_scale));
@@ -489,9 +499,10 @@ SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
 
 /* ---- the hit records -----------------------------------------------------------
  * What triangle_set_fill_hit() makes of a lane's hit, as far as shading
- * needs it: the point (from the barycentrics), the geometric normal facing
- * the ray, the shading normal, the material and its albedo, and whether
- * the front was hit; written straight into the lanes' arrays. */
+ * needs it: the point (from the barycentrics) and its error bound, the
+ * geometric normal facing the ray, the shading normal, the material and its
+ * albedo, and whether the front was hit; written straight into the lanes'
+ * arrays. */
 static int hit_record_lane(const pt_scene *sc, const flat_hits8 *hits, int k, vertex_lanes *L,
                            int material[LANES])
 {
@@ -499,6 +510,7 @@ static int hit_record_lane(const pt_scene *sc, const flat_hits8 *hits, int k, ve
     triangle_set_fill_hit(&sc->triangles, hits->index[k], flat_rays8_get(&L->ray, k), hits->t[k], hits->b1[k],
                           hits->b2[k], &hit);
     lanes_set(L->p, k, hit.point);
+    L->p_error[k] = hit.point_error;
     lanes_set(L->ng, k, hit.normal_geometric);
     lanes_set(L->n, k, hit.normal_shading);
     lanes_set(L->albedo, k, sc->materials[hit.material_id].albedo);
@@ -525,12 +537,16 @@ SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const flat_hits8 *hi
     __m256i corner = _mm256_mullo_epi32(index, _mm256_set1_epi32(9)), surface = _mm256_slli_epi32(index, 2);
     const float *t0 = &set->triangles[0].p0.x;
     __m256 b1 = _mm256_load_ps(hits->b1), b2 = _mm256_load_ps(hits->b2);
-    __m256 w0 = _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(1.0f), b1), b2);
-    __m256 point[3];
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    /* triangle_fill_hit_normal: P0 + (b1 E1 + b2 E2), and the size of the
+     * edges for the error bound (triangle_edge_size) */
+    __m256 point[3], size = _mm256_setzero_ps();
     for (int c = 0; c < 3; c++) {
         __m256 p0 = _mm256_i32gather_ps(t0 + c, corner, 4), p1 = _mm256_i32gather_ps(t0 + 3 + c, corner, 4),
                p2 = _mm256_i32gather_ps(t0 + 6 + c, corner, 4);
-        point[c] = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(p0, w0), _mm256_mul_ps(p1, b1)), _mm256_mul_ps(p2, b2));
+        __m256 e1 = _mm256_sub_ps(p1, p0), e2 = _mm256_sub_ps(p2, p0);
+        point[c] = _mm256_add_ps(p0, _mm256_add_ps(_mm256_mul_ps(e1, b1), _mm256_mul_ps(e2, b2)));
+        size = _mm256_max_ps(size, _mm256_max_ps(_mm256_and_ps(e1, abs_mask), _mm256_and_ps(e2, abs_mask)));
     }
     const float *s0 = &set->surfaces[0].normal.x;
     __m256 normal[3], direction[3];
@@ -538,6 +554,7 @@ SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const flat_hits8 *hi
         normal[c] = _mm256_i32gather_ps(s0 + c, surface, 4);
         direction[c] = _mm256_load_ps(L->ray.direction[c]);
     }
+    _mm256_store_ps(L->p_error, spawn_point_error8(point, normal, size));
     __m256i materials = _mm256_i32gather_epi32(&set->surfaces[0].material, surface, 4);
     /* hit_set_normal: the front if the ray comes against the outward normal */
     __m256 front = _mm256_cmp_ps(spawn_dot8(direction, normal), _mm256_setzero_ps(), _CMP_LT_OQ);
@@ -650,8 +667,8 @@ static void render_row(row_job *job)
                 shadow->origin[c][q % LANES] = L.shadow_origin[c][k];
                 shadow->direction[c][q % LANES] = L.shadow_direction[c][k];
             }
-            shadow->t_min[q % LANES] = 0.0f;
-            shadow->t_max[q % LANES] = 1.0f; /* ray_spawn_to's */
+            shadow->t_min[q % LANES] = L.shadow_t_min[k]; /* ray_spawn_to's */
+            shadow->t_max[q % LANES] = L.shadow_t_max[k];
             job->queue.contribution[q] = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
             job->queue.lane[q] = k;
             job->queue.sample_id[q] = lanes[k].sample_id;
@@ -720,4 +737,37 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
     free(pdf_area);
     *out = e;
     return true;
+}
+
+int path_tracer_wide_light_math(const wide_light_vertex *v, int count, vec3 contribution[8])
+{
+    vertex_lanes L;
+    memset(&L, 0, sizeof L);
+    int lanes = 0;
+    for (int k = 0; k < count && k < LANES; k++) {
+        lanes_set(L.p, k, v[k].p);
+        lanes_set(L.ng, k, v[k].ng);
+        lanes_set(L.n, k, v[k].n);
+        lanes_set(L.wo, k, v[k].wo);
+        lanes_set(L.albedo, k, v[k].albedo);
+        lanes_set(L.throughput, k, v[k].throughput);
+        lanes_set(L.x_light, k, v[k].x_light);
+        lanes_set(L.n_light, k, v[k].n_light);
+        lanes_set(L.le, k, v[k].le);
+        L.p_error[k] = v[k].p_error;
+        L.x_error[k] = v[k].x_error;
+        L.pdf_area[k] = v[k].pdf_area;
+        lanes |= 1 << k;
+    }
+    int lit = 0;
+#if WIDE_HAVE_AVX
+    if (use_avx && __builtin_cpu_supports("avx2"))
+        lit = light_math_avx(&L, lanes);
+    else
+#endif
+        for (int k = 0; k < count && k < LANES; k++)
+            lit |= light_math_lane(&L, k);
+    for (int k = 0; k < count && k < LANES; k++)
+        contribution[k] = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
+    return lit;
 }

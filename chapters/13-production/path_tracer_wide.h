@@ -55,4 +55,24 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
  * rendering. */
 void path_tracer_wide_use_avx(bool on);
 
+/* One vertex's light sample as the lanes compute it: the hit (point, its
+ * error bound, geometric and shading normals), the direction back along the
+ * path, the surface's albedo (diffuse), the path's throughput, and the
+ * point picked on a light (point, error bound, normal, L_e, pdf per unit
+ * area). */
+typedef struct {
+    vec3 p, ng, n, wo, albedo, throughput;
+    float p_error;
+    vec3 x_light, n_light, le;
+    float x_error, pdf_area;
+} wide_light_vertex;
+
+/* For the tests: the light samples' arithmetic of up to eight vertices,
+ * as the eight-path renderer does it (in AVX where it runs, else lane by
+ * lane): bit k of the result says whether vertex k's sample adds light,
+ * and contribution[k] is what it adds, times the throughput, if its shadow
+ * ray gets through. Chapter 09's shade() computes the same from
+ * pt_scene_sample_light() and bsdf_eval(). */
+int path_tracer_wide_light_math(const wide_light_vertex *v, int count, vec3 contribution[8]);
+
 #endif

@@ -88,19 +88,34 @@ enum { WALL_TEST_BUDGET = 100000000 };
  *     exactly +-1 on that axis and the offset that coordinate, so the
  *     distance is one subtraction, off by half a unit in the last place of
  *     |p| + |offset| along that axis at most. The slack is 2^-20 of those:
- *     a point 2^-16 from the plane x = 0 (the smallest offset ray.h moves
- *     a ray's end off a surface by) is still judged correctly.
+ *     a point 2^-16 from the plane x = 0 is still judged correctly, and
+ *     so is a ray's end ray.h moved off such a wall (by at least 64
+ *     roundings of the wall's size, 2^-18 of it: twice the slack of the
+ *     back wall, the farthest from 0 for its size).
  *   - any other (the red wall, whose quad is not quite flat): the unit
- *     normal is rounded to float, so the plane tilts by up to 2^-24 and the
- *     error grows with the distance from the triangle; the slack is 2^-19
- *     of |p| in each coordinate plus of the corners' and offset's sizes.
+ *     normal n is rounded to float, each component by at most u |n_k|
+ *     (u = 2^-24), and the offset too, so the plane tilts a little about
+ *     the corner the offset was taken at, c0. The distance n . p - offset
+ *     is off by at most (u = one rounding of each term):
+ *       3 for the dot product and 1 for the subtraction, of |n| . |p|;
+ *       1 for the tilted normal, of |n| . (|p| + |c0|);
+ *       2 for its length not being exactly 1, of |n| . |p| + |offset|;
+ *       1 for the offset, and the subtraction's 1, of |offset|;
+ *     and 2 more of |n| . |p| where p is a ray's end o + t d, rounded
+ *     twice (the test passes |o| + |t d| as |p|): 9 of |n| . |p| and 4 of
+ *     |offset| and |n| . |c0|. The slack is 16 of each (TILTED_SLACK, per
+ *     axis weighted by |n_k|): on the red wall 1.6e-3, under what ray.h
+ *     moves a ray's end off it (2.2e-3), so rays from it skip the walls
+ *     too. (It was 2^-19 of every coordinate and corner unweighted, 9.5e-3,
+ *     and a quarter of the Cornell box's shadow rays, those from the red
+ *     wall, took the full test.)
  * A margin too large only sends a ray down the full test, never gives a
  * wrong answer. */
 typedef struct {
     float normal[3], offset, slack[3], slack_constant;
 } wall_plane;
 
-static const float AXIS_SLACK = 0x1.0p-20f, TILTED_SLACK = 0x1.0p-19f;
+static const float AXIS_SLACK = 0x1.0p-20f, TILTED_SLACK = 0x1.0p-20f;
 
 /* The plane of triangle t, facing the side its normal (p1 - p0) x (p2 - p0)
  * points to; false if the triangle has no area. */
@@ -127,15 +142,15 @@ static bool wall_plane_of(const triangle *t, wall_plane *out)
             return true;
         }
     }
-    double offset = 0.0, size = 0.0;
+    double offset = 0.0, corner = 0.0;
     for (int k = 0; k < 3; k++) {
         out->normal[k] = (float)(n[k] / length);
         offset += (double)out->normal[k] * corners[0][k];
-        size += fabs((double)corners[0][k]) + fabs((double)corners[1][k]) + fabs((double)corners[2][k]);
-        out->slack[k] = TILTED_SLACK;
+        corner += fabs((double)out->normal[k]) * fabs((double)corners[0][k]);
+        out->slack[k] = TILTED_SLACK * fabsf(out->normal[k]);
     }
     out->offset = (float)offset;
-    out->slack_constant = (float)(TILTED_SLACK * (size + fabs(offset)));
+    out->slack_constant = (float)(TILTED_SLACK * (corner + fabs(offset)));
     return true;
 }
 

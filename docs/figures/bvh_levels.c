@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "03-aabb-slabs/accel_view.h"
 #include "06-bvh/bvh.h"
 #include "camera.h"
 #include "cli.h"
@@ -129,7 +130,7 @@ int main(int argc, char **argv)
     cli_spec spec = {"bvh_levels",
                      "The boxes of chapter 06's BVH (the lecture's median split) at one depth of the tree,\n"
                      "over the tori it was built on; each triangle in the colour of its box. For the book.",
-                     extras, sizeof extras / sizeof extras[0]};
+                     extras, sizeof extras / sizeof extras[0], NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
 
     mesh m;

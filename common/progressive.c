@@ -1,0 +1,121 @@
+/* progressive.c -- estimates with their error, rendered in passes (see
+ * progressive.h). */
+#include "progressive.h"
+
+#include <math.h>
+
+#include "timer.h"
+
+/* relMSE's guard against dividing by near-black pixels (as image_relmse). */
+static const double RELATIVE_ERROR_EPSILON = 1e-2;
+
+void estimate_image_free(estimate_image *e)
+{
+    image_free(&e->mean);
+    image_free(&e->standard_error);
+}
+
+estimate_image estimate_render(radiance_fn radiance, const void *scene, const camera *cam, int spp, uint64_t seed,
+                               int threads)
+{
+    return estimate_render_sampled(radiance, NULL, scene, cam, spp, seed, threads);
+}
+
+estimate_image estimate_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                       const camera *cam, int spp, uint64_t seed, int threads)
+{
+    estimate_image e;
+    e.mean = image_make(cam->width, cam->height);
+    e.standard_error = image_make(cam->width, cam->height);
+    render_job job = {.cam = cam, .spp = spp, .seed = seed, .threads = threads, .quiet = true,
+                      .radiance = radiance, .scene = scene, .standard_error = &e.standard_error,
+                      .jitter = true, .sample = sample};
+    render_stats stats;
+    render_image(&job, &e.mean, &stats);
+    e.spp = spp;
+    e.seconds = stats.seconds;
+    e.counters = stats.counters;
+    return e;
+}
+
+double estimate_relative_error(const estimate_image *e)
+{
+    size_t n = (size_t)e->mean.width * (size_t)e->mean.height * 3;
+    double sum = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double m = e->mean.rgb[i], s = e->standard_error.rgb[i];
+        sum += s * s / (m * m + RELATIVE_ERROR_EPSILON);
+    }
+    return sqrt(sum / (double)n);
+}
+
+/* Merge pass b into a: means weighted by sample counts; the variance of the
+ * merged mean is sum n_k^2 se_k^2 / N^2. */
+static void merge_estimates(estimate_image *a, const estimate_image *b)
+{
+    double na = (double)a->spp, nb = (double)b->spp, n = na + nb;
+    size_t count = (size_t)a->mean.width * (size_t)a->mean.height * 3;
+    for (size_t i = 0; i < count; i++) {
+        double mean = (na * a->mean.rgb[i] + nb * b->mean.rgb[i]) / n;
+        double sa = a->standard_error.rgb[i], sb = b->standard_error.rgb[i];
+        double variance = (na * na * sa * sa + nb * nb * sb * sb) / (n * n);
+        a->mean.rgb[i] = (float)mean;
+        a->standard_error.rgb[i] = (float)sqrt(variance);
+    }
+    a->spp += b->spp;
+    a->seconds += b->seconds;
+    counters_add(&a->counters, &b->counters);
+}
+
+/* The per-pixel variance is trusted from this many samples on: from n
+ * samples of a normal variable the sample variance is off by a factor
+ * sqrt(2 / (n - 1)), a third at 16 (and more for a path tracer's skewed
+ * samples, where the first few often all miss the light and read 0). */
+enum { PROGRESSIVE_TRUSTED_SPP = 16 };
+
+estimate_image progressive_render(radiance_fn radiance, const void *scene, const camera *cam, uint64_t seed,
+                                  int threads, double seconds, double target_error, FILE *log)
+{
+    return progressive_render_sampled(radiance, NULL, scene, cam, seed, threads, seconds, target_error, log);
+}
+
+estimate_image progressive_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                          const camera *cam, uint64_t seed, int threads, double seconds,
+                                          double target_error, FILE *log)
+{
+    double start = timer_seconds();
+    /* Two samples at least: one sample per pixel has no variance to
+     * estimate its error from (its standard error would read 0, and the
+     * target would seem reached at once). */
+    estimate_image total = estimate_render_sampled(radiance, sample, scene, cam, 2, seed, threads);
+    for (int pass = 1;; pass++) {
+        double elapsed = timer_seconds() - start, error = estimate_relative_error(&total);
+        bool trusted = total.spp >= PROGRESSIVE_TRUSTED_SPP;
+        if (log != NULL)
+            fprintf(log, "pass %2d: %6ld spp, %8.2f s, estimated relative error %.4f%s\n", pass, total.spp, elapsed,
+                    error, trusted ? "" : " (not trusted below 16 spp)");
+        if (seconds <= 0.0 && target_error <= 0.0)
+            break; /* nothing to wait for */
+        if (target_error > 0.0 && trusted && error <= target_error) {
+            if (log != NULL)
+                fprintf(log, "reached the target error %.4f\n", target_error);
+            break;
+        }
+        /* The next pass doubles the samples so far: stop now if it would
+         * overrun the budget (passes take time in proportion to spp). */
+        double per_sample = elapsed / (double)total.spp;
+        if (seconds > 0.0 && elapsed + per_sample * (double)total.spp > seconds) {
+            if (log != NULL)
+                fprintf(log, "stopped at the time budget %.1f s (another pass would take %.1f s)\n", seconds,
+                        per_sample * (double)total.spp);
+            break;
+        }
+        estimate_image next =
+            estimate_render_sampled(radiance, sample, scene, cam, (int)total.spp, seed + (uint64_t)pass * 0x9e3779b9ULL,
+                                    threads);
+        merge_estimates(&total, &next);
+        estimate_image_free(&next);
+    }
+    total.seconds = timer_seconds() - start;
+    return total;
+}

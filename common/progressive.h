@@ -1,0 +1,60 @@
+/* progressive.h -- renders whose error can be estimated, and rendering in
+ * passes until a time budget or a target error is reached.
+ *
+ * Usage (any integrator of render.h's shape):
+ *   estimate_image e = estimate_render(path_trace_radiance, &pt, &cam, 64, seed, threads);
+ *   printf("%.4f\n", estimate_relative_error(&e));     what the variance predicts
+ *   estimate_image_free(&e);
+ *   e = progressive_render(path_trace_radiance, &pt, &cam, seed, threads, 10.0, 0.01, stdout);
+ *
+ * The samples land anywhere in the pixel (render.h's jitter), even at one
+ * sample per pixel: every pass estimates the same image, the pixel's average
+ * over its area, so passes can be merged.
+ */
+#ifndef PROGRESSIVE_H
+#define PROGRESSIVE_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "camera.h"
+#include "counters.h"
+#include "image.h"
+#include "render.h"
+
+/* A render whose error can be estimated: the mean and, per pixel, the
+ * standard error of that mean. */
+typedef struct {
+    image mean;
+    image standard_error;
+    long spp;
+    double seconds;
+    ray_counters counters;
+} estimate_image;
+
+void estimate_image_free(estimate_image *e);
+
+/* Renders with `spp` samples per pixel; seed picks the random streams. */
+estimate_image estimate_render(radiance_fn radiance, const void *scene, const camera *cam, int spp, uint64_t seed,
+                               int threads);
+/* The same, each sample by `sample` when it is not NULL (render.h's
+ * render_sample_fn, such as chapter 09's Sobol sampler). */
+estimate_image estimate_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                       const camera *cam, int spp, uint64_t seed, int threads);
+
+/* The error the image's own variance predicts: sqrt of the mean over pixels
+ * and channels of standard_error^2 / (mean^2 + eps), a relative RMSE. */
+double estimate_relative_error(const estimate_image *e);
+
+/* Renders passes of 2, 2, 4, 8, ... samples per pixel (each with its own
+ * seed), merging them, until `seconds` have passed or the estimated relative
+ * error is below `target_error`, judged only from 16 samples per pixel on,
+ * where the per-pixel variance can be trusted (either may be 0: not used; both 0, one
+ * pass). Prints one line per pass to `log` (if not NULL). */
+estimate_image progressive_render(radiance_fn radiance, const void *scene, const camera *cam, uint64_t seed,
+                                  int threads, double seconds, double target_error, FILE *log);
+estimate_image progressive_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                          const camera *cam, uint64_t seed, int threads, double seconds,
+                                          double target_error, FILE *log);
+
+#endif

@@ -1,0 +1,87 @@
+/* run_record.c -- what a run was (see run_record.h). One record per
+ * process, written by the main thread before and after rendering. */
+#include "run_record.h"
+
+#include <stdio.h>
+#include <string.h>
+
+enum { COMMAND_SIZE = 4096, NOTE_COUNT = 16, NOTE_SIZE = 256 };
+
+static char command[COMMAND_SIZE];
+static bool recorded;
+static const cli_options *options; /* main()'s, alive for the whole run */
+static char note_keys[NOTE_COUNT][64], note_values[NOTE_COUNT][NOTE_SIZE];
+static int note_count;
+
+/* s as the body of a JSON string: quotes, backslashes and control bytes
+ * escaped. Returns the characters written (less than size). */
+static size_t json_escape(const char *s, char *out, size_t size)
+{
+    size_t n = 0;
+    for (; *s != '\0' && n + 7 < size; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\')
+            n += (size_t)snprintf(out + n, size - n, "\\%c", c);
+        else if (c < 0x20)
+            n += (size_t)snprintf(out + n, size - n, "\\u%04x", c);
+        else
+            out[n++] = (char)c;
+    }
+    out[n] = '\0';
+    return n;
+}
+
+void run_record_command(int argc, char **argv, const cli_options *opts)
+{
+    size_t n = 0;
+    command[0] = '\0';
+    for (int i = 0; i < argc && n + 2 < sizeof command; i++) {
+        /* an argument with a space or a quote is shown in single quotes, so the line can be pasted back */
+        bool quote = strpbrk(argv[i], " \t\"'\\") != NULL || argv[i][0] == '\0';
+        n += (size_t)snprintf(command + n, sizeof command - n, "%s%s%s%s", i > 0 ? " " : "", quote ? "'" : "",
+                              argv[i], quote ? "'" : "");
+        if (n >= sizeof command)
+            n = sizeof command - 1;
+    }
+    options = opts;
+    recorded = true;
+}
+
+void run_record_note(const char *key, const char *value)
+{
+    int k = 0;
+    while (k < note_count && strcmp(note_keys[k], key) != 0)
+        k++;
+    if (k == NOTE_COUNT)
+        return;
+    snprintf(note_keys[k], sizeof note_keys[k], "%s", key);
+    snprintf(note_values[k], sizeof note_values[k], "%s", value);
+    if (k == note_count)
+        note_count++;
+}
+
+bool run_record_json(char *out, size_t size)
+{
+    out[0] = '\0';
+    if (!recorded)
+        return true;
+    char cmd[2 * COMMAND_SIZE], scene[2 * 1024];
+    json_escape(command, cmd, sizeof cmd);
+    if (options->scene != NULL)
+        json_escape(options->scene, scene, sizeof scene);
+    size_t n = (size_t)snprintf(out, size,
+                                "\"command\": \"%s\",\n  \"version\": \"%s\",\n  \"seed\": %llu,\n  \"threads\": %d,\n"
+                                "  \"width\": %d,\n  \"height\": %d,\n  \"spp\": %d,\n  \"scene\": %s%s%s",
+                                cmd, PROJECT_VERSION, (unsigned long long)options->seed, options->threads,
+                                options->width, options->height, options->spp, options->scene != NULL ? "\"" : "",
+                                options->scene != NULL ? scene : "null", options->scene != NULL ? "\"" : "");
+    for (int k = 0; k < note_count && n < size; k++) {
+        char value[2 * NOTE_SIZE];
+        json_escape(note_values[k], value, sizeof value);
+        /* a note that is a JSON list (the effects) is written as it is */
+        bool list = note_values[k][0] == '[';
+        n += (size_t)snprintf(out + n, size - n, ",\n  \"%s\": %s%s%s", note_keys[k], list ? "" : "\"",
+                              list ? note_values[k] : value, list ? "" : "\"");
+    }
+    return n < size;
+}

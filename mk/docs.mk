@@ -1,0 +1,91 @@
+# `make docs` weaves each chapter's README.md into build/docs/NN-name.html
+# with pandoc and the Lua filter docs/weave.lua: code excerpts are read from
+# the sources now, images are the ones the programs and `make plots` make
+# (each shown with its command, from docs/figures.txt), formulas become
+# MathML, and there are no scripts. docs/coverage.md maps every concept of
+# lectures 13-16 to its file, function, test and figure; the filter fails
+# the build if any of them does not exist. `make test-docs` opens every page
+# in headless Chromium and checks images, links and math.
+
+.PHONY: docs docs-deps test-docs
+
+DOCS := $(BUILD)/docs
+DOCS_TEST := $(BUILD)/docs-test
+DOC_NOTES := scene-format hard-cases
+DOC_PAGES := $(patsubst %,$(DOCS)/%.html,$(CHAPTERS)) $(DOCS)/index.html $(DOCS)/coverage.html \
+  $(patsubst %,$(DOCS)/%.html,$(DOC_NOTES))
+DOC_FIGURES := $(patsubst %,$(BUILD)/%,$(shell sed -n 's|^\(out/[^ ]*\.png\).*|\1|p' docs/figures.txt))
+DOC_PLOTS_STAMP := $(BUILD)/plots/.made
+DOC_SOURCES := $(wildcard common/*.[ch] chapters/*/*.[ch] tests/*.c)
+DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.txt $(DOC_SOURCES)
+DOC_ROOT = $(shell realpath -m --relative-to=$(DOCS) .)
+DOC_PANDOC = pandoc --fail-if-warnings --mathml --standalone --template docs/template.html \
+  --lua-filter docs/weave.lua -M chapters="$(CHAPTERS)" -M build=$(BUILD) -M docs=$(DOCS) \
+  -M root=$(DOC_ROOT) -M figures=docs/figures.txt -M lectures=docs/lectures.md -M plots="$(PLOT_SCRIPTS)"
+# $(call docs_check,DIR,PAGES): tests/docs_check.html's report on DIR's pages (comma-separated).
+docs_check = $(CHROMIUM) --allow-file-access-from-files --virtual-time-budget=60000 --dump-dom \
+  "file://$(abspath tests/docs_check.html)?dir=file://$(1)/&pages=$(2)" 2>> $(DOCS_TEST)/chromium.log \
+  | sed -n '/<pre id="report">/,/<\/pre>/p' | sed 's/<[^>]*>//g; /^$$/d'
+CHROMIUM = chromium --headless --no-sandbox --disable-gpu --hide-scrollbars \
+  --user-data-dir=$(abspath $(DOCS_TEST))/profile
+
+docs: $(DOC_PAGES)
+	@echo "The book is in $(DOCS)/: open $(DOCS)/index.html"
+
+# Each figure by the command docs/figures.txt gives it (build/ there means $(BUILD)).
+$(DOC_FIGURES): $(BUILD)/%.png: docs/figures.txt $(PROGRAMS) $(DOC_PROGRAMS)
+	@mkdir -p $(dir $@)
+	@cmd=$$(awk -v f='$*.png' '$$1 == f { $$1 = ""; print }' docs/figures.txt | sed 's|build/|$(BUILD)/|g'); \
+	echo "$$cmd"; $$cmd --quiet
+
+$(DOC_PLOTS_STAMP): $(PLOT_SCRIPTS) $(PROGRAMS)
+	@$(MAKE) --no-print-directory plots
+	@touch $@
+
+$(DOCS)/book.css: docs/book.css | docs-deps
+	@mkdir -p $(DOCS)/img
+	cp $< $@
+
+$(DOCS)/%.html: chapters/%/README.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(DOCS)/book.css
+	$(DOC_PANDOC) -f gfm -M page=chapter -M chapter=$* -M files="$(notdir $(wildcard chapters/$*/*.[ch]))" $< -o $@
+
+# The index shows each chapter's picture: it waits for them (with -j, it
+# was made before them and refused, naming the missing images).
+$(DOCS)/index.html: docs/index.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOCS)/book.css
+	$(DOC_PANDOC) -f gfm -M page=index -M chapter= $< -o $@
+
+# The notes beside the chapters: the scene format and the hard-case catalog.
+$(patsubst %,$(DOCS)/%.html,$(DOC_NOTES)): $(DOCS)/%.html: docs/%.md $(DOC_INPUTS) $(DOCS)/book.css
+	$(DOC_PANDOC) -f gfm -M page=note -M chapter= $< -o $@
+
+$(DOCS)/coverage.html: docs/coverage.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(DOCS)/book.css
+	$(DOC_PANDOC) -f gfm -M page=coverage -M chapter= $< -o $@
+
+# The checks fail when they should: a coverage row naming a function that
+# does not exist, an excerpt whose function is gone (each must name its file
+# and line); then every page in Chromium, through tests/docs_check.html, which
+# loads each page in a frame and reports what is broken; then a screenshot of
+# the index ($(DOCS)/index-screenshot.png) to look at.
+test-docs: docs | docs-deps
+	@mkdir -p $(DOCS_TEST)
+	@for bad in tests/docs/bad_*.md; do \
+	  want=$$(sed -n 's/^<!-- expect: \(.*\) -->$$/\1/p' $$bad); \
+	  if $(DOC_PANDOC) -f gfm -M page=$$(sed -n 's/^<!-- page: \(.*\) -->$$/\1/p' $$bad) -M chapter= \
+	       $$bad -o $(DOCS_TEST)/bad.html 2> $(DOCS_TEST)/bad.log; then \
+	    echo "FAIL: $$bad was accepted"; exit 1; fi; \
+	  grep -qF "$$want" $(DOCS_TEST)/bad.log || { cat $(DOCS_TEST)/bad.log; echo "FAIL: $$bad: no '$$want'"; exit 1; }; \
+	  echo "ok: $$bad is refused: $$want"; \
+	done
+	@$(call docs_check,$(abspath tests/docs),bad_page.html) > $(DOCS_TEST)/bad_page.txt; \
+	grep -q '^RESULT: FAIL (1 pages, 3 problems)' $(DOCS_TEST)/bad_page.txt \
+	  || { cat $(DOCS_TEST)/bad_page.txt; echo "FAIL: the browser check missed a fault of tests/docs/bad_page.html"; exit 1; }; \
+	echo "ok: the browser check finds the three faults of tests/docs/bad_page.html"
+	@pages=$$(cd $(DOCS) && ls *.html | tr '\n' ',' | sed 's/,$$//'); \
+	$(call docs_check,$(abspath $(DOCS)),$$pages) > $(DOCS_TEST)/report.txt; \
+	cat $(DOCS_TEST)/report.txt; grep -q '^RESULT: PASS' $(DOCS_TEST)/report.txt
+	@$(CHROMIUM) --window-size=1100,1500 --screenshot=$(abspath $(DOCS))/index-screenshot.png \
+	  file://$(abspath $(DOCS))/index.html 2>> $(DOCS_TEST)/chromium.log
+	@echo "test-docs: every page checked; screenshot of the index: $(DOCS)/index-screenshot.png"
+
+docs-deps: deps
+	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="pandoc chromium"

@@ -147,6 +147,12 @@ static void warn_if_long(const cli_options *opts, const char *label, const rende
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
                    const camera *cam, render_stats *stats_out)
 {
+    return program_render_sampled(opts, label, radiance, NULL, scene, cam, stats_out);
+}
+
+int program_render_sampled(const cli_options *opts, const char *label, radiance_fn radiance, render_sample_fn sample,
+                           const void *scene, const camera *cam, render_stats *stats_out)
+{
     render_job job = {.cam = cam,
                       .spp = opts->spp,
                       .seed = opts->seed,
@@ -156,7 +162,8 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
                       .radiance = radiance,
                       .scene = scene,
                       .jitter = opts->jitter,
-                      .stratify = opts->stratify};
+                      .stratify = opts->stratify,
+                      .sample = sample};
     if (opts->explain)
         return program_explain(opts, label, &job, stats_out);
     warn_if_long(opts, label, &job);

@@ -24,6 +24,11 @@
  * NULL) receives that pixel's counters and a time of 0. */
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
                    const camera *cam, render_stats *stats);
+/* The same, each sample by `sample` when it is not NULL (render.h's
+ * render_sample_fn: a sampler that knows which sample of the pixel it
+ * draws). */
+int program_render_sampled(const cli_options *opts, const char *label, radiance_fn radiance, render_sample_fn sample,
+                           const void *scene, const camera *cam, render_stats *stats);
 
 /* With --scene FILE: loads it into d (exits with status 1 and the parser's
  * "file:line:col: message" on error), applies its image statement to the

@@ -18,12 +18,18 @@ void estimate_image_free(estimate_image *e)
 estimate_image estimate_render(radiance_fn radiance, const void *scene, const camera *cam, int spp, uint64_t seed,
                                int threads)
 {
+    return estimate_render_sampled(radiance, NULL, scene, cam, spp, seed, threads);
+}
+
+estimate_image estimate_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                       const camera *cam, int spp, uint64_t seed, int threads)
+{
     estimate_image e;
     e.mean = image_make(cam->width, cam->height);
     e.standard_error = image_make(cam->width, cam->height);
     render_job job = {.cam = cam, .spp = spp, .seed = seed, .threads = threads, .quiet = true,
                       .radiance = radiance, .scene = scene, .standard_error = &e.standard_error,
-                      .jitter = true};
+                      .jitter = true, .sample = sample};
     render_stats stats;
     render_image(&job, &e.mean, &stats);
     e.spp = spp;
@@ -70,11 +76,18 @@ enum { PROGRESSIVE_TRUSTED_SPP = 16 };
 estimate_image progressive_render(radiance_fn radiance, const void *scene, const camera *cam, uint64_t seed,
                                   int threads, double seconds, double target_error, FILE *log)
 {
+    return progressive_render_sampled(radiance, NULL, scene, cam, seed, threads, seconds, target_error, log);
+}
+
+estimate_image progressive_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                          const camera *cam, uint64_t seed, int threads, double seconds,
+                                          double target_error, FILE *log)
+{
     double start = timer_seconds();
     /* Two samples at least: one sample per pixel has no variance to
      * estimate its error from (its standard error would read 0, and the
      * target would seem reached at once). */
-    estimate_image total = estimate_render(radiance, scene, cam, 2, seed, threads);
+    estimate_image total = estimate_render_sampled(radiance, sample, scene, cam, 2, seed, threads);
     for (int pass = 1;; pass++) {
         double elapsed = timer_seconds() - start, error = estimate_relative_error(&total);
         bool trusted = total.spp >= PROGRESSIVE_TRUSTED_SPP;
@@ -98,7 +111,8 @@ estimate_image progressive_render(radiance_fn radiance, const void *scene, const
             break;
         }
         estimate_image next =
-            estimate_render(radiance, scene, cam, (int)total.spp, seed + (uint64_t)pass * 0x9e3779b9ULL, threads);
+            estimate_render_sampled(radiance, sample, scene, cam, (int)total.spp, seed + (uint64_t)pass * 0x9e3779b9ULL,
+                                    threads);
         merge_estimates(&total, &next);
         estimate_image_free(&next);
     }

@@ -37,6 +37,10 @@ void estimate_image_free(estimate_image *e);
 /* Renders with `spp` samples per pixel; seed picks the random streams. */
 estimate_image estimate_render(radiance_fn radiance, const void *scene, const camera *cam, int spp, uint64_t seed,
                                int threads);
+/* The same, each sample by `sample` when it is not NULL (render.h's
+ * render_sample_fn, such as chapter 09's Sobol sampler). */
+estimate_image estimate_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                       const camera *cam, int spp, uint64_t seed, int threads);
 
 /* The error the image's own variance predicts: sqrt of the mean over pixels
  * and channels of standard_error^2 / (mean^2 + eps), a relative RMSE. */
@@ -49,5 +53,8 @@ double estimate_relative_error(const estimate_image *e);
  * pass). Prints one line per pass to `log` (if not NULL). */
 estimate_image progressive_render(radiance_fn radiance, const void *scene, const camera *cam, uint64_t seed,
                                   int threads, double seconds, double target_error, FILE *log);
+estimate_image progressive_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                          const camera *cam, uint64_t seed, int threads, double seconds,
+                                          double target_error, FILE *log);
 
 #endif

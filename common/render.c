@@ -11,6 +11,17 @@
 #include "stats.h"
 #include "timer.h"
 
+ray render_camera_ray(const render_job *job, int index, float px, float py, ray_counters *counters)
+{
+    ray r = camera_ray(job->cam, px, py);
+    counters->camera_rays++;
+    if (explain_on()) {
+        explain_line(0, "sample %d of %d, at (%.3f, %.3f) in the image", index + 1, job->spp, (double)px, (double)py);
+        explain_ray(1, "camera ray", r);
+    }
+    return r;
+}
+
 vec3 render_pixel(const render_job *job, int x, int y, ray_counters *counters, vec3 *std_error)
 {
     const camera *cam = job->cam;
@@ -20,22 +31,22 @@ vec3 render_pixel(const render_job *job, int x, int y, ray_counters *counters, v
     while ((strata + 1) * (strata + 1) <= job->spp)
         strata++;
     for (int s = 0; s < job->spp; s++) {
-        float px = (float)x + 0.5f, py = (float)y + 0.5f;
-        if (job->stratify && s < strata * strata) {
-            /* cell (s mod k, s div k), and a uniform point inside it */
-            px = (float)x + ((float)(s % strata) + pcg32_float(&rng)) / (float)strata;
-            py = (float)y + ((float)(s / strata) + pcg32_float(&rng)) / (float)strata;
-        } else if (job->spp > 1 || job->jitter || job->stratify) {
-            px = (float)x + pcg32_float(&rng);
-            py = (float)y + pcg32_float(&rng);
+        vec3 sample;
+        if (job->sample != NULL) { /* the sample's own function decides all (render.h) */
+            sample = job->sample(job, x, y, s, &rng, counters);
+        } else {
+            float px = (float)x + 0.5f, py = (float)y + 0.5f;
+            if (job->stratify && s < strata * strata) {
+                /* cell (s mod k, s div k), and a uniform point inside it */
+                px = (float)x + ((float)(s % strata) + pcg32_float(&rng)) / (float)strata;
+                py = (float)y + ((float)(s / strata) + pcg32_float(&rng)) / (float)strata;
+            } else if (job->spp > 1 || job->jitter || job->stratify) {
+                px = (float)x + pcg32_float(&rng);
+                py = (float)y + pcg32_float(&rng);
+            }
+            ray r = render_camera_ray(job, s, px, py, counters);
+            sample = job->radiance(job->scene, r, &rng, counters);
         }
-        ray r = camera_ray(cam, px, py);
-        counters->camera_rays++;
-        if (explain_on()) {
-            explain_line(0, "sample %d of %d, at (%.3f, %.3f) in the image", s + 1, job->spp, (double)px, (double)py);
-            explain_ray(1, "camera ray", r);
-        }
-        vec3 sample = job->radiance(job->scene, r, &rng, counters);
         if (explain_on()) {
             char c[64];
             explain_line(1, "sample radiance %s", explain_vec3(c, sample));

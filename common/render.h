@@ -34,7 +34,17 @@
 
 typedef vec3 (*radiance_fn)(const void *scene, ray r, pcg32 *rng, ray_counters *counters);
 
-typedef struct {
+/* One whole sample of pixel (x, y): where in the pixel, and the radiance
+ * that arrives there. For samplers whose numbers depend on which sample of
+ * the pixel is drawn (index 0 .. job->spp - 1), such as a low-discrepancy
+ * sequence (chapter 09's --sampler sobol); the render loop still sums,
+ * drops NaN and Inf and takes the standard error. rng is the pixel's
+ * stream, as radiance_fn's. */
+struct render_job;
+typedef vec3 (*render_sample_fn)(const struct render_job *job, int x, int y, int index, pcg32 *rng,
+                                 ray_counters *counters);
+
+typedef struct render_job {
     const camera *cam;   /* image size comes from cam->width, cam->height */
     int spp;
     uint64_t seed;
@@ -49,6 +59,9 @@ typedef struct {
      * k x k grid, k = floor(sqrt(spp)), one random position in each cell;
      * samples beyond k x k anywhere in the pixel. Implies jitter. */
     bool stratify;
+    /* Optional: each sample by this function instead (then jitter, stratify
+     * and radiance are its own business). */
+    render_sample_fn sample;
 } render_job;
 
 typedef struct {
@@ -58,6 +71,11 @@ typedef struct {
 
 /* Renders into out (already made at the camera's size). */
 void render_image(const render_job *job, image *out, render_stats *stats);
+
+/* The camera ray through (px, py), counted, and shown by --explain as
+ * sample `index` of the pixel: what render_pixel does before calling
+ * radiance, for a render_sample_fn to do the same. */
+ray render_camera_ray(const render_job *job, int index, float px, float py, ray_counters *counters);
 
 /* One pixel, exactly as render_image computes it (for tests and for
  * explaining a pixel). std_error may be NULL. */

@@ -21,6 +21,8 @@
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
+#include "09-path-tracing/sobol_sampler.h"
+#include "08-monte-carlo/estimators.h"
 #include "08-monte-carlo/sampling.h"
 #include "effects.h"
 #include "render.h"
@@ -39,7 +41,10 @@ typedef struct {
     render_stats stats;
 } render_result;
 
-static render_result render(const path_tracer *pt, int width, int height, int spp, uint64_t seed, int threads)
+/* A render whose samples are `sample`'s (render.h; NULL: the pixel's random
+ * stream). */
+static render_result render_sampled(const path_tracer *pt, render_sample_fn sample, int width, int height, int spp,
+                                    uint64_t seed, int threads)
 {
     camera cam = pt_scene_camera(pt->scene, width, height);
     render_result r;
@@ -47,9 +52,15 @@ static render_result render(const path_tracer *pt, int width, int height, int sp
     r.standard_error = image_make(width, height);
     render_job job = {.cam = &cam, .spp = spp, .seed = test_seed(seed), .threads = threads, .quiet = true,
                       .radiance = path_trace_radiance, .scene = pt, .standard_error = &r.standard_error,
-                      .jitter = true};
+                      .jitter = true, .sample = sample};
     render_image(&job, &r.mean, &r.stats);
     return r;
+}
+
+/* A render with pt's own sampler (--sampler). */
+static render_result render(const path_tracer *pt, int width, int height, int spp, uint64_t seed, int threads)
+{
+    return render_sampled(pt, path_tracer_sample_fn(pt), width, height, spp, seed, threads);
 }
 
 static void render_result_free(render_result *r)
@@ -423,13 +434,14 @@ static void test_russian_roulette_on_and_off_agree_in_mean(void **state)
  * The variance of a pixel's estimate over independent renders, averaged over
  * the pixels, for spp = 1, 2, 4, ... 64: the slope of log variance against
  * log spp must be -1 within 0.15. */
-static double mean_pixel_variance(const path_tracer *pt, int spp, int renders)
+static double mean_pixel_variance_sampled(const path_tracer *pt, render_sample_fn sample, int spp, int renders,
+                                          uint64_t seed)
 {
     enum { SIDE = 8 };
     welford pixel[SIDE * SIDE * 3];
     memset(pixel, 0, sizeof pixel);
     for (int s = 0; s < renders; s++) {
-        render_result r = render(pt, SIDE, SIDE, spp, 1000 * (uint64_t)spp + (uint64_t)s, 1);
+        render_result r = render_sampled(pt, sample, SIDE, SIDE, spp, seed + (uint64_t)s, 1);
         for (int i = 0; i < SIDE * SIDE * 3; i++)
             welford_add(&pixel[i], r.mean.rgb[i]);
         render_result_free(&r);
@@ -438,6 +450,11 @@ static double mean_pixel_variance(const path_tracer *pt, int spp, int renders)
     for (int i = 0; i < SIDE * SIDE * 3; i++)
         sum += welford_variance(&pixel[i]);
     return sum / (SIDE * SIDE * 3);
+}
+
+static double mean_pixel_variance(const path_tracer *pt, int spp, int renders)
+{
+    return mean_pixel_variance_sampled(pt, NULL, spp, renders, 1000 * (uint64_t)spp);
 }
 
 static void test_variance_falls_as_one_over_spp(void **state)
@@ -457,6 +474,269 @@ static void test_variance_falls_as_one_over_spp(void **state)
     pt_scene_free(&sc);
 }
 
+/* ---- better samples: --sampler sobol (sobol_sampler.h) ----------------------------- */
+
+/* Each pair of the sequence's dimensions is checked on its first 2^m points
+ * for m = 0 .. SOBOL_NET_LEVELS: the few hundred samples of a pixel. */
+enum { SOBOL_NET_LEVELS = 8, SOBOL_NET_POINTS = 1 << SOBOL_NET_LEVELS };
+
+/* Are the first 2^m points (x_i, y_i), 32-bit fractions, a (t, m, 2)-net:
+ * does every box of 2^-j by 2^-(m - t - j) hold exactly 2^t of them? */
+static bool is_net(const uint32_t *x, const uint32_t *y, int m, int t)
+{
+    if (t > m)
+        t = m; /* a (m, m, 2)-net is any 2^m points */
+    int cells = 1 << (m - t), count[SOBOL_NET_POINTS];
+    for (int j = 0; j <= m - t; j++) {
+        int k = m - t - j; /* 2^j columns, 2^k rows */
+        memset(count, 0, sizeof count);
+        for (int i = 0; i < 1 << m; i++) {
+            uint32_t column = j == 0 ? 0u : x[i] >> (32 - j), row = k == 0 ? 0u : y[i] >> (32 - k);
+            count[(column << k) | row]++;
+        }
+        for (int c = 0; c < cells; c++)
+            if (count[c] != 1 << t)
+                return false;
+    }
+    return true;
+}
+
+/* Is p (bit k the coefficient of x^k, degree s) primitive over GF(2): is
+ * the first power of x that is 1 modulo p the (2^s - 1)-th? */
+static bool is_primitive(uint32_t p, int s)
+{
+    uint32_t power = 1u, period = (1u << s) - 1u;
+    for (uint32_t e = 1; e <= period; e++) {
+        power <<= 1; /* times x, then reduced modulo p */
+        if (power & (1u << s))
+            power ^= p;
+        if (power == 1u)
+            return e == period;
+    }
+    return false;
+}
+
+/* Sobol's construction promises that dimensions i and j, of primitive
+ * polynomials of degrees s_i and s_j, are a (t, m, 2)-net at every 2^m with
+ * t = (s_i - 1) + (s_j - 1) (Niederreiter's t of the pair; dimension 0's
+ * "polynomial" x counts 0), if the polynomials are distinct and primitive.
+ * Checked for all 2016 pairs of the 64 dimensions, unscrambled and as the
+ * sampler hands them out (Owen's scrambling and the xor keep every net),
+ * and that dimensions 0 and 1 are chapter 08's. The twin: one dimension
+ * paired with itself, the diagonal, is no net. */
+static void test_sobol_sequence_is_a_net_in_every_pair_of_dimensions(void **state)
+{
+    (void)state;
+    static uint32_t points[SOBOL_DIMENSIONS][SOBOL_NET_POINTS], scrambled[SOBOL_DIMENSIONS][SOBOL_NET_POINTS];
+    int t[SOBOL_DIMENSIONS];
+    uint32_t polynomial[SOBOL_DIMENSIONS];
+    for (int d = 0; d < SOBOL_DIMENSIONS; d++) {
+        int degree;
+        polynomial[d] = sobol_polynomial(d, &degree);
+        t[d] = degree - 1;
+        if (d > 0)
+            assert_true(is_primitive(polynomial[d], degree));
+        for (int e = 0; e < d; e++)
+            assert_true(polynomial[e] != polynomial[d]);
+        for (uint32_t i = 0; i < SOBOL_NET_POINTS; i++)
+            points[d][i] = sobol_sequence_bits(i, d);
+    }
+    for (uint32_t i = 0; i < 4 * SOBOL_NET_POINTS; i++) {
+        assert_int_equal(sobol_sequence_bits(i, 0), sobol_bits(i, 0));
+        assert_int_equal(sobol_sequence_bits(i, 1), sobol_bits(i, 1));
+    }
+    pcg32 unused = pcg32_for_pixel(1, 0); /* only coordinates past SOBOL_DIMENSIONS draw from it */
+    for (uint32_t i = 0; i < SOBOL_NET_POINTS; i++) {
+        sobol_sampler sampler = sobol_sampler_start(test_seed(81), 7, i, &unused);
+        for (int d = 0; d < SOBOL_DIMENSIONS; d++) {
+            float u = sobol_sampler_next(&sampler);
+            scrambled[d][i] = (uint32_t)((double)u * 0x1.0p32); /* exact: 24 bits */
+        }
+    }
+    for (int m = 0; m <= SOBOL_NET_LEVELS; m++)
+        for (int i = 0; i < SOBOL_DIMENSIONS; i++)
+            for (int j = i + 1; j < SOBOL_DIMENSIONS; j++) {
+                if (!is_net(points[i], points[j], m, t[i] + t[j]) ||
+                    !is_net(scrambled[i], scrambled[j], m, t[i] + t[j]))
+                    fail_msg("dimensions %d and %d: not a (%d, %d, 2)-net", i, j, t[i] + t[j], m);
+            }
+    int twin = 5; /* degree 3: a pair of it would be a (4, 8, 2)-net */
+    assert_false(is_net(points[twin], points[twin], SOBOL_NET_LEVELS, 2 * t[twin]));
+}
+
+/* ---- the Sobol sampler converges to the same image --------------------------------
+ * A pixel's Sobol samples are not independent: their own spread is no
+ * measure of the error of their mean (usually far more). Independent
+ * scrambles (renders with other seeds) are independent estimates, so the
+ * image and its standard errors come from SOBOL_RENDERS of them, as chapter
+ * 11's comparisons take BDPT's (image_check.h wants errors from many). */
+enum { SOBOL_RENDERS = 64, SOBOL_RENDER_SPP = 16 };
+
+static render_result render_replicas(const path_tracer *pt, render_sample_fn sample, int side, uint64_t seed)
+{
+    int n = side * side * 3;
+    welford *pixel = calloc((size_t)n, sizeof *pixel);
+    assert_non_null(pixel);
+    render_result total = {.mean = image_make(side, side), .standard_error = image_make(side, side)};
+    for (int k = 0; k < SOBOL_RENDERS; k++) {
+        render_result r = render_sampled(pt, sample, side, side, SOBOL_RENDER_SPP, seed + (uint64_t)k, 2);
+        for (int i = 0; i < n; i++)
+            welford_add(&pixel[i], r.mean.rgb[i]);
+        render_result_free(&r);
+    }
+    for (int i = 0; i < n; i++) {
+        total.mean.rgb[i] = (float)welford_mean(&pixel[i]);
+        total.standard_error.rgb[i] = (float)welford_standard_error(&pixel[i]);
+    }
+    free(pixel);
+    return total;
+}
+
+/* The twin's sampler: the numbers of the first bounce used again at every
+ * bounce, as a sampler that restarted its dimensions at each vertex would:
+ * coordinates 2 .. 6 of the lecture's rung without roulette, three for the
+ * light and two for the direction. The bounces are then not independent
+ * (each leaves in the same direction of its own frame, so a path that
+ * finds light once finds it again), which biases the sum of their
+ * products. Paths of at most TWIN_MAX_DEPTH bounces keep the twin's
+ * variance finite: with roulette a path that survives one survives all,
+ * and the bias hides in rare huge paths. */
+enum { FIRST_BOUNCE_COORDINATE = 2, LECTURE_NUMBERS_PER_BOUNCE = 5, TWIN_MAX_DEPTH = 4 };
+
+static float reused_next(void *state)
+{
+    sobol_sampler *s = state;
+    if (s->dimension >= FIRST_BOUNCE_COORDINATE + LECTURE_NUMBERS_PER_BOUNCE)
+        s->dimension = FIRST_BOUNCE_COORDINATE;
+    return sobol_sampler_next(s);
+}
+
+static vec3 reused_dimensions_sample(const render_job *job, int x, int y, int index, pcg32 *rng,
+                                     ray_counters *counters)
+{
+    sobol_sampler sobol = sobol_sampler_start(job->seed, (uint64_t)y * (uint64_t)job->cam->width + (uint64_t)x,
+                                              (uint32_t)index, rng);
+    pt_random random = {.rng = rng, .next = reused_next, .state = &sobol};
+    float px = (float)x + pt_random_float(&random);
+    float py = (float)y + pt_random_float(&random);
+    return path_trace_radiance_from(job->scene, render_camera_ray(job, index, px, py, counters), &random, counters);
+}
+
+/* The lecture's rung and MIS with Sobol samples against MIS with random
+ * ones, on the Cornell box: the same image (image_check.h), 1024 samples a
+ * pixel on each side. */
+static void test_sobol_samples_converge_to_the_same_image(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    path_tracer reference = tracer(&sc, PT_MIS, RR_THROUGHPUT);
+    render_result ref = render(&reference, 8, 8, SOBOL_RENDERS * SOBOL_RENDER_SPP, 91, 2);
+    const pt_integrator rungs[2] = {PT_LECTURE, PT_MIS};
+    for (int k = 0; k < 2; k++) {
+        path_tracer pt = tracer(&sc, rungs[k], RR_FIXED);
+        pt.sampler = PT_SAMPLER_SOBOL;
+        render_result r = render_replicas(&pt, path_tracer_sample_fn(&pt), 8, 1000 * (uint64_t)(k + 1));
+        image_check c = check_agree(&r.mean, &r.standard_error, &ref.mean, &ref.standard_error);
+        print_message("%s, Sobol samples: p = %.3g (image mean z = %.2f, chi-square %.1f on %d)\n",
+                      pt_integrator_name(rungs[k]), c.p, c.z, c.chi2, c.dof);
+        assert_image_check(c, 3, pt_integrator_name(rungs[k]));
+        render_result_free(&r);
+    }
+    path_tracer truncated = tracer(&sc, PT_LECTURE, RR_OFF);
+    truncated.max_depth = TWIN_MAX_DEPTH;
+    render_result right = render(&truncated, 8, 8, SOBOL_RENDERS * SOBOL_RENDER_SPP, 92, 2);
+    render_result twin = render_replicas(&truncated, reused_dimensions_sample, 8, 3000);
+    image_check c = check_agree(&twin.mean, &twin.standard_error, &right.mean, &right.standard_error);
+    print_message("twin, the first bounce's numbers at every bounce: p = %.3g (image mean z = %.1f, "
+                  "chi-square %.0f on %d)\n", c.p, c.z, c.chi2, c.dof);
+    assert_true(c.p < image_check_alpha(3));
+    render_result_free(&right);
+    render_result_free(&twin);
+    render_result_free(&ref);
+    pt_scene_free(&sc);
+}
+
+/* ---- the Sobol sampler's error falls faster ---------------------------------------
+ * A diffuse floor under a square light, seen from between the two: every
+ * pixel sees the floor, every floor point the whole light, and nothing is
+ * in the way. With direct light only (max_depth 1) a sample draws five
+ * numbers (where in the pixel, which of the light's two triangles, where
+ * on it) and its radiance is a smooth function of them: no edge, no shadow.
+ * What theory says there:
+ *  - at N = 1 a scrambled Sobol point is a uniform random point: the
+ *    variance is the same for both samplers;
+ *  - random points: variance sigma^2 / N, slope -1 on a log-log plot
+ *    (within RANDOM_SLOPE_TOLERANCE, as in test_variance_falls_as_one_over_spp);
+ *  - Owen-scrambled nets: variance o(1/N) for any square-integrable
+ *    integrand, and O(N^-3 (log N)^(s-1)) for a smooth one (Owen 1997). The
+ *    uniform point on a triangle takes a square root of one number, whose
+ *    derivative is unbounded at 0, so this integrand is not smooth
+ *    everywhere and its rate lies between the two.
+ * The test asks for a slope of at most SOBOL_SLOPE_BOUND from N = 1 to 64,
+ * a rate random points cannot have; starting from the same variance, that
+ * puts the Sobol variance at 64 spp below (1/64)^0.5 = 1/8 of the random
+ * one's. (Measured over 40 seeds: slopes -1.80 to -1.84, ratios 0.034 to
+ * 0.040. The five coordinates are a (5, m, 5)-net at every 2^m, t the sum
+ * of their polynomials' degrees less one, so the ratio drops most between
+ * 16 and 32 samples.) The twin: every sample of a pixel given point 0 (the
+ * sample index ignored), one random point used N times: slope 0. */
+static const double SOBOL_SLOPE_BOUND = -1.5;
+/* tolerance on the random sampler's slope, as in test_variance_falls_as_one_over_spp */
+static const double RANDOM_SLOPE_TOLERANCE = 0.15;
+enum { SPP_LEVELS = 7, VARIANCE_RENDERS = 32 }; /* 1, 2, ... 64 spp; renders per level */
+
+static void build_floor_under_a_light(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int floor = pt_scene_add_material(sc, pt_diffuse(vec3_splat(0.5f)));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_splat(1.0f)));
+    pt_scene_add_quad(sc, vec3_make(-2, 0, 2), vec3_make(2, 0, 2), vec3_make(2, 0, -2), vec3_make(-2, 0, -2), floor);
+    /* facing down: counter-clockwise seen from below */
+    pt_scene_add_quad(sc, vec3_make(-0.5f, 1, -0.5f), vec3_make(0.5f, 1, -0.5f), vec3_make(0.5f, 1, 0.5f),
+                      vec3_make(-0.5f, 1, 0.5f), light);
+    sc->eye = vec3_make(0, 0.8f, 0.01f); /* under the light, looking down: the floor within 0.3 of the centre */
+    sc->target = vec3_make(0, 0, 0);
+    sc->vertical_fov_degrees = 40.0f;
+    pt_scene_finish(sc);
+}
+
+static vec3 same_point_sample(const render_job *job, int x, int y, int index, pcg32 *rng, ray_counters *counters)
+{
+    (void)index;
+    return path_trace_sobol_sample(job, x, y, 0, rng, counters);
+}
+
+static void test_sobol_error_falls_faster_on_a_smooth_integrand(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    build_floor_under_a_light(&sc);
+    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+    pt.max_depth = 1;
+    double spp[SPP_LEVELS], random_variance[SPP_LEVELS], sobol_variance[SPP_LEVELS], twin_variance[SPP_LEVELS];
+    for (int k = 0; k < SPP_LEVELS; k++) {
+        spp[k] = (double)(1 << k);
+        uint64_t seed = 5000 + 100 * (uint64_t)k;
+        random_variance[k] = mean_pixel_variance_sampled(&pt, NULL, 1 << k, VARIANCE_RENDERS, seed);
+        sobol_variance[k] = mean_pixel_variance_sampled(&pt, path_trace_sobol_sample, 1 << k, VARIANCE_RENDERS, seed);
+        twin_variance[k] = mean_pixel_variance_sampled(&pt, same_point_sample, 1 << k, VARIANCE_RENDERS, seed);
+        print_message("%3d spp: variance random %.3e, Sobol %.3e (ratio %.4f), twin %.3e\n", 1 << k,
+                      random_variance[k], sobol_variance[k], sobol_variance[k] / random_variance[k], twin_variance[k]);
+    }
+    double random_slope = stats_loglog_slope(spp, random_variance, SPP_LEVELS);
+    double sobol_slope = stats_loglog_slope(spp, sobol_variance, SPP_LEVELS);
+    double twin_slope = stats_loglog_slope(spp, twin_variance, SPP_LEVELS);
+    print_message("slopes: random %.3f, Sobol %.3f, twin %.3f\n", random_slope, sobol_slope, twin_slope);
+    assert_close(random_slope, -1.0, RANDOM_SLOPE_TOLERANCE);
+    assert_true(sobol_slope <= SOBOL_SLOPE_BOUND);
+    double bound = pow(spp[SPP_LEVELS - 1], SOBOL_SLOPE_BOUND + 1.0); /* 1/8 */
+    assert_true(sobol_variance[SPP_LEVELS - 1] <= bound * random_variance[SPP_LEVELS - 1]);
+    assert_false(twin_slope <= SOBOL_SLOPE_BOUND);
+    assert_false(twin_variance[SPP_LEVELS - 1] <= bound * random_variance[SPP_LEVELS - 1]);
+    pt_scene_free(&sc);
+}
+
 /* ---- determinism, counters, hard cases ----------------------------------------------- */
 
 static void test_same_image_for_one_and_two_threads(void **state)
@@ -465,11 +745,14 @@ static void test_same_image_for_one_and_two_threads(void **state)
     pt_scene sc;
     pt_scene_build_cornell_box_materials(&sc);
     for (int k = 0; k < 3; k++) {
-        path_tracer pt = tracer(&sc, all_rungs[k], RR_THROUGHPUT);
-        render_result a = render(&pt, 16, 16, 4, 71, 1), b = render(&pt, 16, 16, 4, 71, 2);
-        assert_memory_equal(a.mean.rgb, b.mean.rgb, 16 * 16 * 3 * sizeof(float));
-        render_result_free(&a);
-        render_result_free(&b);
+        for (int sampler = PT_SAMPLER_RANDOM; sampler <= PT_SAMPLER_SOBOL; sampler++) {
+            path_tracer pt = tracer(&sc, all_rungs[k], RR_THROUGHPUT);
+            pt.sampler = (pt_sampler)sampler;
+            render_result a = render(&pt, 16, 16, 4, 71, 1), b = render(&pt, 16, 16, 4, 71, 2);
+            assert_memory_equal(a.mean.rgb, b.mean.rgb, 16 * 16 * 3 * sizeof(float));
+            render_result_free(&a);
+            render_result_free(&b);
+        }
     }
     pt_scene_free(&sc);
 }
@@ -1317,6 +1600,9 @@ int main(void)
         cmocka_unit_test(test_lights_are_picked_by_power),
         cmocka_unit_test(test_russian_roulette_on_and_off_agree_in_mean),
         cmocka_unit_test(test_variance_falls_as_one_over_spp),
+        cmocka_unit_test(test_sobol_sequence_is_a_net_in_every_pair_of_dimensions),
+        cmocka_unit_test(test_sobol_samples_converge_to_the_same_image),
+        cmocka_unit_test(test_sobol_error_falls_faster_on_a_smooth_integrand),
         cmocka_unit_test(test_same_image_for_one_and_two_threads),
         cmocka_unit_test(test_no_glass_no_refraction_and_no_nan),
         cmocka_unit_test(test_one_sided_emitter),

@@ -26,13 +26,14 @@ double experiment_cpu_seconds(void)
 /* progressive.h's, for the path tracer. */
 estimate_image render_estimate(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int threads)
 {
-    return estimate_render(path_trace_radiance, pt, cam, spp, seed, threads);
+    return estimate_render_sampled(path_trace_radiance, path_tracer_sample_fn(pt), pt, cam, spp, seed, threads);
 }
 
 estimate_image render_progressive(const path_tracer *pt, const camera *cam, uint64_t seed, int threads,
                                   double seconds, double target_error, FILE *log)
 {
-    return progressive_render(path_trace_radiance, pt, cam, seed, threads, seconds, target_error, log);
+    return progressive_render_sampled(path_trace_radiance, path_tracer_sample_fn(pt), pt, cam, seed, threads, seconds,
+                                      target_error, log);
 }
 
 /* ---- the reference ------------------------------------------------------------ */
@@ -170,13 +171,18 @@ typedef struct {
     pt_integrator integrator;
     pt_russian_roulette rr;
     const char *label;
+    pt_sampler sampler; /* PT_SAMPLER_RANDOM unless given */
 } rung;
 
+/* The ladder, then better samples on its first and last rung (after them,
+ * so that the rows' numbers in the CSV stay what the plots expect). */
 static const rung rungs[] = {
-    {PT_LECTURE, RR_FIXED, "lecture (uniform hemisphere, P_RR 0.8)"},
-    {PT_COSINE, RR_FIXED, "cosine-weighted (P_RR 0.8)"},
-    {PT_MIS, RR_FIXED, "BSDF sampling + MIS (P_RR 0.8)"},
-    {PT_MIS, RR_THROUGHPUT, "BSDF sampling + MIS, RR on throughput"},
+    {PT_LECTURE, RR_FIXED, "lecture (uniform hemisphere, P_RR 0.8)", PT_SAMPLER_RANDOM},
+    {PT_COSINE, RR_FIXED, "cosine-weighted (P_RR 0.8)", PT_SAMPLER_RANDOM},
+    {PT_MIS, RR_FIXED, "BSDF sampling + MIS (P_RR 0.8)", PT_SAMPLER_RANDOM},
+    {PT_MIS, RR_THROUGHPUT, "BSDF sampling + MIS, RR on throughput", PT_SAMPLER_RANDOM},
+    {PT_LECTURE, RR_FIXED, "lecture, Sobol samples", PT_SAMPLER_SOBOL},
+    {PT_MIS, RR_THROUGHPUT, "MIS, RR on throughput, Sobol samples", PT_SAMPLER_SOBOL},
 };
 enum { RUNG_COUNT = sizeof rungs / sizeof rungs[0] };
 
@@ -218,7 +224,7 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
         experiment_csv_discard(csv, path);
         return false;
     }
-    fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample,cpu_seconds\n");
+    fprintf(csv, "rung,integrator,russian_roulette,spp,seconds,rmse,relmse,rays_per_sample,cpu_seconds,sampler\n");
     fprintf(time_csv, "rung,label,target_relmse,cpu_seconds,spp\n");
     printf("\n%-42s %6s %9s %9s %10s %10s\n", "rung", "spp", "seconds", "CPU s", "RMSE", "relMSE");
     double reached[RUNG_COUNT][TARGET_COUNT];
@@ -227,6 +233,7 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
         path_tracer pt = path_tracer_defaults(sc);
         pt.integrator = rungs[k].integrator;
         pt.russian_roulette = rungs[k].rr;
+        pt.sampler = rungs[k].sampler;
         double seconds[MAX_POINTS], relmses[MAX_POINTS];
         int spps[MAX_POINTS], n = 0;
         for (int spp = 1; spp <= max_spp && n < MAX_POINTS; spp *= 2, n++) {
@@ -236,8 +243,9 @@ bool experiment_convergence(const pt_scene *sc, const char *name, const camera *
             double rmse, relmse;
             experiment_error(&e.mean, reference, &rmse, &relmse);
             double rays = (double)counters_total_rays(&e.counters) / ((double)spp * cam->width * cam->height);
-            fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f,%.6f\n", k, pt_integrator_name(pt.integrator),
-                    pt_russian_roulette_name(pt.russian_roulette), spp, e.seconds, rmse, relmse, rays, cpu);
+            fprintf(csv, "%d,%s,%s,%d,%.6f,%.6e,%.6e,%.3f,%.6f,%s\n", k, pt_integrator_name(pt.integrator),
+                    pt_russian_roulette_name(pt.russian_roulette), spp, e.seconds, rmse, relmse, rays, cpu,
+                    PT_SAMPLER_NAMES[pt.sampler]);
             printf("%-42s %6d %9.3f %9.3f %10.4f %10.5f\n", rungs[k].label, spp, e.seconds, cpu, rmse, relmse);
             seconds[n] = cpu;
             relmses[n] = relmse;

@@ -15,7 +15,7 @@
 
 /* The chapter's own flags. */
 typedef struct {
-    cli_choice integrator, rr, builtin, accel;
+    cli_choice integrator, rr, builtin, accel, sampler;
     const char *obj, *data;
     float rr_probability, time_budget, target_error;
     int max_depth, rr_start, experiment_size, reference_spp, experiment_spp;
@@ -74,6 +74,7 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     pt->effects = f->data != NULL ? EFFECT_ALL : effects_decide(&e, EFFECT_ALL);
     pt->integrator = integrator;
     pt->russian_roulette = (pt_russian_roulette)f->rr.index;
+    pt->sampler = (pt_sampler)f->sampler.index;
     pt->rr_probability = f->rr_probability;
     pt->rr_start_depth = f->rr_start;
     pt->max_depth = f->max_depth >= 0 ? f->max_depth : from_file && desc.max_depth >= 0 ? desc.max_depth : 64;
@@ -156,14 +157,19 @@ static int render(const cli_options *opts, const path_tracer *pt)
 {
     camera cam = pt_scene_camera(pt->scene, opts->width, opts->height);
     render_stats stats;
-    int status = program_render(opts, PROGRAM, path_trace_radiance, pt, &cam, &stats);
+    int status =
+        program_render_sampled(opts, PROGRAM, path_trace_radiance, path_tracer_sample_fn(pt), pt, &cam, &stats);
     if (status == 0 && !opts->quiet && !opts->explain)
-        printf("%s: %.3f s per million camera samples (%d threads, %s Russian roulette)\n",
+        printf("%s: %.3f s per million camera samples (%d threads, %s Russian roulette, %s samples)\n",
                pt_integrator_name(pt->integrator),
                stats.seconds / ((double)opts->width * opts->height * opts->spp) * 1e6, opts->threads,
-               pt_russian_roulette_name(pt->russian_roulette));
+               pt_russian_roulette_name(pt->russian_roulette), PT_SAMPLER_NAMES[pt->sampler]);
     return status;
 }
+
+static const char *const SAMPLER_NOTES[] = {"independent numbers from each pixel's stream (default)",
+                                            "sample i of a pixel is point i of an Owen-scrambled Sobol sequence",
+                                            NULL};
 
 static const char *const ACCEL_NOTES[] = {"chapter 06's BVH, binned SAH (default)", "chapter 05's kd-tree",
                                           "chapter 04's uniform grid", "chapter 03: every triangle", NULL};
@@ -174,7 +180,8 @@ int main(int argc, char **argv)
     /* --integrator and --max-depth not given (-1): the scene file's, else lecture and 64 */
     chapter_flags f = {{PT_INTEGRATOR_NAMES, NULL, -1}, {PT_ROULETTE_NAMES, NULL, RR_FIXED},
                        {PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {PT_ACCEL_NAMES, ACCEL_NOTES, 0},
-                       NULL, NULL, 0.8f, 0.0f, 0.0f, -1, 3, 96, 4096, 256, CAMERA_NOT_OVERRIDDEN};
+                       {PT_SAMPLER_NAMES, SAMPLER_NOTES, PT_SAMPLER_RANDOM}, NULL, NULL, 0.8f, 0.0f, 0.0f, -1, 3, 96, 4096,
+                       256, CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--integrator", CLI_CHOICE, &f.integrator, NULL, "the rung of the ladder (default lecture)", 0, 0},
         {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed P_RR (default), pbrt's on the throughput, "
@@ -182,6 +189,7 @@ int main(int argc, char **argv)
         {"--rr-probability", CLI_FLOAT, &f.rr_probability, "P", "P_RR for --rr fixed (default 0.8)", 0.01, 1.0},
         {"--rr-start", CLI_INT, &f.rr_start, "N", "--rr throughput or albedo: the first bounce the roulette may "
                                                   "end (default 3; pbrt-v3's is 5, smallpt's 6)", 0, 1000},
+        {"--sampler", CLI_CHOICE, &f.sampler, NULL, "where a path's numbers come from (default random)", 0, 0},
         {"--max-depth", CLI_INT, &f.max_depth, "N", "bounces counted at most (default 64)", 0, 1000},
         {"--builtin", CLI_CHOICE, &f.builtin, NULL, "the built-in scene (default cornell)", 0, 0},
         {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file with its MTL materials instead", 0, 0},
@@ -201,10 +209,11 @@ int main(int argc, char **argv)
     cli_spec spec = {PROGRAM,
                      "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"
                      "bounce, direct light by sampling the light's area, Russian roulette. Renders the Cornell\n"
-                     "box; --integrator climbs the ladder (lecture -> cosine -> mis); --accel picks the structure\n"
-                     "of chapters 03-06. --time-budget or --target-error render progressively; --data DIR\n"
-                     "measures error against time. The built-in Cornell box is chapters/09-path-tracing/scenes/\n"
-                     "cornell.scene. The same path tracer made fast: chapter 13 (13-production).",
+                     "box; --integrator climbs the ladder (lecture -> cosine -> mis), --sampler sobol draws\n"
+                     "better samples; --accel picks the structure of chapters 03-06. --time-budget or\n"
+                     "--target-error render progressively; --data DIR measures error against time. The built-in\n"
+                     "Cornell box is chapters/09-path-tracing/scenes/cornell.scene. The same path tracer made\n"
+                     "fast: chapter 13 (13-production).",
                      extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.jitter = true; /* Monte Carlo over the pixel area, even at 1 spp */

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "09-path-tracing/bsdf.h"
+#include "09-path-tracing/sobol_sampler.h"
 #include "explain.h"
 
 path_tracer path_tracer_defaults(const pt_scene *scene)
@@ -24,6 +25,7 @@ path_tracer path_tracer_defaults(const pt_scene *scene)
     pt.rr_start_depth = 3;
     pt.max_depth = 64;
     pt.effects = EFFECT_ALL;
+    pt.sampler = PT_SAMPLER_RANDOM;
     return pt;
 }
 
@@ -32,6 +34,7 @@ static const char *const *const integrator_names = PT_INTEGRATOR_NAMES;
 /* in the order of pt_russian_roulette */
 const char *const PT_ROULETTE_NAMES[] = {"off", "fixed", "throughput", "albedo", NULL};
 static const char *const *const roulette_names = PT_ROULETTE_NAMES;
+const char *const PT_SAMPLER_NAMES[] = {"random", "sobol", NULL};
 
 const char *pt_russian_roulette_name(pt_russian_roulette r) { return roulette_names[r]; }
 
@@ -505,4 +508,22 @@ vec3 path_trace_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *count
 {
     pt_random random = {.rng = rng, .next = NULL, .state = NULL};
     return path_trace_radiance_from(ctx, r, &random, counters);
+}
+
+vec3 path_trace_sobol_sample(const render_job *job, int x, int y, int index, pcg32 *rng, ray_counters *counters)
+{
+    uint64_t pixel = (uint64_t)y * (uint64_t)job->cam->width + (uint64_t)x;
+    sobol_sampler sobol = sobol_sampler_start(job->seed, pixel, (uint32_t)index, rng);
+    pt_random random = {.rng = rng, .next = sobol_sampler_next, .state = &sobol};
+    /* coordinates 0 and 1: where in the pixel (each its own declaration:
+     * C leaves the order of an initializer list's side effects open) */
+    float px = (float)x + pt_random_float(&random);
+    float py = (float)y + pt_random_float(&random);
+    ray r = render_camera_ray(job, index, px, py, counters);
+    return path_trace_radiance_from(job->scene, r, &random, counters);
+}
+
+render_sample_fn path_tracer_sample_fn(const path_tracer *pt)
+{
+    return pt->sampler == PT_SAMPLER_SOBOL ? path_trace_sobol_sample : NULL;
 }

@@ -10,17 +10,21 @@
  *               heuristic): glossy surfaces and small lights both work
  * and, separately, Russian roulette: with a fixed probability (the
  * lecture), on the surface's albedo (smallpt) or on the path's throughput
- * (pbrt).
+ * (pbrt); and where the numbers come from (--sampler): independent random
+ * numbers (the lecture), or a pixel's samples as the points of an
+ * Owen-scrambled Sobol sequence (sobol_sampler.h).
  *
  * Usage:
  *   path_tracer pt = path_tracer_defaults(&scene);
  *   pt.integrator = PT_MIS;
- *   render_job job = {..., .radiance = path_trace_radiance, .scene = &pt};
+ *   render_job job = {..., .radiance = path_trace_radiance, .scene = &pt,
+ *                     .sample = path_tracer_sample_fn(&pt)};
  */
 #ifndef PATH_TRACER_H
 #define PATH_TRACER_H
 
 #include "09-path-tracing/scene_pt.h"
+#include "render.h"
 #include "rng.h"
 #include "scene_file.h"
 
@@ -36,6 +40,11 @@ typedef enum {
  * PathIntegrator from `bounces > 3` of its 0-based count (bounce 5), smallpt
  * from `++depth > 5` (bounce 6). The speed table and its tests use them. */
 enum { RR_START_PBRT = 5, RR_START_SMALLPT = 6 };
+
+typedef enum {
+    PT_SAMPLER_RANDOM, /* the pixel's pcg32 stream: independent numbers (the lecture) */
+    PT_SAMPLER_SOBOL,  /* sample i of a pixel: point i of an Owen-scrambled Sobol sequence */
+} pt_sampler;
 
 typedef struct {
     const pt_scene *scene;
@@ -56,6 +65,9 @@ typedef struct {
      * glossy) vertex; without EFFECT_REFLECTION or EFFECT_REFRACTION a
      * mirror's or glass's sample in that lobe ends the path. */
     unsigned effects;
+    /* Where the numbers come from; a render honours it through
+     * path_tracer_sample_fn. */
+    pt_sampler sampler;
 } path_tracer;
 
 path_tracer path_tracer_defaults(const pt_scene *scene);
@@ -118,9 +130,22 @@ static inline float pt_random_float(pt_random *random)
  * same order path_trace_radiance draws them from its stream. */
 vec3 path_trace_radiance_from(const path_tracer *pt, ray r, pt_random *random, ray_counters *counters);
 
-/* The names, in the enums' order, NULL-terminated (for --integrator, --rr). */
+/* render.h's render_sample_fn for --sampler sobol (job->scene points to a
+ * path_tracer): the position in pixel (x, y) and then the path, all from
+ * point `index` of the pixel's scrambled Sobol sequence, in the order
+ * path_trace_radiance draws them. */
+vec3 path_trace_sobol_sample(const render_job *job, int x, int y, int index, pcg32 *rng, ray_counters *counters);
+
+/* What a render_job of pt sets as .sample: NULL for PT_SAMPLER_RANDOM (the
+ * render loop's jittered position, then path_trace_radiance), else
+ * path_trace_sobol_sample. */
+render_sample_fn path_tracer_sample_fn(const path_tracer *pt);
+
+/* The names, in the enums' order, NULL-terminated (for --integrator, --rr,
+ * --sampler). */
 extern const char *const PT_INTEGRATOR_NAMES[];
 extern const char *const PT_ROULETTE_NAMES[];
+extern const char *const PT_SAMPLER_NAMES[];
 const char *pt_integrator_name(pt_integrator i);
 bool pt_integrator_parse(const char *name, pt_integrator *out);
 /* "off", "fixed", "throughput", "albedo": --rr's words */

@@ -249,7 +249,7 @@ static void test_mesh_paths_are_relative_to_the_scene_file(void **state)
     assert_int_equal(m.material_count, 1);
     assert_close(m.materials[0].diffuse.x, 0.8, 1e-6);
     assert_false(scene_desc_load_mesh(&d, 1, &m, err, sizeof err));
-    char expected[600];
+    char expected[1400]; /* two paths of up to 512 and the message */
     snprintf(expected, sizeof expected, "%s:2:1: mesh: ", path);
     assert_memory_equal(err, expected, strlen(expected));
     assert_int_equal(m.face_count, 2); /* unchanged */

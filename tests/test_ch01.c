@@ -175,12 +175,12 @@ static void test_triangle_back_face_and_outside(void **state)
 
 /* ---- watertightness: rays through shared edges and vertices --------------- */
 
-typedef bool (*triangle_test)(const triangle *, const ray *, float *, float *, float *);
+typedef bool (*triangle_test_fn)(const triangle *, const ray *, float *, float *, float *);
 
 /* Shoots `count` rays from outside a closed icosphere at its vertices and at
  * points on its edges, and counts the rays that none of the triangles around
  * that vertex or edge reports as hit: leaks through a closed surface. */
-static long count_leaks(triangle_test test, int count)
+static long count_leaks(triangle_test_fn test, int count)
 {
     mesh m;
     mesh_init(&m);

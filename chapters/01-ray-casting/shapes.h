@@ -86,14 +86,160 @@ static inline bool triangle_intersect_edges(vec3 p0, vec3 e1, vec3 e2, const ray
     return true;
 }
 
-/* The same test returning only t and the barycentrics (b1, b2): what an
- * acceleration structure calls in its inner loop, filling the hit record
- * once, for the closest hit only, with triangle_fill_hit(). */
+/* The same test returning only t and the barycentrics (b1, b2), the way an
+ * acceleration structure's inner loop wants it (filling the hit record once,
+ * for the closest hit only, with triangle_fill_hit()). Kept as the lecture's
+ * derivation and as the counterexample: rays through the shared edges of a
+ * closed mesh leak through it (docs/hard-cases.md). Nothing renders with it;
+ * every accelerator can be switched to it to measure that
+ * (accel_use_triangle_test, chapter 03). */
 bool triangle_intersect_barycentric(const triangle *tri, const ray *r, float *t, float *b1, float *b2);
-/* The watertight test of Woop, Benthin and Wald (2013): a ray through an edge
- * or vertex shared by triangles of a closed mesh hits at least one of them,
- * which Moller-Trumbore does not promise. Same outputs as above. */
+
+/* ---- Ray-triangle, watertight: what every renderer uses ----------------------
+ * The test of Woop, Benthin and Wald (2013), as pbrt-v4 writes it: a ray
+ * through an edge or a vertex shared by triangles of a closed mesh hits at
+ * least one of them, which Moller-Trumbore does not promise (shapes.c says
+ * why). Same outputs as triangle_intersect_barycentric(): t in
+ * (r->t_min, r->t_max), b1 and b2 the weights of p1 and p2. */
 bool triangle_intersect_watertight(const triangle *tri, const ray *r, float *t, float *b1, float *b2);
+/* Both tests by name, for whoever offers a choice (accelerators, benchmarks). */
+typedef enum {
+    TRIANGLE_TEST_WATERTIGHT,      /* the default: zero in every accelerator's struct */
+    TRIANGLE_TEST_MOLLER_TRUMBORE, /* the lecture's, kept to measure against */
+} triangle_test;
+static inline const char *triangle_test_name(triangle_test test)
+{
+    return test == TRIANGLE_TEST_WATERTIGHT ? "watertight" : "Moller-Trumbore";
+}
+
+/* The watertight test in two parts, so that an accelerator pays for the
+ * ray's part once per ray instead of once per triangle. The ray's part: its
+ * axes renamed so that z is the one along which |d| is largest (kz; kx and
+ * ky follow it cyclically), and the shear that takes d to (0, 0, 1):
+ *   x' = x - (d_kx / d_kz) z,  y' = y - (d_ky / d_kz) z,  z' = z / d_kz.
+ * The SIMD kernels of chapter 13 (bvh4, flat) hold the same numbers in
+ * registers and do the triangle's part lane by lane with exactly the
+ * operations of watertight_intersect() below, so every lane's answer is
+ * this function's, bit for bit. */
+typedef struct {
+    int kx, ky, kz;
+    float shear_x, shear_y, shear_z; /* d_kx / d_kz, d_ky / d_kz, 1 / d_kz */
+    vec3 origin;
+    float t_min;
+} watertight_ray;
+
+/* A triangle's nine coordinates are nine floats in a row (p0.x .. p2.z), so
+ * the kernels can read coordinate kx of a corner by index. */
+_Static_assert(sizeof(vec3) == 3 * sizeof(float), "a vec3 is three floats in a row");
+_Static_assert(sizeof(triangle) == 9 * sizeof(float), "a triangle is its nine coordinates");
+
+static inline watertight_ray watertight_ray_make(const ray *r)
+{
+    vec3 abs_d = vec3_abs(r->direction);
+    int kz = abs_d.x > abs_d.y ? (abs_d.x > abs_d.z ? 0 : 2) : (abs_d.y > abs_d.z ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
+    const float *d = &r->direction.x;
+    float dz = d[kz];
+    return (watertight_ray){kx, ky, kz, d[kx] / dz, d[ky] / dz, 1.0f / dz, r->origin, r->t_min};
+}
+
+/* The edge functions of a lane recomputed in double, where the products of
+ * floats are exact (watertight_intersect() calls it when one is exactly 0). */
+void watertight_edges_in_double(float ax, float ay, float bx, float by, float cx, float cy, float *u, float *v,
+                                float *w);
+
+/* The triangle's part: corners p0, p1, p2 given as pointers to their three
+ * coordinates. A hit in (t_min, t_max) gives t, b1 (p1's weight) and b2
+ * (p2's). Degenerate triangles (triangle_is_degenerate()) are not refused
+ * here: a structure leaves them out at build time (they cannot be hit), or
+ * calls watertight_intersect_triangle(), which asks after a hit.
+ *
+ *  1. Translate the corners by -o and shear them: the ray is now the +z axis
+ *     from (0, 0), and only the corners' x and y decide whether it hits.
+ *  2. The three edge functions of the projected corners, twice the signed
+ *     areas of the triangles the origin makes with each edge:
+ *       u = c_x b_y - c_y b_x (edge p1 p2), v = a_x c_y - a_y c_x (p2 p0),
+ *       w = b_x a_y - b_y a_x (p0 p1).
+ *     An edge shared by two triangles of a closed mesh, consistently
+ *     oriented, is p -> q in one and q -> p in the other: its edge function
+ *     is q_x p_y - q_y p_x in one and p_x q_y - p_y q_x in the other, the
+ *     same two products subtracted the other way round, so the same float
+ *     negated. The ray cannot be "just outside" both triangles: at least one
+ *     sees it inside or on its edge. (Only if a*b - c*d is rounded the same
+ *     way everywhere: no fused multiply-add, -ffp-contract=off.)
+ *  3. An edge function of exactly 0 may be the rounding of a tiny value of
+ *     either sign: recompute in double (exact there), rare.
+ *  4. Inside iff u, v, w are all >= 0 or all <= 0 (either winding).
+ *     pbrt swaps kx and ky when d_kz < 0 to keep the winding; that negates
+ *     u, v, w, their sum and the scaled t exactly, and changes no t, b1, b2
+ *     or decision, so we do not.
+ *  5. det = u + v + w (0: the ray lies in the triangle's plane: no hit);
+ *     t = (u z_a + v z_b + w z_c) / det with the corners' sheared z. */
+static inline bool watertight_intersect(const watertight_ray *wr, const float *p0, const float *p1, const float *p2,
+                                        float t_max, float *t_out, float *b1_out, float *b2_out)
+{
+    const float *o = &wr->origin.x;
+    const int kx = wr->kx, ky = wr->ky, kz = wr->kz;
+    float a_z = p0[kz] - o[kz], b_z = p1[kz] - o[kz], c_z = p2[kz] - o[kz];
+    float ax = (p0[kx] - o[kx]) - wr->shear_x * a_z, ay = (p0[ky] - o[ky]) - wr->shear_y * a_z;
+    float bx = (p1[kx] - o[kx]) - wr->shear_x * b_z, by = (p1[ky] - o[ky]) - wr->shear_y * b_z;
+    float cx = (p2[kx] - o[kx]) - wr->shear_x * c_z, cy = (p2[ky] - o[ky]) - wr->shear_y * c_z;
+    float u = cx * by - cy * bx;
+    float v = ax * cy - ay * cx;
+    float w = bx * ay - by * ax;
+    if (u == 0.0f || v == 0.0f || w == 0.0f)
+        watertight_edges_in_double(ax, ay, bx, by, cx, cy, &u, &v, &w);
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
+        return false;
+    float determinant = u + v + w;
+    if (determinant == 0.0f)
+        return false;
+    float scaled_t = u * (wr->shear_z * a_z) + v * (wr->shear_z * b_z) + w * (wr->shear_z * c_z);
+    float inverse = 1.0f / determinant;
+    float t = scaled_t * inverse;
+    if (!(t > wr->t_min && t < t_max))
+        return false;
+    *t_out = t;
+    *b1_out = v * inverse;
+    *b2_out = w * inverse;
+    return true;
+}
+
+/* Is the triangle's area exactly zero (its corners on one line, or equal)?
+ * Such a triangle has no plane and no normal; no ray may hit it (shapes.c). */
+bool triangle_is_degenerate(const triangle *tri);
+
+/* watertight_intersect() on a triangle that may be degenerate (a set's,
+ * chapter 03): the area is asked only after a hit, which is rare beside the
+ * tests that miss. */
+static inline bool watertight_intersect_triangle(const watertight_ray *wr, const triangle *tri, float t_max,
+                                                 float *t_out, float *b1_out, float *b2_out)
+{
+    float t, b1, b2;
+    if (!watertight_intersect(wr, &tri->p0.x, &tri->p1.x, &tri->p2.x, t_max, &t, &b1, &b2) ||
+        triangle_is_degenerate(tri))
+        return false;
+    *t_out = t;
+    *b1_out = b1;
+    *b2_out = b2;
+    return true;
+}
+
+/* Either test by name on a set's triangle, the ray prepared for both: what
+ * the structures of chapters 03-06 call in their inner loops. Inline, and
+ * called with `test` a constant, so each loop is compiled for one test. */
+static inline bool triangle_intersect_with(triangle_test test, const watertight_ray *wr, const triangle *tri,
+                                           const ray *r, float t_max, float *t, float *b1, float *b2)
+{
+    if (test == TRIANGLE_TEST_WATERTIGHT)
+        return watertight_intersect_triangle(wr, tri, t_max, t, b1, b2);
+    return triangle_intersect_edges(tri->p0, vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0), r, t_max, t, b1,
+                                    b2);
+}
+
+/* The watertight test filling a hit record: what chapter 01's scenes render
+ * with (triangle_intersect() above is the lecture's, beside it). */
+bool triangle_intersect_watertight_hit(const triangle *tri, ray r, hit_record *hit);
 void triangle_fill_hit(const triangle *tri, ray r, float t, float b1, float b2, hit_record *hit);
 
 /* Fill the parts of a hit record every shape fills the same way: orient the

@@ -613,9 +613,9 @@ static void bvh4_destroy(accel *a)
     free(b);
 }
 
-static const accel_ops bvh4_ops_scalar = {closest_hit_scalar, any_hit_scalar, bvh4_destroy};
+static const accel_ops bvh4_ops_scalar = {closest_hit_scalar, any_hit_scalar, bvh4_destroy, NULL};
 #if BVH4_HAVE_SSE
-static const accel_ops bvh4_ops_sse = {closest_hit_sse, any_hit_sse, bvh4_destroy};
+static const accel_ops bvh4_ops_sse = {closest_hit_sse, any_hit_sse, bvh4_destroy, NULL};
 #endif
 
 const accel_ops *bvh4_default_ops(void)

@@ -373,11 +373,11 @@ static void flat_destroy(accel *a)
     free(f);
 }
 
-static const accel_ops flat_ops_scalar = {closest_hit_scalar, any_hit_scalar, flat_destroy};
+static const accel_ops flat_ops_scalar = {closest_hit_scalar, any_hit_scalar, flat_destroy, NULL};
 #if FLAT_HAVE_X86
-static const accel_ops flat_ops_sse = {closest_hit_sse, any_hit_sse, flat_destroy};
-static const accel_ops flat_ops_avx = {closest_hit_avx, any_hit_avx, flat_destroy};
-static const accel_ops flat_ops_avx512 = {closest_hit_avx512, any_hit_avx512, flat_destroy};
+static const accel_ops flat_ops_sse = {closest_hit_sse, any_hit_sse, flat_destroy, NULL};
+static const accel_ops flat_ops_avx = {closest_hit_avx, any_hit_avx, flat_destroy, NULL};
+static const accel_ops flat_ops_avx512 = {closest_hit_avx512, any_hit_avx512, flat_destroy, NULL};
 
 static bool has_avx512(void) { return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl"); }
 #endif

@@ -388,7 +388,7 @@ static void walls_destroy(accel *a)
     free(w);
 }
 
-static const accel_ops walls_ops = {walls_closest_hit, walls_any_hit, walls_destroy};
+static const accel_ops walls_ops = {walls_closest_hit, walls_any_hit, walls_destroy, NULL};
 
 bool walls_is(const accel *a) { return a != NULL && a->ops == &walls_ops; }
 

@@ -169,15 +169,27 @@ static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth,
             assert_true(lane < 4 * b->packet_count);
             const bvh4_packet *p = &b->packets[first + i / 4];
             int t = bvh4_lane_triangle(p->index[i % 4]);
-            if (i >= count) {
+            bool moller_trumbore = b->base.triangle_test == TRIANGLE_TEST_MOLLER_TRUMBORE;
+            if (i >= count) { /* empty: zeros for Moller-Trumbore, NaN for the watertight test */
                 assert_int_equal(t, -1);
-                assert_true(p->e1[0][i % 4] == 0.0f && p->e2[2][i % 4] == 0.0f);
+                if (moller_trumbore)
+                    assert_true(p->e1[0][i % 4] == 0.0f && p->e2[2][i % 4] == 0.0f);
+                else
+                    assert_true(isnan(p->p0[0][i % 4]) && isnan(p->p1[1][i % 4]) && isnan(p->p2[2][i % 4]));
                 continue;
             }
             assert_true(t >= 0 && t < b->triangle_count);
             seen[t]++;
             assert_true(box_contains(box, b->base.set->boxes[t]));
             const triangle *tri = &b->base.set->triangles[t];
+            if (!moller_trumbore) { /* the corners, or NaN for a degenerate triangle */
+                bool degenerate = triangle_is_degenerate(tri);
+                assert_true(degenerate ? isnan(p->p0[0][i % 4]) && isnan(p->p2[2][i % 4])
+                                       : p->p0[0][i % 4] == tri->p0.x && p->p1[1][i % 4] == tri->p1.y &&
+                                             p->p2[2][i % 4] == tri->p2.z);
+                assert_true((p->index[i % 4] & BVH4_LANE_EXACT) != 0);
+                continue;
+            }
             assert_true(p->p0[0][i % 4] == tri->p0.x && p->e1[1][i % 4] == tri->p1.y - tri->p0.y &&
                         p->e2[2][i % 4] == tri->p2.z - tri->p0.z);
             if (p->index[i % 4] & BVH4_LANE_EXACT) { /* P0 + E1 and P0 + E2 are P1 and P2, bit for bit */
@@ -235,6 +247,11 @@ static void test_bvh4_every_triangle_in_exactly_one_lane_and_boxes_nest(void **s
         for (int split = 0; split < 2; split++) {
             accel *a = bvh4_build(&set, split ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN);
             check_bvh4_structure(a);
+            /* the lanes rewritten for Moller-Trumbore, and back */
+            assert_true(accel_use_triangle_test(a, TRIANGLE_TEST_MOLLER_TRUMBORE));
+            check_bvh4_structure(a);
+            assert_true(accel_use_triangle_test(a, TRIANGLE_TEST_WATERTIGHT));
+            check_bvh4_structure(a);
             accel_destroy(a);
         }
         triangle_set_free(&set);
@@ -288,18 +305,29 @@ static accel *bvh4_of_mesh_kind(accel_check_mesh kind, mesh *m, triangle_set *se
     return bvh4_build(set, BVH_SPLIT_SAH);
 }
 
+static void check_bvh4_hit_records(triangle_test test);
+
 /* The hit record of a lane marked BVH4_LANE_EXACT is made from the packet's
- * P0, E1, E2 instead of the set's triangle: it must be the very record the
- * set's triangle gives (point, normals, material, bit for bit), on every
- * mesh, and both kinds of lane must occur, so that both paths are checked. */
+ * corners (watertight test) or P0, E1, E2 (Moller-Trumbore) instead of the
+ * set's triangle: it must be the very record the set's triangle gives
+ * (point, normals, material, bit for bit), on every mesh. With
+ * Moller-Trumbore both kinds of lane must occur, so that both paths are
+ * checked; the watertight test's lanes are all exact. */
 static void test_bvh4_hit_records_equal_the_sets(void **state)
 {
     (void)state;
+    for (int test = 0; test < 2; test++)
+        check_bvh4_hit_records((triangle_test)test);
+}
+
+static void check_bvh4_hit_records(triangle_test test)
+{
     long exact_hits = 0, other_hits = 0;
     for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
         mesh m;
         triangle_set set;
         accel *a = bvh4_of_mesh_kind((accel_check_mesh)kind, &m, &set);
+        assert_true(accel_use_triangle_test(a, test));
         const bvh4 *b = (const bvh4 *)a;
         bool *exact = calloc((size_t)set.count + 1, sizeof *exact);
         for (int lane = 0; lane < 4 * b->packet_count; lane++) {
@@ -330,12 +358,16 @@ static void test_bvh4_hit_records_equal_the_sets(void **state)
         triangle_set_free(&set);
         mesh_free(&m);
     }
-    print_message("bvh4 hit records: %ld from exact lanes, %ld from the set's triangles\n", exact_hits, other_hits);
-    assert_true(exact_hits > 0 && other_hits > 0);
+    print_message("bvh4 hit records, %s: %ld from exact lanes, %ld from the set's triangles\n",
+                  triangle_test_name(test), exact_hits, other_hits);
+    if (test == TRIANGLE_TEST_MOLLER_TRUMBORE)
+        assert_true(exact_hits > 0 && other_hits > 0);
+    else
+        assert_true(exact_hits > 0 && other_hits == 0);
 }
 
 /* The SSE and the scalar kernel: the same hits, the same floats, the same
- * counters, ray by ray, on the tori field. */
+ * counters, ray by ray, on the tori field, with either triangle test. */
 static void test_bvh4_kernels_give_identical_answers(void **state)
 {
     (void)state;
@@ -349,6 +381,8 @@ static void test_bvh4_kernels_give_identical_answers(void **state)
     pcg32 rng = pcg32_for_pixel(6, 44);
     int hits = 0;
     for (int i = 0; i < 20000; i++) {
+        /* the watertight test on three rays in four, Moller-Trumbore on the fourth */
+        assert_true(accel_use_triangle_test(a, i % 4 == 3 ? TRIANGLE_TEST_MOLLER_TRUMBORE : TRIANGLE_TEST_WATERTIGHT));
         ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
         hit_record sse_hit, scalar_hit;
         ray_counters sse = {0}, scalar = {0};
@@ -448,37 +482,35 @@ static void test_bvh4_slab_test_matches_chapter_03(void **state)
     assert_true(hits > 10000 && nan_cases > 3000);
 }
 
-/* The 4-lane Moller-Trumbore, both kernels, against chapter 01's
- * triangle_intersect_barycentric(): the same hit or miss, and the same t,
- * b1, b2 bit for bit, on rays aimed at vertices and edges (the near-ties)
- * and with degenerate lanes (zero area, and the empty lane). */
+/* The 4-lane tests, both kernels, against chapter 01's: the watertight
+ * test against triangle_intersect_watertight(), Moller-Trumbore against
+ * triangle_intersect_barycentric(). The same hit or miss, and the same t,
+ * b1, b2 bit for bit, on rays aimed at vertices and edges (the near-ties,
+ * and the watertight test's double-precision path) and with degenerate
+ * lanes (zero area, and the empty lane). */
 static void test_bvh4_triangle_test_matches_chapter_01(void **state)
 {
     (void)state;
     pcg32 rng = pcg32_for_pixel(607, 4);
     int hits = 0;
     for (int i = 0; i < 50000; i++) {
+        triangle_test test = i % 2 ? TRIANGLE_TEST_MOLLER_TRUMBORE : TRIANGLE_TEST_WATERTIGHT;
         triangle tris[4];
         bvh4_packet packet;
         memset(&packet, 0, sizeof packet);
+        bool empty_lane = i % 8 < 2; /* lane 3 left as an empty lane */
         for (int k = 0; k < 4; k++) {
             vec3 p[3];
             for (int j = 0; j < 3; j++)
                 p[j] = vec3_make(pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1);
-            if (k == 3 && i % 4 == 0)
+            if (k == 3 && i % 8 == 4)
                 p[2] = p[1]; /* zero area */
             tris[k] = (triangle){p[0], p[1], p[2]};
-            vec3 e1 = vec3_sub(p[1], p[0]), e2 = vec3_sub(p[2], p[0]);
-            for (int axis = 0; axis < 3; axis++) {
-                packet.p0[axis][k] = vec3_axis(p[0], axis);
-                packet.e1[axis][k] = vec3_axis(e1, axis);
-                packet.e2[axis][k] = vec3_axis(e2, axis);
-            }
+            if (k == 3 && empty_lane)
+                bvh4_packet_set_lane(&packet, k, NULL, -1, test);
+            else
+                bvh4_packet_set_lane(&packet, k, &tris[k], k, test);
         }
-        bool empty_lane = i % 4 == 1; /* lane 3 left as an empty lane */
-        if (empty_lane)
-            for (int axis = 0; axis < 3; axis++)
-                packet.p0[axis][3] = packet.e1[axis][3] = packet.e2[axis][3] = 0.0f;
         /* aim at a vertex or an edge midpoint of lane i % 3's triangle */
         const triangle *aim = &tris[i % 3];
         vec3 target = i % 2 ? aim->p1 : vec3_scale(vec3_add(aim->p0, aim->p2), 0.5f);
@@ -487,11 +519,14 @@ static void test_bvh4_triangle_test_matches_chapter_01(void **state)
         float t_max = i % 5 == 0 ? 0.9f : INFINITY;
         for (int kernel = 0; kernel < 2; kernel++) {
             float t[4] = {0}, b1[4] = {0}, b2[4] = {0};
-            int mask = bvh4_triangle_test(&packet, r, t_max, t, b1, b2, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+            int mask =
+                bvh4_triangle_test(&packet, r, t_max, t, b1, b2, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE, test);
             for (int k = 0; k < 4; k++) {
                 float want_t = 0.0f, want_b1 = 0.0f, want_b2 = 0.0f;
                 bool want = !(k == 3 && empty_lane) &&
-                            triangle_intersect_barycentric(&tris[k], &r, &want_t, &want_b1, &want_b2) &&
+                            (test == TRIANGLE_TEST_WATERTIGHT
+                                 ? triangle_intersect_watertight(&tris[k], &r, &want_t, &want_b1, &want_b2)
+                                 : triangle_intersect_barycentric(&tris[k], &r, &want_t, &want_b1, &want_b2)) &&
                             want_t < t_max;
                 bool got = mask >> k & 1;
                 if (want != got || (want && (t[k] != want_t || b1[k] != want_b1 || b2[k] != want_b2)))

@@ -115,16 +115,16 @@ static inline const char *triangle_test_name(triangle_test test)
 /* The watertight test in two parts, so that an accelerator pays for the
  * ray's part once per ray instead of once per triangle. The ray's part: its
  * axes renamed so that z is the one along which |d| is largest (kz; kx and
- * ky follow it cyclically), and the shear that takes d to (0, 0, 1):
- *   x' = x - (d_kx / d_kz) z,  y' = y - (d_ky / d_kz) z,  z' = z / d_kz.
+ * ky follow it cyclically), and the shear along it that takes the ray's
+ * line to the z axis: x' = x - (d_kx / d_kz) z,  y' = y - (d_ky / d_kz) z.
  * The SIMD kernels of chapter 13 (bvh4, flat) hold the same numbers in
  * registers and do the triangle's part lane by lane with exactly the
  * operations of watertight_intersect() below, so every lane's answer is
  * this function's, bit for bit. */
 typedef struct {
     int kx, ky, kz;
-    float shear_x, shear_y, shear_z; /* d_kx / d_kz, d_ky / d_kz, 1 / d_kz */
-    vec3 origin;
+    float shear_x, shear_y; /* d_kx / d_kz, d_ky / d_kz */
+    vec3 origin, direction;
     float t_min;
 } watertight_ray;
 
@@ -140,7 +140,7 @@ static inline watertight_ray watertight_ray_make(const ray *r)
     int kx = kz == 2 ? 0 : kz + 1, ky = kx == 2 ? 0 : kx + 1;
     const float *d = &r->direction.x;
     float dz = d[kz];
-    return (watertight_ray){kx, ky, kz, d[kx] / dz, d[ky] / dz, 1.0f / dz, r->origin, r->t_min};
+    return (watertight_ray){kx, ky, kz, d[kx] / dz, d[ky] / dz, r->origin, r->direction, r->t_min};
 }
 
 /* The edge functions of a lane recomputed in double, where the products of
@@ -173,8 +173,40 @@ void watertight_edges_in_double(float ax, float ay, float bx, float by, float cx
  *     pbrt swaps kx and ky when d_kz < 0 to keep the winding; that negates
  *     u, v, w, their sum and the scaled t exactly, and changes no t, b1, b2
  *     or decision, so we do not.
- *  5. det = u + v + w (0: the ray lies in the triangle's plane: no hit);
- *     t = (u z_a + v z_b + w z_c) / det with the corners' sheared z. */
+ *  5. det = u + v + w (0: the ray lies in the triangle's plane: no hit).
+ *  6. t from the triangle's plane, for the rays that passed: see
+ *     watertight_plane_t(). The barycentrics are the edge functions over
+ *     det. */
+
+/* t where the ray meets the triangle's plane, ((P0 - O) . N) / (D . N)
+ * with N = (P1 - P0) x (P2 - P0), as Embree's watertight kernel computes
+ * it; pbrt computes (u z_a + v z_b + w z_c) / det from the sheared
+ * corners instead. Why not pbrt's: the shear mixes the three coordinates
+ * of every corner, so that t's error is a few ulps of the corners'
+ * distances from the origin, whatever the ray's own offset from the
+ * plane. A ray spawned from the Cornell box's floor (y = 0) starts 2^-16
+ * above it (ray.h's fixed offset near 0) while the floor's corners are 550
+ * away, a quarter of their ulp: pbrt's t found the floor again at
+ * t = +3e-8 (5 of 20,000 shadow rays, test_walls_skipped_only_where_they_
+ * cannot_block). Here P0 - O along an axis-aligned normal is exact, and in
+ * general t is as accurate as Moller-Trumbore's, for which ray.h's offsets
+ * were made and tested. pbrt guards its t with an error bound instead
+ * (refusing t below it), which refuses every hit on a sliver one float
+ * step thick (test_sliver_one_float_step_thick_is_still_hit). Only rays
+ * that passed the edge test get here. Written out (not vec3_cross and
+ * vec3_dot) so that the SIMD kernels' copies (watertight_simd.h) visibly
+ * do the same operations in the same order. */
+static inline float watertight_plane_t(const float *p0, const float *p1, const float *p2, const watertight_ray *wr)
+{
+    float e1x = p1[0] - p0[0], e1y = p1[1] - p0[1], e1z = p1[2] - p0[2];
+    float e2x = p2[0] - p0[0], e2y = p2[1] - p0[1], e2z = p2[2] - p0[2];
+    float nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+    float sx = p0[0] - wr->origin.x, sy = p0[1] - wr->origin.y, sz = p0[2] - wr->origin.z;
+    float numerator = sx * nx + sy * ny + sz * nz;
+    float denominator = wr->direction.x * nx + wr->direction.y * ny + wr->direction.z * nz;
+    return numerator / denominator;
+}
+
 static inline bool watertight_intersect(const watertight_ray *wr, const float *p0, const float *p1, const float *p2,
                                         float t_max, float *t_out, float *b1_out, float *b2_out)
 {
@@ -194,11 +226,10 @@ static inline bool watertight_intersect(const watertight_ray *wr, const float *p
     float determinant = u + v + w;
     if (determinant == 0.0f)
         return false;
-    float scaled_t = u * (wr->shear_z * a_z) + v * (wr->shear_z * b_z) + w * (wr->shear_z * c_z);
-    float inverse = 1.0f / determinant;
-    float t = scaled_t * inverse;
+    float t = watertight_plane_t(p0, p1, p2, wr);
     if (!(t > wr->t_min && t < t_max))
         return false;
+    float inverse = 1.0f / determinant;
     *t_out = t;
     *b1_out = v * inverse;
     *b2_out = w * inverse;

@@ -6,26 +6,48 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "13-production/bvh4.h"
 #include "memory.h"
 #include "timer.h"
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(BVH4_NO_SIMD)
 #define FLAT_HAVE_X86 1
 #include <immintrin.h>
+
+#include "13-production/watertight_simd.h"
 #else
 #define FLAT_HAVE_X86 0
 #endif
 
+/* Each kernel below is written once with `watertight` a parameter and
+ * inlined into two entry points, one per triangle test, so that the test
+ * is a constant inside and the choice is made once per ray or packet. */
+#if defined(__GNUC__)
+#define ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define ALWAYS_INLINE inline
+#endif
+
 /* ---- the plain C kernel ---------------------------------------------------------
- * Lane by lane, in triangle order, chapter 01's test on the stored edges
- * (triangle_intersect_edges, the arithmetic of
+ * Lane by lane, in triangle order, chapter 01's test on what the block
+ * stores: watertight_intersect() on the corners (the ray's part in wr), or
+ * triangle_intersect_edges() on P0 and the edges (the arithmetic of
  * triangle_intersect_barycentric): the reference the others must equal.
  * Returns the lane hit nearest in (t_min, *t_max), or -1, and lowers
  * *t_max to it; a later lane must be strictly nearer to replace it. */
-static int block_closest_scalar(const flat_block *b, const ray *r, float *t_max, float *b1, float *b2)
+static ALWAYS_INLINE int block_closest_scalar(const flat_block *b, const ray *r, const watertight_ray *wr,
+                                              bool watertight, float *t_max, float *b1, float *b2)
 {
     int found = -1;
     for (int k = 0; k < FLAT_LANES; k++) {
+        if (watertight) {
+            const float p0[3] = {b->p0[0][k], b->p0[1][k], b->p0[2][k]};
+            const float p1[3] = {b->p1[0][k], b->p1[1][k], b->p1[2][k]};
+            const float p2[3] = {b->p2[0][k], b->p2[1][k], b->p2[2][k]};
+            if (watertight_intersect(wr, p0, p1, p2, *t_max, t_max, b1, b2))
+                found = k;
+            continue;
+        }
         vec3 p0 = vec3_make(b->p0[0][k], b->p0[1][k], b->p0[2][k]);
         vec3 e1 = vec3_make(b->e1[0][k], b->e1[1][k], b->e1[2][k]);
         vec3 e2 = vec3_make(b->e2[0][k], b->e2[1][k], b->e2[2][k]);
@@ -45,6 +67,7 @@ static int block_closest_scalar(const flat_block *b, const ray *r, float *t_max,
  * GCC has been seen to turn into scalar code inside a target("avx")
  * function. */
 #if FLAT_HAVE_X86
+/* Moller-Trumbore: triangle_intersect_edges() lane by lane. */
 #define FLAT_LANE_TEST(V, P, LOAD, CMP_NE, CMP_GE, CMP_LE, CMP_GT, CMP_LT, block, offset, nearest, which, hit_b1, hit_b2,    \
                        any)                                                                                         \
     do {                                                                                                           \
@@ -79,12 +102,81 @@ static int block_closest_scalar(const flat_block *b, const ray *r, float *t_max,
         any = P##_or_ps(any, ok);                                                                                  \
     } while (0)
 
+/* Lanes with an edge function of exactly 0 get all three recomputed in
+ * double, as the scalar test does (watertight_edges_in_double): c holds the
+ * lanes' projected corners a_x, a_y, b_x, b_y, c_x, c_y. Rare (rays
+ * through edges and vertices), so out of line, through memory. */
+__attribute__((noinline, cold)) static void edges_in_double(int lanes, const float c[6][FLAT_LANES],
+                                                            float u[FLAT_LANES], float v[FLAT_LANES],
+                                                            float w[FLAT_LANES])
+{
+    for (int k = 0; k < FLAT_LANES; k++)
+        if (lanes >> k & 1)
+            watertight_edges_in_double(c[0][k], c[1][k], c[2][k], c[3][k], c[4][k], c[5][k], &u[k], &v[k], &w[k]);
+}
+
+/* The watertight test's edge functions of the projected corners, and the
+ * lanes that need them in double, for the FLAT_*_WATERTIGHT macros. */
+#define FLAT_EDGES(V, P, STORE, LOADU, CMP_EQ, ax, ay, bx, by, cx, cy, u, v, w)                                    \
+    V u = P##_sub_ps(P##_mul_ps(cx, by), P##_mul_ps(cy, bx));                                                      \
+    V v = P##_sub_ps(P##_mul_ps(ax, cy), P##_mul_ps(ay, cx));                                                      \
+    V w = P##_sub_ps(P##_mul_ps(bx, ay), P##_mul_ps(by, ax));                                                      \
+    do {                                                                                                           \
+        int exact_zero_ = P##_movemask_ps(P##_or_ps(P##_or_ps(CMP_EQ(u, zero), CMP_EQ(v, zero)), CMP_EQ(w, zero))); \
+        if (__builtin_expect(exact_zero_ != 0, 0)) {                                                               \
+            float c_[6][FLAT_LANES], u_[FLAT_LANES], v_[FLAT_LANES], w_[FLAT_LANES];                               \
+            STORE(c_[0], ax), STORE(c_[1], ay), STORE(c_[2], bx), STORE(c_[3], by), STORE(c_[4], cx);              \
+            STORE(c_[5], cy), STORE(u_, u), STORE(v_, v), STORE(w_, w);                                            \
+            edges_in_double(exact_zero_, (const float(*)[FLAT_LANES])c_, u_, v_, w_);                               \
+            u = LOADU(u_), v = LOADU(v_), w = LOADU(w_);                                                           \
+        }                                                                                                          \
+    } while (0)
+
+/* The watertight test, watertight_intersect() lane by lane: the ray's part
+ * in w_ox .. w_sy and kx, ky, kz (the same for every lane: the rows of the
+ * ray's axes are loaded, so the permutation costs nothing). The lanes the
+ * ray passes inside go on to t (rarely any: one branch per block). */
+#define FLAT_LANE_TEST_WATERTIGHT(V, P, LOAD, STORE, LOADU, CMP_EQ, CMP_NE, CMP_GT, CMP_LT, block, offset, nearest, \
+                                  which, hit_b1, hit_b2, any)                                                      \
+    do {                                                                                                           \
+        V a_z = P##_sub_ps(LOAD(block->p0[kz] + offset), w_oz);                                                    \
+        V b_z = P##_sub_ps(LOAD(block->p1[kz] + offset), w_oz);                                                    \
+        V c_z = P##_sub_ps(LOAD(block->p2[kz] + offset), w_oz);                                                    \
+        V ax = P##_sub_ps(P##_sub_ps(LOAD(block->p0[kx] + offset), w_ox), P##_mul_ps(w_sx, a_z));                  \
+        V ay = P##_sub_ps(P##_sub_ps(LOAD(block->p0[ky] + offset), w_oy), P##_mul_ps(w_sy, a_z));                  \
+        V bx = P##_sub_ps(P##_sub_ps(LOAD(block->p1[kx] + offset), w_ox), P##_mul_ps(w_sx, b_z));                  \
+        V by = P##_sub_ps(P##_sub_ps(LOAD(block->p1[ky] + offset), w_oy), P##_mul_ps(w_sy, b_z));                  \
+        V cx = P##_sub_ps(P##_sub_ps(LOAD(block->p2[kx] + offset), w_ox), P##_mul_ps(w_sx, c_z));                  \
+        V cy = P##_sub_ps(P##_sub_ps(LOAD(block->p2[ky] + offset), w_oy), P##_mul_ps(w_sy, c_z));                  \
+        FLAT_EDGES(V, P, STORE, LOADU, CMP_EQ, ax, ay, bx, by, cx, cy, u, v, w);                                   \
+        V negative = P##_or_ps(P##_or_ps(CMP_LT(u, zero), CMP_LT(v, zero)), CMP_LT(w, zero));                      \
+        V positive = P##_or_ps(P##_or_ps(CMP_GT(u, zero), CMP_GT(v, zero)), CMP_GT(w, zero));                      \
+        V determinant = P##_add_ps(P##_add_ps(u, v), w);                                                           \
+        V ok = P##_andnot_ps(P##_and_ps(negative, positive), CMP_NE(determinant, zero));                           \
+        if (P##_movemask_ps(ok) != 0) {                                                                            \
+            WATERTIGHT_PLANE_T(V, P, t, LOAD(block->p0[0] + offset), LOAD(block->p0[1] + offset),                  \
+                               LOAD(block->p0[2] + offset), LOAD(block->p1[0] + offset), LOAD(block->p1[1] + offset), \
+                               LOAD(block->p1[2] + offset), LOAD(block->p2[0] + offset), LOAD(block->p2[1] + offset), \
+                               LOAD(block->p2[2] + offset), ox, oy, oz, dx, dy, dz);                               \
+            ok = P##_and_ps(ok, P##_and_ps(CMP_GT(t, t_min), CMP_LT(t, nearest)));                                 \
+            V inverse = P##_div_ps(one, determinant);                                                              \
+            nearest = P##_or_ps(P##_and_ps(ok, t), P##_andnot_ps(ok, nearest));                                    \
+            V lane_index = LOAD((const float *)block->index + offset);                                             \
+            which = P##_or_ps(P##_and_ps(ok, lane_index), P##_andnot_ps(ok, which));                               \
+            hit_b1 = P##_or_ps(P##_and_ps(ok, P##_mul_ps(v, inverse)), P##_andnot_ps(ok, hit_b1));                 \
+            hit_b2 = P##_or_ps(P##_and_ps(ok, P##_mul_ps(w, inverse)), P##_andnot_ps(ok, hit_b2));                 \
+            any = P##_or_ps(any, ok);                                                                              \
+        }                                                                                                          \
+    } while (0)
+
+#define SSE_CMP_EQ(a, b) _mm_cmpeq_ps(a, b)
 #define SSE_CMP_NE(a, b) _mm_cmpneq_ps(a, b)
 #define SSE_CMP_GE(a, b) _mm_cmpge_ps(a, b)
 #define SSE_CMP_LE(a, b) _mm_cmple_ps(a, b)
 #define SSE_CMP_GT(a, b) _mm_cmpgt_ps(a, b)
 #define SSE_CMP_LT(a, b) _mm_cmplt_ps(a, b)
 /* The ordered predicates are the SSE ones (cmpneq is unordered: NaN != 0). */
+#define AVX_CMP_EQ(a, b) _mm256_cmp_ps(a, b, _CMP_EQ_OQ)
 #define AVX_CMP_NE(a, b) _mm256_cmp_ps(a, b, _CMP_NEQ_UQ)
 #define AVX_CMP_GE(a, b) _mm256_cmp_ps(a, b, _CMP_GE_OS)
 #define AVX_CMP_LE(a, b) _mm256_cmp_ps(a, b, _CMP_LE_OS)
@@ -118,32 +210,47 @@ static bool finish(const flat *f, const ray *r, int index, float t, float b1, fl
     return true;
 }
 
-static bool closest_hit_scalar(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+static ALWAYS_INLINE bool closest_scalar(const accel *a, ray r, hit_record *hit, ray_counters *counters,
+                                         bool watertight)
 {
     const flat *f = (const flat *)a;
     counters->primitive_tests += (uint64_t)f->base.set->count;
+    const watertight_ray wr = watertight_ray_make(&r);
     float t_max = r.t_max, b1 = 0.0f, b2 = 0.0f;
     int index = -1;
     for (int i = 0; i < f->block_count; i++) {
-        int lane = block_closest_scalar(&f->blocks[i], &r, &t_max, &b1, &b2);
+        int lane = block_closest_scalar(&f->blocks[i], &r, &wr, watertight, &t_max, &b1, &b2);
         if (lane >= 0)
             index = f->blocks[i].index[lane];
     }
     return finish(f, &r, index, t_max, b1, b2, hit);
 }
 
-static bool any_hit_scalar(const accel *a, ray r, ray_counters *counters)
+static ALWAYS_INLINE bool any_scalar(const accel *a, ray r, ray_counters *counters, bool watertight)
 {
     const flat *f = (const flat *)a;
+    const watertight_ray wr = watertight_ray_make(&r);
     for (int i = 0; i < f->block_count; i++) {
         float t_max = r.t_max, b1, b2;
         counters->primitive_tests += (uint64_t)(f->base.set->count - i * FLAT_LANES < FLAT_LANES
                                                     ? f->base.set->count - i * FLAT_LANES
                                                     : FLAT_LANES);
-        if (block_closest_scalar(&f->blocks[i], &r, &t_max, &b1, &b2) >= 0)
+        if (block_closest_scalar(&f->blocks[i], &r, &wr, watertight, &t_max, &b1, &b2) >= 0)
             return true;
     }
     return false;
+}
+
+static bool closest_hit_scalar(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    return a->triangle_test == TRIANGLE_TEST_WATERTIGHT ? closest_scalar(a, r, hit, counters, true)
+                                                        : closest_scalar(a, r, hit, counters, false);
+}
+
+static bool any_hit_scalar(const accel *a, ray r, ray_counters *counters)
+{
+    return a->triangle_test == TRIANGLE_TEST_WATERTIGHT ? any_scalar(a, r, counters, true)
+                                                        : any_scalar(a, r, counters, false);
 }
 
 #if FLAT_HAVE_X86
@@ -155,23 +262,49 @@ static uint64_t tested_through(const flat *f, int i)
     return (uint64_t)(n < f->base.set->count ? n : f->base.set->count);
 }
 
-static bool closest_hit_sse(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+/* What both tests need of the ray, as vectors of V (for FLAT_LANE_TEST and
+ * FLAT_LANE_TEST_WATERTIGHT): the origin, the direction, t_min, and the
+ * watertight test's part (chapter 01's watertight_ray) in its axes. */
+#define FLAT_RAY_VECTORS(V, SET1, r)                                                                               \
+    const V ox = SET1((r).origin.x), oy = SET1((r).origin.y), oz = SET1((r).origin.z);                             \
+    const V dx = SET1((r).direction.x), dy = SET1((r).direction.y), dz = SET1((r).direction.z);                    \
+    const V t_min = SET1((r).t_min);                                                                               \
+    const watertight_ray wr_ = watertight_ray_make(&(r));                                                          \
+    const int kx = wr_.kx, ky = wr_.ky, kz = wr_.kz;                                                               \
+    const float *w_origin_ = &wr_.origin.x;                                                                        \
+    const V w_ox = SET1(w_origin_[kx]), w_oy = SET1(w_origin_[ky]), w_oz = SET1(w_origin_[kz]);                    \
+    const V w_sx = SET1(wr_.shear_x), w_sy = SET1(wr_.shear_y)
+
+/* A block as two halves of four, each with its own lanes' nearest hits. */
+#define SSE_BLOCK_TEST(watertight, block, nearest, which, hit_b1, hit_b2, any)                                     \
+    do {                                                                                                           \
+        if (watertight) {                                                                                          \
+            FLAT_LANE_TEST_WATERTIGHT(__m128, _mm, _mm_load_ps, _mm_storeu_ps, _mm_loadu_ps, SSE_CMP_EQ, SSE_CMP_NE, \
+                                      SSE_CMP_GT, SSE_CMP_LT, block, 0, nearest[0], which[0], hit_b1[0], hit_b2[0], \
+                                      any);                                                                        \
+            FLAT_LANE_TEST_WATERTIGHT(__m128, _mm, _mm_load_ps, _mm_storeu_ps, _mm_loadu_ps, SSE_CMP_EQ, SSE_CMP_NE, \
+                                      SSE_CMP_GT, SSE_CMP_LT, block, 4, nearest[1], which[1], hit_b1[1], hit_b2[1], \
+                                      any);                                                                        \
+        } else {                                                                                                   \
+            FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT,   \
+                           block, 0, nearest[0], which[0], hit_b1[0], hit_b2[0], any);                             \
+            FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT,   \
+                           block, 4, nearest[1], which[1], hit_b1[1], hit_b2[1], any);                             \
+        }                                                                                                          \
+    } while (0)
+
+static ALWAYS_INLINE bool closest_sse(const accel *a, ray r, hit_record *hit, ray_counters *counters, bool watertight)
 {
     const flat *f = (const flat *)a;
     counters->primitive_tests += (uint64_t)f->base.set->count;
-    const __m128 ox = _mm_set1_ps(r.origin.x), oy = _mm_set1_ps(r.origin.y), oz = _mm_set1_ps(r.origin.z);
-    const __m128 dx = _mm_set1_ps(r.direction.x), dy = _mm_set1_ps(r.direction.y), dz = _mm_set1_ps(r.direction.z);
-    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), t_min = _mm_set1_ps(r.t_min);
-    /* the two halves of each block, each with its own lanes' nearest hits */
+    FLAT_RAY_VECTORS(__m128, _mm_set1_ps, r);
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
     __m128 nearest[2], which[2], hit_b1[2] = {zero, zero}, hit_b2[2] = {zero, zero}, any = zero;
     nearest[0] = nearest[1] = _mm_set1_ps(r.t_max);
     which[0] = which[1] = _mm_castsi128_ps(_mm_set1_epi32(-1));
     for (int i = 0; i < f->block_count; i++) {
         const flat_block *block = &f->blocks[i];
-        FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT, block, 0,
-                       nearest[0], which[0], hit_b1[0], hit_b2[0], any);
-        FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT, block, 4,
-                       nearest[1], which[1], hit_b1[1], hit_b2[1], any);
+        SSE_BLOCK_TEST(watertight, block, nearest, which, hit_b1, hit_b2, any);
     }
     if (_mm_movemask_ps(any) == 0)
         return false;
@@ -186,21 +319,17 @@ static bool closest_hit_sse(const accel *a, ray r, hit_record *hit, ray_counters
     return k >= 0 && finish(f, &r, h.index[k], h.t[k], h.b1[k], h.b2[k], hit);
 }
 
-static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
+static ALWAYS_INLINE bool any_sse(const accel *a, ray r, ray_counters *counters, bool watertight)
 {
     const flat *f = (const flat *)a;
-    const __m128 ox = _mm_set1_ps(r.origin.x), oy = _mm_set1_ps(r.origin.y), oz = _mm_set1_ps(r.origin.z);
-    const __m128 dx = _mm_set1_ps(r.direction.x), dy = _mm_set1_ps(r.direction.y), dz = _mm_set1_ps(r.direction.z);
-    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), t_min = _mm_set1_ps(r.t_min);
+    FLAT_RAY_VECTORS(__m128, _mm_set1_ps, r);
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
     for (int i = 0; i < f->block_count; i++) {
         const flat_block *block = &f->blocks[i];
         /* the nearest hit does not matter, only whether there is one */
         __m128 nearest[2], which[2] = {zero, zero}, hit_b1[2] = {zero, zero}, hit_b2[2] = {zero, zero}, any = zero;
         nearest[0] = nearest[1] = _mm_set1_ps(r.t_max);
-        FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT, block, 0,
-                       nearest[0], which[0], hit_b1[0], hit_b2[0], any);
-        FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT, block, 4,
-                       nearest[1], which[1], hit_b1[1], hit_b2[1], any);
+        SSE_BLOCK_TEST(watertight, block, nearest, which, hit_b1, hit_b2, any);
         if (_mm_movemask_ps(any) != 0) {
             counters->primitive_tests += tested_through(f, i);
             return true;
@@ -209,16 +338,38 @@ static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
     counters->primitive_tests += (uint64_t)f->base.set->count;
     return false;
 }
+
+static bool closest_hit_sse(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    return a->triangle_test == TRIANGLE_TEST_WATERTIGHT ? closest_sse(a, r, hit, counters, true)
+                                                        : closest_sse(a, r, hit, counters, false);
+}
+
+static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
+{
+    return a->triangle_test == TRIANGLE_TEST_WATERTIGHT ? any_sse(a, r, counters, true)
+                                                        : any_sse(a, r, counters, false);
+}
 #endif
 
 /* ---- eight rays against one triangle at a time ----------------------------------
- * The rays' origins, directions and ends as eight lanes; each triangle's P0,
- * E1, E2 broadcast to all eight; the lane arithmetic of FLAT_LANE_TEST with
- * the roles swapped. The triangles go in order and a later one must be
- * strictly nearer, so of equal t the lower index wins, as for one ray. */
+ * The rays' origins, directions and ends as eight lanes; each triangle
+ * broadcast to all eight; the lane arithmetic of the tests above with the
+ * roles swapped. The triangles go in order and a later one must be
+ * strictly nearer, so of equal t the lower index wins, as for one ray.
+ *
+ * The watertight test's axes are now each lane's own: kz is the axis of
+ * that ray's largest |d|. So the broadcast corner's coordinates are put in
+ * each lane's order with two selections per coordinate (kz_x, kz_y: the
+ * lanes whose kz is x, y; the others' is z), where one ray alone loaded the
+ * rows it needed. The selections are exact, so every lane still does
+ * watertight_intersect()'s arithmetic. */
 #if FLAT_HAVE_X86
 typedef struct {
     __m256 ox, oy, oz, dx, dy, dz, t_min, t_max;
+    /* the watertight test's part, lane by lane (watertight_ray): the
+     * lanes whose kz is x and y, the origin in the lanes' axes, the shear */
+    __m256 kz_x, kz_y, w_ox, w_oy, w_oz, w_sx, w_sy;
 } ray8;
 
 /* Moller-Trumbore of triangle (block, lane j) for the eight rays: the mask
@@ -258,6 +409,63 @@ typedef struct {
         t_out = t;                                                                                                 \
         u_out = u;                                                                                                 \
         v_out = v;                                                                                                 \
+    } while (0)
+
+/* The selection `mask ? b : a`, lane by lane (blendv: one instruction). */
+#define FLAT_SELECT(mask, b, a) _mm256_blendv_ps(a, b, mask)
+
+/* A corner of triangle (block, lane j), one of the rows p0, p1, p2,
+ * broadcast and put in each lane's axes: kz = x makes the axes (y, z, x),
+ * kz = y makes them (z, x, y), kz = z leaves (x, y, z). */
+#define FLAT_CORNER8(block, row, j, R, px, py, pz)                                                                 \
+    __m256 px, py, pz;                                                                                             \
+    do {                                                                                                           \
+        __m256 x_ = _mm256_broadcast_ss(&(block)->row[0][j]), y_ = _mm256_broadcast_ss(&(block)->row[1][j]);       \
+        __m256 z_ = _mm256_broadcast_ss(&(block)->row[2][j]);                                                      \
+        px = FLAT_SELECT((R).kz_x, y_, FLAT_SELECT((R).kz_y, z_, x_));                                             \
+        py = FLAT_SELECT((R).kz_x, z_, FLAT_SELECT((R).kz_y, x_, y_));                                             \
+        pz = FLAT_SELECT((R).kz_x, x_, FLAT_SELECT((R).kz_y, y_, z_));                                             \
+    } while (0)
+
+/* The watertight test of triangle (block, lane j) for the eight rays:
+ * watertight_intersect() lane by lane, each lane in its own axes. The mask
+ * of rays that hit it in (t_min, nearest), and their t, b1, b2 (0 in the
+ * lanes the ray passes beside). */
+#define FLAT_RAYS_TEST_WATERTIGHT(block, j, R, nearest, ok_out, t_out, u_out, v_out)                                \
+    do {                                                                                                           \
+        const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);                                       \
+        FLAT_CORNER8(block, p0, j, R, p0x, p0y, p0z);                                                              \
+        FLAT_CORNER8(block, p1, j, R, p1x, p1y, p1z);                                                              \
+        FLAT_CORNER8(block, p2, j, R, p2x, p2y, p2z);                                                              \
+        __m256 a_z = _mm256_sub_ps(p0z, (R).w_oz), b_z = _mm256_sub_ps(p1z, (R).w_oz);                             \
+        __m256 c_z = _mm256_sub_ps(p2z, (R).w_oz);                                                                 \
+        __m256 ax = _mm256_sub_ps(_mm256_sub_ps(p0x, (R).w_ox), _mm256_mul_ps((R).w_sx, a_z));                     \
+        __m256 ay = _mm256_sub_ps(_mm256_sub_ps(p0y, (R).w_oy), _mm256_mul_ps((R).w_sy, a_z));                     \
+        __m256 bx = _mm256_sub_ps(_mm256_sub_ps(p1x, (R).w_ox), _mm256_mul_ps((R).w_sx, b_z));                     \
+        __m256 by = _mm256_sub_ps(_mm256_sub_ps(p1y, (R).w_oy), _mm256_mul_ps((R).w_sy, b_z));                     \
+        __m256 cx = _mm256_sub_ps(_mm256_sub_ps(p2x, (R).w_ox), _mm256_mul_ps((R).w_sx, c_z));                     \
+        __m256 cy = _mm256_sub_ps(_mm256_sub_ps(p2y, (R).w_oy), _mm256_mul_ps((R).w_sy, c_z));                     \
+        FLAT_EDGES(__m256, _mm256, _mm256_storeu_ps, _mm256_loadu_ps, AVX_CMP_EQ, ax, ay, bx, by, cx, cy, u, v, w); \
+        __m256 negative = _mm256_or_ps(_mm256_or_ps(AVX_CMP_LT(u, zero), AVX_CMP_LT(v, zero)), AVX_CMP_LT(w, zero)); \
+        __m256 positive = _mm256_or_ps(_mm256_or_ps(AVX_CMP_GT(u, zero), AVX_CMP_GT(v, zero)), AVX_CMP_GT(w, zero)); \
+        __m256 determinant = _mm256_add_ps(_mm256_add_ps(u, v), w);                                                \
+        __m256 ok = _mm256_andnot_ps(_mm256_and_ps(negative, positive), AVX_CMP_NE(determinant, zero));            \
+        ok_out = ok;                                                                                               \
+        t_out = u_out = v_out = zero; /* for the lanes not hit: read, never used */                                \
+        if (_mm256_movemask_ps(ok) != 0) {                                                                         \
+            const flat_block *b_ = (block);                                                                        \
+            WATERTIGHT_PLANE_T(__m256, _mm256, t, _mm256_broadcast_ss(&b_->p0[0][j]),                              \
+                               _mm256_broadcast_ss(&b_->p0[1][j]), _mm256_broadcast_ss(&b_->p0[2][j]),             \
+                               _mm256_broadcast_ss(&b_->p1[0][j]),                                                 \
+                               _mm256_broadcast_ss(&b_->p1[1][j]), _mm256_broadcast_ss(&b_->p1[2][j]),             \
+                               _mm256_broadcast_ss(&b_->p2[0][j]), _mm256_broadcast_ss(&b_->p2[1][j]),             \
+                               _mm256_broadcast_ss(&b_->p2[2][j]), (R).ox, (R).oy, (R).oz, (R).dx, (R).dy, (R).dz); \
+            __m256 inverse = _mm256_div_ps(one, determinant);                                                      \
+            ok_out = _mm256_and_ps(ok, _mm256_and_ps(AVX_CMP_GT(t, (R).t_min), AVX_CMP_LT(t, nearest)));           \
+            t_out = t;                                                                                             \
+            u_out = _mm256_mul_ps(v, inverse);                                                                     \
+            v_out = _mm256_mul_ps(w, inverse);                                                                     \
+        }                                                                                                          \
     } while (0)
 
 /* The AVX kernels (flat_avx.inc), compiled twice: for AVX's 16 vector
@@ -373,11 +581,31 @@ static void flat_destroy(accel *a)
     free(f);
 }
 
-static const accel_ops flat_ops_scalar = {closest_hit_scalar, any_hit_scalar, flat_destroy, NULL};
+/* Every lane rewritten for `test` (flat.h), from the set. */
+static bool flat_use_triangle_test(accel *a, triangle_test test)
+{
+    flat *f = (flat *)a;
+    a->triangle_test = test;
+    for (int i = 0; i < f->block_count * FLAT_LANES; i++) {
+        flat_block *b = &f->blocks[i / FLAT_LANES];
+        int k = i % FLAT_LANES;
+        float p0[3], v1[3], v2[3];
+        bvh4_lane_coordinates(i < a->set->count ? &a->set->triangles[i] : NULL, test, p0, v1, v2);
+        for (int axis = 0; axis < 3; axis++) {
+            b->p0[axis][k] = p0[axis];
+            b->p1[axis][k] = v1[axis]; /* p1 and e1 are the same floats (flat.h) */
+            b->p2[axis][k] = v2[axis];
+        }
+        b->index[k] = i < a->set->count ? i : -1;
+    }
+    return true;
+}
+
+static const accel_ops flat_ops_scalar = {closest_hit_scalar, any_hit_scalar, flat_destroy, flat_use_triangle_test};
 #if FLAT_HAVE_X86
-static const accel_ops flat_ops_sse = {closest_hit_sse, any_hit_sse, flat_destroy, NULL};
-static const accel_ops flat_ops_avx = {closest_hit_avx, any_hit_avx, flat_destroy, NULL};
-static const accel_ops flat_ops_avx512 = {closest_hit_avx512, any_hit_avx512, flat_destroy, NULL};
+static const accel_ops flat_ops_sse = {closest_hit_sse, any_hit_sse, flat_destroy, flat_use_triangle_test};
+static const accel_ops flat_ops_avx = {closest_hit_avx, any_hit_avx, flat_destroy, flat_use_triangle_test};
+static const accel_ops flat_ops_avx512 = {closest_hit_avx512, any_hit_avx512, flat_destroy, flat_use_triangle_test};
 
 static bool has_avx512(void) { return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl"); }
 #endif
@@ -537,22 +765,7 @@ accel *flat_build(const triangle_set *set)
         exit(1);
     }
     memset(f->blocks, 0, bytes);
-    for (int i = 0; i < f->block_count * FLAT_LANES; i++) {
-        flat_block *b = &f->blocks[i / FLAT_LANES];
-        int k = i % FLAT_LANES;
-        b->index[k] = -1; /* empty: all zeros, determinant 0 */
-        if (i >= set->count)
-            continue;
-        const triangle *t = &set->triangles[i];
-        vec3 e1 = vec3_sub(t->p1, t->p0), e2 = vec3_sub(t->p2, t->p0);
-        const float p0[3] = {t->p0.x, t->p0.y, t->p0.z}, d1[3] = {e1.x, e1.y, e1.z}, d2[3] = {e2.x, e2.y, e2.z};
-        for (int axis = 0; axis < 3; axis++) {
-            b->p0[axis][k] = p0[axis];
-            b->e1[axis][k] = d1[axis];
-            b->e2[axis][k] = d2[axis];
-        }
-        b->index[k] = i;
-    }
+    flat_use_triangle_test(&f->base, TRIANGLE_TEST_WATERTIGHT); /* the lanes */
     group_triangles(f, set);
     flat_set_kernel(&f->base, flat_best_kernel());
     f->base.stats.name = "flat";

@@ -128,6 +128,16 @@ typedef struct {
     float t_min;
 } watertight_ray;
 
+/* The triangle's part below is inlined into every accelerator's loop
+ * whatever the compiler's size heuristics say: GCC 12 left
+ * watertight_intersect() out of line in brute force's loop, and a call per
+ * triangle (its arguments through memory) cost more than the test. */
+#if defined(__GNUC__)
+#define WATERTIGHT_INLINE static inline __attribute__((always_inline))
+#else
+#define WATERTIGHT_INLINE static inline
+#endif
+
 /* A triangle's nine coordinates are nine floats in a row (p0.x .. p2.z), so
  * the kernels can read coordinate kx of a corner by index. */
 _Static_assert(sizeof(vec3) == 3 * sizeof(float), "a vec3 is three floats in a row");
@@ -173,7 +183,8 @@ void watertight_edges_in_double(float ax, float ay, float bx, float by, float cx
  *     pbrt swaps kx and ky when d_kz < 0 to keep the winding; that negates
  *     u, v, w, their sum and the scaled t exactly, and changes no t, b1, b2
  *     or decision, so we do not.
- *  5. det = u + v + w (0: the ray lies in the triangle's plane: no hit).
+ *  5. det = u + v + w (0: the ray lies in the triangle's plane: no hit;
+ *     NaN, from NaN coordinates: no hit either).
  *  6. t from the triangle's plane, for the rays that passed: see
  *     watertight_plane_t(). The barycentrics are the edge functions over
  *     det. */
@@ -196,7 +207,7 @@ void watertight_edges_in_double(float ax, float ay, float bx, float by, float cx
  * that passed the edge test get here. Written out (not vec3_cross and
  * vec3_dot) so that the SIMD kernels' copies (watertight_simd.h) visibly
  * do the same operations in the same order. */
-static inline float watertight_plane_t(const float *p0, const float *p1, const float *p2, const watertight_ray *wr)
+WATERTIGHT_INLINE float watertight_plane_t(const float *p0, const float *p1, const float *p2, const watertight_ray *wr)
 {
     float e1x = p1[0] - p0[0], e1y = p1[1] - p0[1], e1z = p1[2] - p0[2];
     float e2x = p2[0] - p0[0], e2y = p2[1] - p0[1], e2z = p2[2] - p0[2];
@@ -207,7 +218,7 @@ static inline float watertight_plane_t(const float *p0, const float *p1, const f
     return numerator / denominator;
 }
 
-static inline bool watertight_intersect(const watertight_ray *wr, const float *p0, const float *p1, const float *p2,
+WATERTIGHT_INLINE bool watertight_intersect(const watertight_ray *wr, const float *p0, const float *p1, const float *p2,
                                         float t_max, float *t_out, float *b1_out, float *b2_out)
 {
     const float *o = &wr->origin.x;
@@ -218,13 +229,21 @@ static inline bool watertight_intersect(const watertight_ray *wr, const float *p
     float cx = (p2[kx] - o[kx]) - wr->shear_x * c_z, cy = (p2[ky] - o[ky]) - wr->shear_y * c_z;
     float u = cx * by - cy * bx;
     float v = ax * cy - ay * cx;
+    /* Most rays pass beside the triangle, and two of its edge functions
+     * already disagree in sign: leave before the third. (Rounding is
+     * monotonic, so an edge function that is not exactly 0 has the sign of
+     * its exact value, which step 3 would recompute: the answer is the
+     * same as the full test's, and the SIMD kernels, which run every lane
+     * to the end, agree with it.) */
+    if ((u < 0.0f && v > 0.0f) || (u > 0.0f && v < 0.0f))
+        return false;
     float w = bx * ay - by * ax;
     if (u == 0.0f || v == 0.0f || w == 0.0f)
         watertight_edges_in_double(ax, ay, bx, by, cx, cy, &u, &v, &w);
     if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
         return false;
     float determinant = u + v + w;
-    if (determinant == 0.0f)
+    if (!(fabsf(determinant) > 0.0f)) /* 0, or NaN from a NaN edge function */
         return false;
     float t = watertight_plane_t(p0, p1, p2, wr);
     if (!(t > wr->t_min && t < t_max))
@@ -243,7 +262,7 @@ bool triangle_is_degenerate(const triangle *tri);
 /* watertight_intersect() on a triangle that may be degenerate (a set's,
  * chapter 03): the area is asked only after a hit, which is rare beside the
  * tests that miss. */
-static inline bool watertight_intersect_triangle(const watertight_ray *wr, const triangle *tri, float t_max,
+WATERTIGHT_INLINE bool watertight_intersect_triangle(const watertight_ray *wr, const triangle *tri, float t_max,
                                                  float *t_out, float *b1_out, float *b2_out)
 {
     float t, b1, b2;
@@ -259,7 +278,7 @@ static inline bool watertight_intersect_triangle(const watertight_ray *wr, const
 /* Either test by name on a set's triangle, the ray prepared for both: what
  * the structures of chapters 03-06 call in their inner loops. Inline, and
  * called with `test` a constant, so each loop is compiled for one test. */
-static inline bool triangle_intersect_with(triangle_test test, const watertight_ray *wr, const triangle *tri,
+WATERTIGHT_INLINE bool triangle_intersect_with(triangle_test test, const watertight_ray *wr, const triangle *tri,
                                            const ray *r, float t_max, float *t, float *b1, float *b2)
 {
     if (test == TRIANGLE_TEST_WATERTIGHT)

@@ -164,40 +164,15 @@ static inline int triangle_test4_watertight_scalar(const bvh4_packet *p, const b
 }
 
 #if BVH4_HAVE_SSE
-/* Lanes with an edge function of exactly 0 get all three recomputed in
- * double, as the scalar test does (watertight_edges_in_double). Rare (rays
- * through edges and vertices), so out of line, through memory. */
-__attribute__((noinline, cold)) static void edges_in_double4(int lanes, __m128 ax, __m128 ay, __m128 bx, __m128 by,
-                                                             __m128 cx, __m128 cy, __m128 *u, __m128 *v, __m128 *w)
-{
-    float c[6][4], uu[4], vv[4], ww[4];
-    _mm_storeu_ps(c[0], ax);
-    _mm_storeu_ps(c[1], ay);
-    _mm_storeu_ps(c[2], bx);
-    _mm_storeu_ps(c[3], by);
-    _mm_storeu_ps(c[4], cx);
-    _mm_storeu_ps(c[5], cy);
-    _mm_storeu_ps(uu, *u);
-    _mm_storeu_ps(vv, *v);
-    _mm_storeu_ps(ww, *w);
-    for (int k = 0; k < 4; k++)
-        if (lanes >> k & 1)
-            watertight_edges_in_double(c[0][k], c[1][k], c[2][k], c[3][k], c[4][k], c[5][k], &uu[k], &vv[k], &ww[k]);
-    *u = _mm_loadu_ps(uu);
-    *v = _mm_loadu_ps(vv);
-    *w = _mm_loadu_ps(ww);
-}
-
 /* The scalar test stops at the first failed condition; here every lane
- * runs to the end and the conditions are and-ed. A lane the scalar test
- * leaves early (outside, or determinant 0) computes inf or NaN on the way,
- * which fail its remaining comparisons: the mask is the same. */
+ * runs to the end and the conditions are and-ed, as in
+ * WATERTIGHT_INSIDE (watertight_simd.h), which says why the answers are the
+ * same. Only the lanes the ray passes inside, if any, go on to t. */
 static inline int triangle_test4_watertight_sse(const bvh4_packet *p, const bvh4_ray *r4, float t_max, float t[4],
                                                 float b1[4], float b2[4])
 {
     const int kx = r4->watertight.kx, ky = r4->watertight.ky, kz = r4->watertight.kz;
     const __m128 *o = r4->w_origin, *shear = r4->w_shear;
-    const __m128 zero = _mm_setzero_ps();
     __m128 a_z = _mm_sub_ps(_mm_load_ps(p->p0[kz]), o[2]);
     __m128 b_z = _mm_sub_ps(_mm_load_ps(p->p1[kz]), o[2]);
     __m128 c_z = _mm_sub_ps(_mm_load_ps(p->p2[kz]), o[2]);
@@ -210,16 +185,7 @@ static inline int triangle_test4_watertight_sse(const bvh4_packet *p, const bvh4
     __m128 u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
     __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
     __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
-    int exact_zero = _mm_movemask_ps(
-        _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(u, zero), _mm_cmpeq_ps(v, zero)), _mm_cmpeq_ps(w, zero)));
-    if (__builtin_expect(exact_zero != 0, 0))
-        edges_in_double4(exact_zero, ax, ay, bx, by, cx, cy, &u, &v, &w);
-    __m128 negative = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
-    __m128 positive = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
-    __m128 determinant = _mm_add_ps(_mm_add_ps(u, v), w);
-    /* inside (not both signs), and not in the plane (cmpneq: NaN passes, as
-     * in the scalar test, and fails below) */
-    __m128 ok = _mm_andnot_ps(_mm_and_ps(negative, positive), _mm_cmpneq_ps(determinant, zero));
+    WATERTIGHT_INSIDE(__m128, _mm, WATERTIGHT_IN_DOUBLE4, ok, determinant, ax, ay, bx, by, cx, cy, u, v, w);
     if (_mm_movemask_ps(ok) == 0)
         return 0; /* most packets: the ray passes beside all four */
     WATERTIGHT_PLANE_T(__m128, _mm, distance, _mm_load_ps(p->p0[0]), _mm_load_ps(p->p0[1]), _mm_load_ps(p->p0[2]),

@@ -102,42 +102,15 @@ static ALWAYS_INLINE int block_closest_scalar(const flat_block *b, const ray *r,
         any = P##_or_ps(any, ok);                                                                                  \
     } while (0)
 
-/* Lanes with an edge function of exactly 0 get all three recomputed in
- * double, as the scalar test does (watertight_edges_in_double): c holds the
- * lanes' projected corners a_x, a_y, b_x, b_y, c_x, c_y. Rare (rays
- * through edges and vertices), so out of line, through memory. */
-__attribute__((noinline, cold)) static void edges_in_double(int lanes, const float c[6][FLAT_LANES],
-                                                            float u[FLAT_LANES], float v[FLAT_LANES],
-                                                            float w[FLAT_LANES])
-{
-    for (int k = 0; k < FLAT_LANES; k++)
-        if (lanes >> k & 1)
-            watertight_edges_in_double(c[0][k], c[1][k], c[2][k], c[3][k], c[4][k], c[5][k], &u[k], &v[k], &w[k]);
-}
 
-/* The watertight test's edge functions of the projected corners, and the
- * lanes that need them in double, for the FLAT_*_WATERTIGHT macros. */
-#define FLAT_EDGES(V, P, STORE, LOADU, CMP_EQ, ax, ay, bx, by, cx, cy, u, v, w)                                    \
-    V u = P##_sub_ps(P##_mul_ps(cx, by), P##_mul_ps(cy, bx));                                                      \
-    V v = P##_sub_ps(P##_mul_ps(ax, cy), P##_mul_ps(ay, cx));                                                      \
-    V w = P##_sub_ps(P##_mul_ps(bx, ay), P##_mul_ps(by, ax));                                                      \
-    do {                                                                                                           \
-        int exact_zero_ = P##_movemask_ps(P##_or_ps(P##_or_ps(CMP_EQ(u, zero), CMP_EQ(v, zero)), CMP_EQ(w, zero))); \
-        if (__builtin_expect(exact_zero_ != 0, 0)) {                                                               \
-            float c_[6][FLAT_LANES], u_[FLAT_LANES], v_[FLAT_LANES], w_[FLAT_LANES];                               \
-            STORE(c_[0], ax), STORE(c_[1], ay), STORE(c_[2], bx), STORE(c_[3], by), STORE(c_[4], cx);              \
-            STORE(c_[5], cy), STORE(u_, u), STORE(v_, v), STORE(w_, w);                                            \
-            edges_in_double(exact_zero_, (const float(*)[FLAT_LANES])c_, u_, v_, w_);                               \
-            u = LOADU(u_), v = LOADU(v_), w = LOADU(w_);                                                           \
-        }                                                                                                          \
-    } while (0)
 
 /* The watertight test, watertight_intersect() lane by lane: the ray's part
  * in w_ox .. w_sy and kx, ky, kz (the same for every lane: the rows of the
  * ray's axes are loaded, so the permutation costs nothing). The lanes the
- * ray passes inside go on to t (rarely any: one branch per block). */
-#define FLAT_LANE_TEST_WATERTIGHT(V, P, LOAD, STORE, LOADU, CMP_EQ, CMP_NE, CMP_GT, CMP_LT, block, offset, nearest, \
-                                  which, hit_b1, hit_b2, any)                                                      \
+ * ray passes inside go on to t (rarely any: one branch per block).
+ * IN_DOUBLE: WATERTIGHT_IN_DOUBLE4 or 8 (watertight_simd.h). */
+#define FLAT_LANE_TEST_WATERTIGHT(V, P, LOAD, IN_DOUBLE, CMP_GT, CMP_LT, block, offset, nearest, which, hit_b1,    \
+                                  hit_b2, any)                                                                     \
     do {                                                                                                           \
         V a_z = P##_sub_ps(LOAD(block->p0[kz] + offset), w_oz);                                                    \
         V b_z = P##_sub_ps(LOAD(block->p1[kz] + offset), w_oz);                                                    \
@@ -148,11 +121,10 @@ __attribute__((noinline, cold)) static void edges_in_double(int lanes, const flo
         V by = P##_sub_ps(P##_sub_ps(LOAD(block->p1[ky] + offset), w_oy), P##_mul_ps(w_sy, b_z));                  \
         V cx = P##_sub_ps(P##_sub_ps(LOAD(block->p2[kx] + offset), w_ox), P##_mul_ps(w_sx, c_z));                  \
         V cy = P##_sub_ps(P##_sub_ps(LOAD(block->p2[ky] + offset), w_oy), P##_mul_ps(w_sy, c_z));                  \
-        FLAT_EDGES(V, P, STORE, LOADU, CMP_EQ, ax, ay, bx, by, cx, cy, u, v, w);                                   \
-        V negative = P##_or_ps(P##_or_ps(CMP_LT(u, zero), CMP_LT(v, zero)), CMP_LT(w, zero));                      \
-        V positive = P##_or_ps(P##_or_ps(CMP_GT(u, zero), CMP_GT(v, zero)), CMP_GT(w, zero));                      \
-        V determinant = P##_add_ps(P##_add_ps(u, v), w);                                                           \
-        V ok = P##_andnot_ps(P##_and_ps(negative, positive), CMP_NE(determinant, zero));                           \
+        V u = P##_sub_ps(P##_mul_ps(cx, by), P##_mul_ps(cy, bx));                                                  \
+        V v = P##_sub_ps(P##_mul_ps(ax, cy), P##_mul_ps(ay, cx));                                                  \
+        V w = P##_sub_ps(P##_mul_ps(bx, ay), P##_mul_ps(by, ax));                                                  \
+        WATERTIGHT_INSIDE(V, P, IN_DOUBLE, ok, determinant, ax, ay, bx, by, cx, cy, u, v, w);                      \
         if (P##_movemask_ps(ok) != 0) {                                                                            \
             WATERTIGHT_PLANE_T(V, P, t, LOAD(block->p0[0] + offset), LOAD(block->p0[1] + offset),                  \
                                LOAD(block->p0[2] + offset), LOAD(block->p1[0] + offset), LOAD(block->p1[1] + offset), \
@@ -169,14 +141,12 @@ __attribute__((noinline, cold)) static void edges_in_double(int lanes, const flo
         }                                                                                                          \
     } while (0)
 
-#define SSE_CMP_EQ(a, b) _mm_cmpeq_ps(a, b)
 #define SSE_CMP_NE(a, b) _mm_cmpneq_ps(a, b)
 #define SSE_CMP_GE(a, b) _mm_cmpge_ps(a, b)
 #define SSE_CMP_LE(a, b) _mm_cmple_ps(a, b)
 #define SSE_CMP_GT(a, b) _mm_cmpgt_ps(a, b)
 #define SSE_CMP_LT(a, b) _mm_cmplt_ps(a, b)
 /* The ordered predicates are the SSE ones (cmpneq is unordered: NaN != 0). */
-#define AVX_CMP_EQ(a, b) _mm256_cmp_ps(a, b, _CMP_EQ_OQ)
 #define AVX_CMP_NE(a, b) _mm256_cmp_ps(a, b, _CMP_NEQ_UQ)
 #define AVX_CMP_GE(a, b) _mm256_cmp_ps(a, b, _CMP_GE_OS)
 #define AVX_CMP_LE(a, b) _mm256_cmp_ps(a, b, _CMP_LE_OS)
@@ -279,12 +249,10 @@ static uint64_t tested_through(const flat *f, int i)
 #define SSE_BLOCK_TEST(watertight, block, nearest, which, hit_b1, hit_b2, any)                                     \
     do {                                                                                                           \
         if (watertight) {                                                                                          \
-            FLAT_LANE_TEST_WATERTIGHT(__m128, _mm, _mm_load_ps, _mm_storeu_ps, _mm_loadu_ps, SSE_CMP_EQ, SSE_CMP_NE, \
-                                      SSE_CMP_GT, SSE_CMP_LT, block, 0, nearest[0], which[0], hit_b1[0], hit_b2[0], \
-                                      any);                                                                        \
-            FLAT_LANE_TEST_WATERTIGHT(__m128, _mm, _mm_load_ps, _mm_storeu_ps, _mm_loadu_ps, SSE_CMP_EQ, SSE_CMP_NE, \
-                                      SSE_CMP_GT, SSE_CMP_LT, block, 4, nearest[1], which[1], hit_b1[1], hit_b2[1], \
-                                      any);                                                                        \
+            FLAT_LANE_TEST_WATERTIGHT(__m128, _mm, _mm_load_ps, WATERTIGHT_IN_DOUBLE4, SSE_CMP_GT, SSE_CMP_LT, block, \
+                                      0, nearest[0], which[0], hit_b1[0], hit_b2[0], any);                         \
+            FLAT_LANE_TEST_WATERTIGHT(__m128, _mm, _mm_load_ps, WATERTIGHT_IN_DOUBLE4, SSE_CMP_GT, SSE_CMP_LT, block, \
+                                      4, nearest[1], which[1], hit_b1[1], hit_b2[1], any);                         \
         } else {                                                                                                   \
             FLAT_LANE_TEST(__m128, _mm, _mm_load_ps, SSE_CMP_NE, SSE_CMP_GE, SSE_CMP_LE, SSE_CMP_GT, SSE_CMP_LT,   \
                            block, 0, nearest[0], which[0], hit_b1[0], hit_b2[0], any);                             \
@@ -433,7 +401,7 @@ typedef struct {
  * lanes the ray passes beside). */
 #define FLAT_RAYS_TEST_WATERTIGHT(block, j, R, nearest, ok_out, t_out, u_out, v_out)                                \
     do {                                                                                                           \
-        const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);                                       \
+        const __m256 one = _mm256_set1_ps(1.0f);                                                                   \
         FLAT_CORNER8(block, p0, j, R, p0x, p0y, p0z);                                                              \
         FLAT_CORNER8(block, p1, j, R, p1x, p1y, p1z);                                                              \
         FLAT_CORNER8(block, p2, j, R, p2x, p2y, p2z);                                                              \
@@ -445,13 +413,12 @@ typedef struct {
         __m256 by = _mm256_sub_ps(_mm256_sub_ps(p1y, (R).w_oy), _mm256_mul_ps((R).w_sy, b_z));                     \
         __m256 cx = _mm256_sub_ps(_mm256_sub_ps(p2x, (R).w_ox), _mm256_mul_ps((R).w_sx, c_z));                     \
         __m256 cy = _mm256_sub_ps(_mm256_sub_ps(p2y, (R).w_oy), _mm256_mul_ps((R).w_sy, c_z));                     \
-        FLAT_EDGES(__m256, _mm256, _mm256_storeu_ps, _mm256_loadu_ps, AVX_CMP_EQ, ax, ay, bx, by, cx, cy, u, v, w); \
-        __m256 negative = _mm256_or_ps(_mm256_or_ps(AVX_CMP_LT(u, zero), AVX_CMP_LT(v, zero)), AVX_CMP_LT(w, zero)); \
-        __m256 positive = _mm256_or_ps(_mm256_or_ps(AVX_CMP_GT(u, zero), AVX_CMP_GT(v, zero)), AVX_CMP_GT(w, zero)); \
-        __m256 determinant = _mm256_add_ps(_mm256_add_ps(u, v), w);                                                \
-        __m256 ok = _mm256_andnot_ps(_mm256_and_ps(negative, positive), AVX_CMP_NE(determinant, zero));            \
+        __m256 u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));                                    \
+        __m256 v = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));                                    \
+        __m256 w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));                                    \
+        WATERTIGHT_INSIDE(__m256, _mm256, WATERTIGHT_IN_DOUBLE8, ok, determinant, ax, ay, bx, by, cx, cy, u, v, w); \
         ok_out = ok;                                                                                               \
-        t_out = u_out = v_out = zero; /* for the lanes not hit: read, never used */                                \
+        t_out = u_out = v_out = _mm256_setzero_ps(); /* for the lanes not hit: read, never used */                 \
         if (_mm256_movemask_ps(ok) != 0) {                                                                         \
             const flat_block *b_ = (block);                                                                        \
             WATERTIGHT_PLANE_T(__m256, _mm256, t, _mm256_broadcast_ss(&b_->p0[0][j]),                              \

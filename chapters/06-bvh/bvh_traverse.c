@@ -7,6 +7,15 @@
 #include "bvh.h"
 #include "bvh_internal.h"
 
+/* The triangle tests and the leaf loop are inlined into each traversal
+ * whatever the compiler's size heuristics say: GCC 12 left
+ * bvh_triangle_test() out of line, a call per triangle. */
+#if defined(__GNUC__)
+#define BVH_INLINE static inline __attribute__((always_inline))
+#else
+#define BVH_INLINE static inline
+#endif
+
 /* Moller-Trumbore with the edges stored (bvh_triangle), for a BVH told to
  * use it (accel_use_triangle_test): the lecture's
  *     [t, b1, b2] = 1 / (S1 . E1) [S2 . E2, S1 . S, S2 . D]
@@ -16,7 +25,7 @@
  * float, bit for bit; only the two subtractions for E1 and E2 moved to the
  * build. The same rules too: only an exactly zero determinant is refused,
  * and the comparisons are false for NaN. */
-static inline bool bvh_triangle_intersect(const bvh_triangle *tri, const ray *r, float t_max, float *t_out,
+BVH_INLINE bool bvh_triangle_intersect(const bvh_triangle *tri, const ray *r, float t_max, float *t_out,
                                           float *b1_out, float *b2_out)
 {
     vec3 s1 = vec3_cross(r->direction, tri->e2);
@@ -44,7 +53,7 @@ static inline bool bvh_triangle_intersect(const bvh_triangle *tri, const ray *r,
 /* The watertight test (chapter 01's, what the BVH runs unless told
  * otherwise) on the stored corners, or Moller-Trumbore on the stored edges:
  * with `test` a constant, each traversal below is compiled for one. */
-static inline bool bvh_triangle_test(triangle_test test, const bvh_triangle *tri, const ray *r,
+BVH_INLINE bool bvh_triangle_test(triangle_test test, const bvh_triangle *tri, const ray *r,
                                      const watertight_ray *wr, float t_max, float *t, float *b1, float *b2)
 {
     if (test == TRIANGLE_TEST_WATERTIGHT)
@@ -75,7 +84,7 @@ typedef struct {
 
 /* Test the triangles of a leaf against (t_min, found->t); with
  * stop_at_first, return true at the first hit. */
-static inline bool test_leaf(const bvh *b, const bvh_node *node, const ray *r, const watertight_ray *wr,
+BVH_INLINE bool test_leaf(const bvh *b, const bvh_node *node, const ray *r, const watertight_ray *wr,
                              triangle_test test, bvh_found *found, bool stop_at_first, uint64_t *primitive_tests)
 {
     int first = node->first, end = first + bvh_node_triangles(node);

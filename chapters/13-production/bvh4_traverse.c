@@ -149,8 +149,8 @@ static inline int slab_test4_sse(const bvh4_node *node, const bvh4_ray *r, float
  * p0[kx], and the permutation costs nothing. Returns the mask of lanes hit
  * in (t_min, t_max). */
 
-static inline int triangle_test4_watertight_scalar(const bvh4_packet *p, const bvh4_ray *r4, float t_max, float t[4],
-                                                   float b1[4], float b2[4])
+static ALWAYS_INLINE int triangle_test4_watertight_scalar(const bvh4_packet *p, const bvh4_ray *r4, float t_max,
+                                                          float t[4], float b1[4], float b2[4])
 {
     int mask = 0;
     for (int k = 0; k < 4; k++) {
@@ -168,8 +168,8 @@ static inline int triangle_test4_watertight_scalar(const bvh4_packet *p, const b
  * runs to the end and the conditions are and-ed, as in
  * WATERTIGHT_INSIDE (watertight_simd.h), which says why the answers are the
  * same. Only the lanes the ray passes inside, if any, go on to t. */
-static inline int triangle_test4_watertight_sse(const bvh4_packet *p, const bvh4_ray *r4, float t_max, float t[4],
-                                                float b1[4], float b2[4])
+static ALWAYS_INLINE int triangle_test4_watertight_sse(const bvh4_packet *p, const bvh4_ray *r4, float t_max,
+                                                       float t[4], float b1[4], float b2[4])
 {
     const int kx = r4->watertight.kx, ky = r4->watertight.ky, kz = r4->watertight.kz;
     const __m128 *o = r4->w_origin, *shear = r4->w_shear;
@@ -211,8 +211,8 @@ static inline int triangle_test4_watertight_sse(const bvh4_packet *p, const bvh4
  * every comparison is false for NaN. Returns the mask of lanes hit in
  * (t_min, t_max). */
 
-static inline int triangle_test4_scalar(const bvh4_packet *p, const ray *r, float t_max, float t[4], float b1[4],
-                                        float b2[4])
+static ALWAYS_INLINE int triangle_test4_scalar(const bvh4_packet *p, const ray *r, float t_max, float t[4],
+                                               float b1[4], float b2[4])
 {
     int mask = 0;
     for (int k = 0; k < 4; k++) {
@@ -230,8 +230,8 @@ static inline int triangle_test4_scalar(const bvh4_packet *p, const ray *r, floa
  * runs to the end and the conditions are and-ed. A lane the scalar test
  * leaves early (determinant 0) computes 1/0 = inf and NaN on the way, which
  * fail its remaining comparisons: the mask is the same. */
-static inline int triangle_test4_sse(const bvh4_packet *p, const bvh4_ray *r4, const ray *r, float t_max, float t[4],
-                                     float b1[4], float b2[4])
+static ALWAYS_INLINE int triangle_test4_sse(const bvh4_packet *p, const bvh4_ray *r4, const ray *r, float t_max,
+                                            float t[4], float b1[4], float b2[4])
 {
     const __m128 *d = r4->direction;
     __m128 e1x = _mm_load_ps(p->e1[0]), e1y = _mm_load_ps(p->e1[1]), e1z = _mm_load_ps(p->e1[2]);

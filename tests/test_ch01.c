@@ -142,9 +142,12 @@ static void test_triangle_ray_in_its_plane_gives_no_hit_and_no_nan(void **state)
     (void)state;
     hit_record hit;
     memset(&hit, 0, sizeof hit);
-    /* In the plane z = 0, straight through the triangle. */
+    /* In the plane z = 0, straight through the triangle: the lecture's test
+     * and the watertight one. */
     assert_false(triangle_intersect(&unit_triangle, ray_from(-1, 0.25f, 0, 1, 0, 0), &hit));
     assert_false(triangle_intersect(&unit_triangle, ray_from(0.2f, 0.2f, 0, 1, 1, 0), &hit));
+    assert_false(triangle_intersect_watertight_hit(&unit_triangle, ray_from(-1, 0.25f, 0, 1, 0, 0), &hit));
+    assert_false(triangle_intersect_watertight_hit(&unit_triangle, ray_from(0.2f, 0.2f, 0, 1, 1, 0), &hit));
     assert_false(isnan(hit.t)); /* the record was not touched */
 }
 
@@ -159,6 +162,10 @@ static void test_tiny_triangle_is_hit(void **state)
     assert_true(triangle_intersect(&tiny, ray_from(side / 4, side / 4, -1, 0, 0, 1), &hit));
     assert_close(hit.t, 1.0, 1e-6);
     assert_false(triangle_intersect(&tiny, ray_from(side, side, -1, 0, 0, 1), &hit));
+    /* the watertight test has no cut-off either */
+    assert_true(triangle_intersect_watertight_hit(&tiny, ray_from(side / 4, side / 4, -1, 0, 0, 1), &hit));
+    assert_close(hit.t, 1.0, 1e-6);
+    assert_false(triangle_intersect_watertight_hit(&tiny, ray_from(side, side, -1, 0, 0, 1), &hit));
 }
 
 static void test_triangle_back_face_and_outside(void **state)
@@ -171,6 +178,12 @@ static void test_triangle_back_face_and_outside(void **state)
     assert_false(hit.front_face);
     assert_close(hit.normal_geometric.z, -1.0, 1e-6);
     assert_false(triangle_intersect(&unit_triangle, ray_from(0.6f, 0.6f, 1, 0, 0, -1), &hit));
+    /* the same with the watertight test, which accepts both windings */
+    assert_true(triangle_intersect_watertight_hit(&unit_triangle, ray_from(0.25f, 0.25f, 1, 0, 0, -1), &hit));
+    assert_true(hit.front_face);
+    assert_true(triangle_intersect_watertight_hit(&unit_triangle, ray_from(0.25f, 0.25f, -1, 0, 0, 1), &hit));
+    assert_false(hit.front_face);
+    assert_false(triangle_intersect_watertight_hit(&unit_triangle, ray_from(0.6f, 0.6f, 1, 0, 0, -1), &hit));
 }
 
 /* ---- watertightness: rays through shared edges and vertices --------------- */

@@ -1175,9 +1175,10 @@ static bool inside_triangle_box(const triangle_set *set, int index, vec3 p)
  * two room sizes back along its line, its origin on the plane or 2^-16 off
  * it. Each lane is compared with the ray alone (flat.c, "Groups").
  *
- * A ray in a triangle's plane, within rounding, is where Moller-Trumbore
- * means nothing: its determinant is rounding noise, and it may report a
- * "hit" hundreds of units from the triangle. A packet whose rays all miss
+ * A ray in a triangle's plane, within rounding, is where a triangle test
+ * means nothing: the watertight test's determinant is rounding noise, and
+ * its t (where the ray meets a plane it nearly lies in) may put the "hit"
+ * hundreds of units from the triangle. A packet whose rays all miss
  * that triangle's box skips it and gives the true nearest hit instead. So
  * a lane may differ from the ray alone only there: where the lone ray's
  * hit point o + t d lies outside its triangle's box. Returns

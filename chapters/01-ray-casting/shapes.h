@@ -158,6 +158,36 @@ static inline watertight_ray watertight_ray_make(const ray *r)
 void watertight_edges_in_double(float ax, float ay, float bx, float by, float cx, float cy, float *u, float *v,
                                 float *w);
 
+/* t where the ray meets the triangle's plane, ((P0 - O) . N) / (D . N)
+ * with N = (P1 - P0) x (P2 - P0), as Embree's watertight kernel computes
+ * it; pbrt computes (u z_a + v z_b + w z_c) / det from the sheared
+ * corners instead. Why not pbrt's: the shear mixes the three coordinates
+ * of every corner, so that t's error is a few ulps of the corners'
+ * distances from the origin, whatever the ray's own offset from the
+ * plane. A ray spawned from the Cornell box's floor (y = 0) starts 2^-16
+ * above it (ray.h's fixed offset near 0) while the floor's corners are 550
+ * away, a quarter of their ulp: pbrt's t found the floor again at
+ * t = +3e-8 (5 of 20,000 shadow rays, test_walls_skipped_only_where_they_
+ * cannot_block). Here P0 - O along an axis-aligned normal is exact, and in
+ * general t is as accurate as Moller-Trumbore's, for which ray.h's offsets
+ * were made and tested. pbrt guards its t with an error bound instead
+ * (refusing t below it), which refuses every hit on a sliver one float
+ * step thick (test_sliver_one_float_step_thick_is_still_hit). Only rays
+ * that passed the edge test get here. Written out (not vec3_cross and
+ * vec3_dot) so that the SIMD kernels' copies (watertight_simd.h) visibly
+ * do the same operations in the same order. */
+WATERTIGHT_INLINE float watertight_plane_t(const float *p0, const float *p1, const float *p2,
+                                           const watertight_ray *wr)
+{
+    float e1x = p1[0] - p0[0], e1y = p1[1] - p0[1], e1z = p1[2] - p0[2];
+    float e2x = p2[0] - p0[0], e2y = p2[1] - p0[1], e2z = p2[2] - p0[2];
+    float nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
+    float sx = p0[0] - wr->origin.x, sy = p0[1] - wr->origin.y, sz = p0[2] - wr->origin.z;
+    float numerator = sx * nx + sy * ny + sz * nz;
+    float denominator = wr->direction.x * nx + wr->direction.y * ny + wr->direction.z * nz;
+    return numerator / denominator;
+}
+
 /* The triangle's part: corners p0, p1, p2 given as pointers to their three
  * coordinates. A hit in (t_min, t_max) gives t, b1 (p1's weight) and b2
  * (p2's). Degenerate triangles (triangle_is_degenerate()) are not refused
@@ -181,45 +211,15 @@ void watertight_edges_in_double(float ax, float ay, float bx, float by, float cx
  *     either sign: recompute in double (exact there), rare.
  *  4. Inside iff u, v, w are all >= 0 or all <= 0 (either winding).
  *     pbrt swaps kx and ky when d_kz < 0 to keep the winding; that negates
- *     u, v, w, their sum and the scaled t exactly, and changes no t, b1, b2
- *     or decision, so we do not.
+ *     u, v, w and their sum exactly, and changes no decision, b1 or b2, so
+ *     we do not.
  *  5. det = u + v + w (0: the ray lies in the triangle's plane: no hit;
  *     NaN, from NaN coordinates: no hit either).
  *  6. t from the triangle's plane, for the rays that passed: see
  *     watertight_plane_t(). The barycentrics are the edge functions over
  *     det. */
-
-/* t where the ray meets the triangle's plane, ((P0 - O) . N) / (D . N)
- * with N = (P1 - P0) x (P2 - P0), as Embree's watertight kernel computes
- * it; pbrt computes (u z_a + v z_b + w z_c) / det from the sheared
- * corners instead. Why not pbrt's: the shear mixes the three coordinates
- * of every corner, so that t's error is a few ulps of the corners'
- * distances from the origin, whatever the ray's own offset from the
- * plane. A ray spawned from the Cornell box's floor (y = 0) starts 2^-16
- * above it (ray.h's fixed offset near 0) while the floor's corners are 550
- * away, a quarter of their ulp: pbrt's t found the floor again at
- * t = +3e-8 (5 of 20,000 shadow rays, test_walls_skipped_only_where_they_
- * cannot_block). Here P0 - O along an axis-aligned normal is exact, and in
- * general t is as accurate as Moller-Trumbore's, for which ray.h's offsets
- * were made and tested. pbrt guards its t with an error bound instead
- * (refusing t below it), which refuses every hit on a sliver one float
- * step thick (test_sliver_one_float_step_thick_is_still_hit). Only rays
- * that passed the edge test get here. Written out (not vec3_cross and
- * vec3_dot) so that the SIMD kernels' copies (watertight_simd.h) visibly
- * do the same operations in the same order. */
-WATERTIGHT_INLINE float watertight_plane_t(const float *p0, const float *p1, const float *p2, const watertight_ray *wr)
-{
-    float e1x = p1[0] - p0[0], e1y = p1[1] - p0[1], e1z = p1[2] - p0[2];
-    float e2x = p2[0] - p0[0], e2y = p2[1] - p0[1], e2z = p2[2] - p0[2];
-    float nx = e1y * e2z - e1z * e2y, ny = e1z * e2x - e1x * e2z, nz = e1x * e2y - e1y * e2x;
-    float sx = p0[0] - wr->origin.x, sy = p0[1] - wr->origin.y, sz = p0[2] - wr->origin.z;
-    float numerator = sx * nx + sy * ny + sz * nz;
-    float denominator = wr->direction.x * nx + wr->direction.y * ny + wr->direction.z * nz;
-    return numerator / denominator;
-}
-
-WATERTIGHT_INLINE bool watertight_intersect(const watertight_ray *wr, const float *p0, const float *p1, const float *p2,
-                                        float t_max, float *t_out, float *b1_out, float *b2_out)
+WATERTIGHT_INLINE bool watertight_intersect(const watertight_ray *wr, const float *p0, const float *p1,
+                                            const float *p2, float t_max, float *t_out, float *b1_out, float *b2_out)
 {
     const float *o = &wr->origin.x;
     const int kx = wr->kx, ky = wr->ky, kz = wr->kz;
@@ -263,7 +263,7 @@ bool triangle_is_degenerate(const triangle *tri);
  * chapter 03): the area is asked only after a hit, which is rare beside the
  * tests that miss. */
 WATERTIGHT_INLINE bool watertight_intersect_triangle(const watertight_ray *wr, const triangle *tri, float t_max,
-                                                 float *t_out, float *b1_out, float *b2_out)
+                                                     float *t_out, float *b1_out, float *b2_out)
 {
     float t, b1, b2;
     if (!watertight_intersect(wr, &tri->p0.x, &tri->p1.x, &tri->p2.x, t_max, &t, &b1, &b2) ||
@@ -279,7 +279,7 @@ WATERTIGHT_INLINE bool watertight_intersect_triangle(const watertight_ray *wr, c
  * the structures of chapters 03-06 call in their inner loops. Inline, and
  * called with `test` a constant, so each loop is compiled for one test. */
 WATERTIGHT_INLINE bool triangle_intersect_with(triangle_test test, const watertight_ray *wr, const triangle *tri,
-                                           const ray *r, float t_max, float *t, float *b1, float *b2)
+                                               const ray *r, float t_max, float *t, float *b1, float *b2)
 {
     if (test == TRIANGLE_TEST_WATERTIGHT)
         return watertight_intersect_triangle(wr, tri, t_max, t, b1, b2);

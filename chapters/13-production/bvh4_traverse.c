@@ -52,10 +52,9 @@ static inline bvh4_ray bvh4_ray_make(const ray *r)
     b.watertight = watertight_ray_make(r);
 #if BVH4_HAVE_SSE
     const watertight_ray *w = &b.watertight;
-    const float *o = &w->origin.x;
-    b.w_origin[0] = _mm_set1_ps(o[w->kx]);
-    b.w_origin[1] = _mm_set1_ps(o[w->ky]);
-    b.w_origin[2] = _mm_set1_ps(o[w->kz]);
+    b.w_origin[0] = _mm_set1_ps(vec3_axis(w->origin, w->kx));
+    b.w_origin[1] = _mm_set1_ps(vec3_axis(w->origin, w->ky));
+    b.w_origin[2] = _mm_set1_ps(vec3_axis(w->origin, w->kz));
     b.w_shear[0] = _mm_set1_ps(w->shear_x);
     b.w_shear[1] = _mm_set1_ps(w->shear_y);
     b.w_t_min = _mm_set1_ps(w->t_min);

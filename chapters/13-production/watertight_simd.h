@@ -93,4 +93,16 @@ __attribute__((noinline, cold, unused)) static void watertight_edges_in_double_l
         t = P##_div_ps(numerator_, denominator_);                                                                 \
     } while (0)
 
+/* The same with N = (P1 - P0) x (P2 - P0) given (computed with
+ * watertight_plane_t()'s operations, once per triangle): the same float. */
+#define WATERTIGHT_PLANE_T_N(V, P, t, p0x, p0y, p0z, nx, ny, nz, ox, oy, oz, dx, dy, dz)                          \
+    V t;                                                                                                          \
+    do {                                                                                                          \
+        V nx_ = (nx), ny_ = (ny), nz_ = (nz);                                                                     \
+        V sx_ = P##_sub_ps(p0x, ox), sy_ = P##_sub_ps(p0y, oy), sz_ = P##_sub_ps(p0z, oz);                         \
+        V numerator_ = P##_add_ps(P##_add_ps(P##_mul_ps(sx_, nx_), P##_mul_ps(sy_, ny_)), P##_mul_ps(sz_, nz_));   \
+        V denominator_ = P##_add_ps(P##_add_ps(P##_mul_ps(dx, nx_), P##_mul_ps(dy, ny_)), P##_mul_ps(dz, nz_));    \
+        t = P##_div_ps(numerator_, denominator_);                                                                 \
+    } while (0)
+
 #endif

@@ -1,8 +1,11 @@
 /* accel_check.h -- the differential test every acceleration structure takes:
  * on several meshes, for many seeded rays, its closest hit must be brute
  * force's (same t, bit for bit, and the same triangle unless two triangles
- * tie at that t), and its any-hit must agree with its closest hit. Include
- * after <cmocka.h>.
+ * tie at that t), and its any-hit must agree with its closest hit. The
+ * reference is brute force with the watertight triangle test (chapter 01),
+ * the test every structure runs: a reference on Moller-Trumbore would leak
+ * through the same shared edges as a structure on it, and could not see
+ * that (tests/test_ch13.c's leak test does). Include after <cmocka.h>.
  *
  * Usage in a suite:
  *   static accel *build_grid(const triangle_set *s) { return grid_build(s, 27.0f); }
@@ -19,8 +22,9 @@
 
 typedef accel *(*accel_builder)(const triangle_set *set);
 
-/* 8 float ulps: two arrangements of Moller-Trumbore round differently by a
- * few ulps; a wrong traversal finds a hit farther away by far more. */
+/* 8 float ulps: two arrangements of a triangle test (a structure's stored
+ * corners or edges, its SIMD lanes) may round differently by a few ulps; a
+ * wrong traversal finds a hit farther away by far more. */
 static const float ACCEL_CHECK_T_TOLERANCE = 8.0f * 0x1.0p-24f;
 
 typedef enum {
@@ -133,6 +137,7 @@ static inline long accel_check_mesh_kind(accel_builder build, accel_check_mesh k
     triangle_set set;
     triangle_set_from_mesh(&set, &m);
     accel *reference = brute_force_build(&set);
+    assert_int_equal(reference->triangle_test, TRIANGLE_TEST_WATERTIGHT);
     accel *tested = build(&set);
     pcg32 rng = pcg32_for_pixel(20261123, (uint64_t)kind);
     long mismatches = 0, hits = 0;

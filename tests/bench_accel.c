@@ -13,6 +13,15 @@
  * and bvh4_any_hit_stream() in chunks of STREAM_CHUNK rays: the same
  * answers, 16 rays taking turns so that their waits for memory overlap.
  *
+ * Every structure traces with the watertight triangle test (chapter 01),
+ * what the renderers use. After each mesh size's table, a second one times
+ * the same structures with the watertight test and with Moller-Trumbore
+ * (accel_use_triangle_test), alternately in the same run (watertight then
+ * Moller-Trumbore, then the other way round, rep after rep), on one
+ * thread: what watertightness costs each structure, by the wall clock and
+ * by this process's CPU time (the two part when other work shares the
+ * machine). --compare-only prints that table alone.
+ *
  * This is a benchmark, not a test: it prints figures and asserts nothing
  * about time. It does check that every structure finds the same hits (the
  * same count and sum of t as brute force or the BVH), so a fast wrong answer
@@ -20,6 +29,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -44,11 +54,18 @@ typedef struct {
 /* ---- timing ------------------------------------------------------------------ */
 
 typedef struct {
-    double seconds;
+    double seconds, cpu_seconds; /* by the wall clock, and this process's CPU time */
     long hits;
     double t_sum;
     ray_counters counters;
 } trace_result;
+
+static double process_cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
 
 /* Rays handed to a stream kernel at a time (bvh4-stream). */
 enum { STREAM_CHUNK = 1024 };
@@ -58,7 +75,7 @@ static trace_result trace(const accel *a, const ray_set *rays, int count, bool c
     trace_result result = {0};
     long hits = 0;
     double t_sum = 0.0;
-    double start = timer_seconds();
+    double start = timer_seconds(), start_cpu = process_cpu_seconds();
 #pragma omp parallel num_threads(threads) reduction(+ : hits, t_sum)
     {
         ray_counters mine = {0};
@@ -96,6 +113,7 @@ static trace_result trace(const accel *a, const ray_set *rays, int count, bool c
         counters_add(&result.counters, &mine);
     }
     result.seconds = timer_seconds() - start;
+    result.cpu_seconds = process_cpu_seconds() - start_cpu;
     result.hits = hits;
     result.t_sum = t_sum;
     return result;
@@ -165,6 +183,94 @@ static ray_set ray_subset(const ray_set *all, int count)
     for (int k = 0; k < count; k++)
         s.rays[k] = all->rays[(size_t)k * (size_t)stride];
     return s;
+}
+
+/* ---- the watertight test against Moller-Trumbore ------------------------------------
+ * One structure, one thread, the four workloads (coherent and incoherent
+ * rays, closest and any hit) with each triangle test in turn: rep k times
+ * the watertight test first when k is even and Moller-Trumbore first when
+ * it is odd, so that a machine that slows down or speeds up during the
+ * run weighs on both alike. The medians of reps, by the wall clock and by
+ * the process's CPU time. Also counts the rays whose answer (hit or not)
+ * differs between the tests: Moller-Trumbore's leaks, and rays through
+ * edges where either may round the other way. */
+enum { WORKLOADS = 4 };
+static const char *const workload_names[WORKLOADS] = {"coherent closest", "coherent any", "incoherent closest",
+                                                      "incoherent any"};
+
+typedef struct {
+    double mrays[2][WORKLOADS], cpu_mrays[2][WORKLOADS]; /* [test][workload] */
+    long hits[2][WORKLOADS];
+} test_comparison;
+
+static double median_of(double *values, int n)
+{
+    qsort(values, (size_t)n, sizeof *values, compare_doubles);
+    return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+static test_comparison compare_triangle_tests(accel *a, const ray_set *coherent, const ray_set *incoherent, int reps,
+                                              bool stream)
+{
+    test_comparison c = {0};
+    double seconds[2][WORKLOADS][16], cpu[2][WORKLOADS][16];
+    if (reps > 16)
+        reps = 16;
+    for (int test = 0; test < 2; test++) { /* warm-up, not counted */
+        accel_use_triangle_test(a, (triangle_test)test);
+        trace(a, coherent, coherent->count, true, 1, stream);
+    }
+    for (int rep = 0; rep < reps; rep++)
+        for (int turn = 0; turn < 2; turn++) {
+            int test = rep % 2 ? 1 - turn : turn;
+            accel_use_triangle_test(a, (triangle_test)test);
+            for (int w = 0; w < WORKLOADS; w++) {
+                const ray_set *rays = w < 2 ? coherent : incoherent;
+                trace_result r = trace(a, rays, rays->count, w % 2 == 0, 1, stream);
+                seconds[test][w][rep] = r.seconds;
+                cpu[test][w][rep] = r.cpu_seconds;
+                c.hits[test][w] = r.hits;
+            }
+        }
+    for (int test = 0; test < 2; test++)
+        for (int w = 0; w < WORKLOADS; w++) {
+            int count = w < 2 ? coherent->count : incoherent->count;
+            c.mrays[test][w] = count / median_of(seconds[test][w], reps) * 1e-6;
+            c.cpu_mrays[test][w] = count / median_of(cpu[test][w], reps) * 1e-6;
+        }
+    accel_use_triangle_test(a, TRIANGLE_TEST_WATERTIGHT);
+    return c;
+}
+
+static void print_comparison_header(int reps)
+{
+    printf("\nthe watertight triangle test (wt) against Moller-Trumbore (mt), the same structures, 1 thread, "
+           "alternating, median of %d:\nMrays/s by the wall clock; cost = mt / wt - 1, the watertight test's extra "
+           "time per ray, by the wall clock [by this process's CPU time]\n", reps);
+    printf("%-11s %9s", "structure", "triangles");
+    for (int w = 0; w < WORKLOADS; w++)
+        printf(" | %-38s", workload_names[w]);
+    printf(" | hits differ\n");
+}
+
+static void print_comparison(const char *name, int triangles, const test_comparison *c, FILE *csv)
+{
+    printf("%-11s %9d", name, triangles);
+    long differ = 0;
+    for (int w = 0; w < WORKLOADS; w++) {
+        double cost = c->mrays[1][w] / c->mrays[0][w] - 1.0;
+        double cpu_cost = c->cpu_mrays[1][w] / c->cpu_mrays[0][w] - 1.0;
+        printf(" | wt %7.3f mt %7.3f %+5.1f%% [%+5.1f%%]", c->mrays[0][w], c->mrays[1][w], 100.0 * cost,
+               100.0 * cpu_cost);
+        long d = c->hits[0][w] - c->hits[1][w];
+        differ += d < 0 ? -d : d;
+    }
+    printf(" | %ld\n", differ);
+    if (csv != NULL)
+        for (int w = 0; w < WORKLOADS; w++)
+            fprintf(csv, "%s,%d,%s,%.4f,%.4f,%.4f,%.4f,%ld,%ld\n", name, triangles, workload_names[w], c->mrays[0][w],
+                    c->mrays[1][w], c->cpu_mrays[0][w], c->cpu_mrays[1][w], c->hits[0][w], c->hits[1][w]);
+    fflush(stdout);
 }
 
 /* ---- Embree's figures ------------------------------------------------------------ */
@@ -296,7 +402,8 @@ static void stadium_study(const char *path, int reps)
 static void usage(void)
 {
     printf("usage: bench_accel [--sizes 1024,10240,102400,1048576] [--only NAME,...] [--reps N]\n"
-           "                   [--threads N] [--out FILE.csv] [--embree FILE] [--stadium FILE.csv]\n\n"
+           "                   [--threads N] [--out FILE.csv] [--embree FILE] [--stadium FILE.csv]\n"
+           "                   [--compare-only] [--tests-csv FILE.csv]\n\n"
            "Times every acceleration structure on the tori field of ../shared/anchors/embree_bench.c,\n"
            "with the harness's coherent and incoherent ray sets: build ms, bytes per triangle, and\n"
            "Mrays/s for closest hit and any hit, on one thread and on all; --out also writes them as\n"
@@ -304,6 +411,9 @@ static void usage(void)
            "harness's output ('embree_bench embree N medium 1 R' lines) and prints ratios.\n"
            "--stadium also runs the teapot in a stadium (the grid at several C, every hierarchy)\n"
            "and writes its figures to FILE.csv.\n"
+           "After each size's table, every structure is timed again with the watertight triangle test and\n"
+           "with Moller-Trumbore, alternately, on one thread (--compare-only: that table alone; --tests-csv\n"
+           "writes it as CSV).\n"
            "structures: brute flat grid kdtree bvh-median bvh-sah bvh4-sah bvh4-stream (flat: brute\n"
            "force, 8 triangles per AVX instruction; bvh4-stream: bvh4-sah's tree, rays traced 16 at a\n"
            "time, taking turns: bvh4_closest_hit_stream)\n");
@@ -313,7 +423,8 @@ int main(int argc, char **argv)
 {
     long sizes[8] = {1024, 10240, 102400, 1048576};
     int size_count = 4, reps = 3, threads = 1;
-    const char *out_path = NULL, *embree_path = NULL, *only = NULL, *stadium_path = NULL;
+    const char *out_path = NULL, *embree_path = NULL, *only = NULL, *stadium_path = NULL, *tests_path = NULL;
+    bool compare_only = false;
 #ifdef _OPENMP
     threads = omp_get_max_threads();
 #endif
@@ -344,6 +455,11 @@ int main(int argc, char **argv)
         } else if (strcmp(argv[i], "--stadium") == 0 && value) {
             stadium_path = value;
             i++;
+        } else if (strcmp(argv[i], "--compare-only") == 0) {
+            compare_only = true;
+        } else if (strcmp(argv[i], "--tests-csv") == 0 && value) {
+            tests_path = value;
+            i++;
         } else if (strcmp(argv[i], "--embree") == 0 && value) {
             embree_path = value;
             i++;
@@ -354,6 +470,17 @@ int main(int argc, char **argv)
     }
     embree_figures embree[8];
     int embree_count = embree_path ? embree_load(embree_path, embree, 8) : 0;
+    FILE *tests_csv = NULL;
+    char tests_temp[4096] = "";
+    if (tests_path != NULL) {
+        snprintf(tests_temp, sizeof tests_temp, "%s.part", tests_path);
+        if ((tests_csv = fopen(tests_temp, "w")) == NULL) {
+            fprintf(stderr, "bench_accel: cannot write '%s'\n", tests_path);
+            return 1;
+        }
+        fprintf(tests_csv, "structure,triangles,workload,watertight_mrays,moller_trumbore_mrays,"
+                           "watertight_cpu_mrays,moller_trumbore_cpu_mrays,watertight_hits,moller_trumbore_hits\n");
+    }
 
     /* The CSV only with --out: a quick run of one structure must not replace
      * the full benchmark's figures that `make plots` draws. Written to a
@@ -396,6 +523,8 @@ int main(int argc, char **argv)
         incoherent.rays = accel_harness_rays(set.bounds, false, &incoherent.count);
         const embree_figures *e = embree_find(embree, embree_count, set.count);
         double closest_mrays[STRUCTURE_COUNT][2] = {{0}}; /* coherent, incoherent, one thread */
+        test_comparison comparisons[STRUCTURE_COUNT];
+        bool compared[STRUCTURE_COUNT] = {false};
 
         for (int k = 0; k < STRUCTURE_COUNT; k++) {
             const structure *st = &structures[k];
@@ -417,6 +546,16 @@ int main(int argc, char **argv)
 
             ray_set coh = ray_subset(&coherent, st->max_rays), inc = ray_subset(&incoherent, st->max_rays);
             bool stream = st->stream;
+            comparisons[k] = compare_triangle_tests(a, &coh, &inc, reps, stream);
+            compared[k] = true;
+            if (compare_only) {
+                if (coh.rays != coherent.rays)
+                    free(coh.rays);
+                if (inc.rays != incoherent.rays)
+                    free(inc.rays);
+                accel_destroy(a);
+                continue;
+            }
             trace(a, &coh, coh.count, true, 1, stream); /* warm-up, not counted */
             trace_result cc = trace_median(a, &coh, coh.count, true, 1, reps, stream);
             trace_result ca = trace_median(a, &coh, coh.count, false, 1, reps, stream);
@@ -478,6 +617,16 @@ int main(int argc, char **argv)
                            closest_mrays[k][1] / closest_mrays[reference][1]);
             printf("\n");
         }
+        bool header = false;
+        for (int k = 0; k < STRUCTURE_COUNT; k++)
+            if (compared[k]) {
+                if (!header)
+                    print_comparison_header(reps);
+                header = true;
+                print_comparison(structures[k].name, set.count, &comparisons[k], tests_csv);
+            }
+        if (header)
+            printf("\n");
         free(coherent.rays);
         free(incoherent.rays);
         triangle_set_free(&set);
@@ -489,6 +638,14 @@ int main(int argc, char **argv)
             return 1;
         }
         printf("wrote %s\n", out_path);
+    }
+    if (tests_csv != NULL) {
+        if (fclose(tests_csv) != 0 || rename(tests_temp, tests_path) != 0) {
+            fprintf(stderr, "bench_accel: cannot write '%s'\n", tests_path);
+            remove(tests_temp);
+            return 1;
+        }
+        printf("wrote %s\n", tests_path);
     }
     if (stadium_path != NULL)
         stadium_study(stadium_path, reps);

@@ -126,7 +126,7 @@ static void embree_destroy(accel *a)
     free(ea);
 }
 
-static const accel_ops embree_ops = {embree_closest_hit, embree_any_hit, embree_destroy};
+static const accel_ops embree_ops = {embree_closest_hit, embree_any_hit, embree_destroy, NULL};
 
 /* One triangle geometry over the set's corners (copied: triangle i is
  * vertices 3i, 3i+1, 3i+2, so Embree's primID is our triangle index), built
@@ -222,7 +222,7 @@ static bool recording_any_hit(const accel *a, ray r, ray_counters *counters)
 
 static void recording_destroy(accel *a) { (void)a; /* lives on the caller's stack */ }
 
-static const accel_ops recording_ops = {recording_closest_hit, recording_any_hit, recording_destroy};
+static const accel_ops recording_ops = {recording_closest_hit, recording_any_hit, recording_destroy, NULL};
 
 /* ---- 1. the same hits on random rays ------------------------------------------ */
 

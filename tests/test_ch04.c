@@ -15,7 +15,7 @@
 
 #include "04-uniform-grid/grid.h"
 
-/* t values below are exact in real numbers; Moller-Trumbore in float gets
+/* t values below are exact in real numbers; the triangle test in float gets
  * within a few ulps of t <= 10. */
 static const double T_TOLERANCE = 1e-5;
 

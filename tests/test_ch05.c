@@ -18,7 +18,7 @@
 
 #include "05-kd-tree/kdtree.h"
 
-/* The t values below are exact in real numbers; Moller-Trumbore in float
+/* The t values below are exact in real numbers; the triangle test in float
  * gets within a few ulps of them for t <= 10. */
 static const double T_TOLERANCE = 1e-5;
 
@@ -513,7 +513,7 @@ static int naive_first_leaf_hit(const kd_tree *tree, ray r, float *t_hit)
         for (uint32_t i = 0; i < kd_node_triangle_count(n); i++) {
             float t, b1, b2;
             int k = (int)tree->references[n->first_reference + i];
-            if (triangle_intersect_barycentric(&tree->base.set->triangles[k], &r, &t, &b1, &b2)) {
+            if (triangle_intersect_watertight(&tree->base.set->triangles[k], &r, &t, &b1, &b2)) {
                 best = k;
                 r.t_max = *t_hit = t;
             }

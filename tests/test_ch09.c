@@ -1099,14 +1099,14 @@ static void fixed_error_destroy(accel *a)
     free(a);
 }
 
-static const accel_ops fixed_error_ops = {fixed_error_closest_hit, fixed_error_any_hit, fixed_error_destroy};
+static const accel_ops fixed_error_ops = {fixed_error_closest_hit, fixed_error_any_hit, fixed_error_destroy, NULL};
 
 static accel *build_fixed_error(const triangle_set *set, const void *context)
 {
     fixed_error_accel *f = calloc(1, sizeof *f);
     assert_non_null(f);
     f->inner = bvh_build(set, BVH_SPLIT_SAH);
-    f->base = (accel){&fixed_error_ops, set, f->inner->stats};
+    f->base = (accel){&fixed_error_ops, set, f->inner->stats, f->inner->triangle_test};
     f->point_error = *(const float *)context;
     return &f->base;
 }

@@ -14,11 +14,17 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <unistd.h>
+
+#include "01-ray-casting/scene.h"
+#include "04-uniform-grid/grid.h"
+#include "05-kd-tree/kdtree.h"
 #include "06-bvh/bvh.h"
 #include "08-monte-carlo/sampling.h"
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
+#include "10-distribution/motion_scene.h"
 #include "13-production/bvh4.h"
 #include "13-production/fast_sincos.h"
 #include "13-production/flat.h"
@@ -31,6 +37,7 @@
 #include "accel_check.h"
 #include "image_check.h"
 #include "pt_scene_check.h"
+#include "leak_check.h"
 #include "test_support.h"
 
 static bool box_contains(aabb outer, aabb inner)
@@ -149,15 +156,27 @@ static void check_bvh4_subtree(const bvh4 *b, uint32_t ref, aabb box, int depth,
             assert_true(lane < 4 * b->packet_count);
             const bvh4_packet *p = &b->packets[first + i / 4];
             int t = bvh4_lane_triangle(p->index[i % 4]);
-            if (i >= count) {
+            bool moller_trumbore = b->base.triangle_test == TRIANGLE_TEST_MOLLER_TRUMBORE;
+            if (i >= count) { /* empty: zeros for Moller-Trumbore, NaN for the watertight test */
                 assert_int_equal(t, -1);
-                assert_true(p->e1[0][i % 4] == 0.0f && p->e2[2][i % 4] == 0.0f);
+                if (moller_trumbore)
+                    assert_true(p->e1[0][i % 4] == 0.0f && p->e2[2][i % 4] == 0.0f);
+                else
+                    assert_true(isnan(p->p0[0][i % 4]) && isnan(p->p1[1][i % 4]) && isnan(p->p2[2][i % 4]));
                 continue;
             }
             assert_true(t >= 0 && t < b->triangle_count);
             seen[t]++;
             assert_true(box_contains(box, b->base.set->boxes[t]));
             const triangle *tri = &b->base.set->triangles[t];
+            if (!moller_trumbore) { /* the corners, or NaN for a degenerate triangle */
+                bool degenerate = triangle_is_degenerate(tri);
+                assert_true(degenerate ? isnan(p->p0[0][i % 4]) && isnan(p->p2[2][i % 4])
+                                       : p->p0[0][i % 4] == tri->p0.x && p->p1[1][i % 4] == tri->p1.y &&
+                                             p->p2[2][i % 4] == tri->p2.z);
+                assert_true((p->index[i % 4] & BVH4_LANE_EXACT) != 0);
+                continue;
+            }
             assert_true(p->p0[0][i % 4] == tri->p0.x && p->e1[1][i % 4] == tri->p1.y - tri->p0.y &&
                         p->e2[2][i % 4] == tri->p2.z - tri->p0.z);
             if (p->index[i % 4] & BVH4_LANE_EXACT) { /* P0 + E1 and P0 + E2 are P1 and P2, bit for bit */
@@ -215,6 +234,11 @@ static void test_bvh4_every_triangle_in_exactly_one_lane_and_boxes_nest(void **s
         for (int split = 0; split < 2; split++) {
             accel *a = bvh4_build(&set, split ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN);
             check_bvh4_structure(a);
+            /* the lanes rewritten for Moller-Trumbore, and back */
+            assert_true(accel_use_triangle_test(a, TRIANGLE_TEST_MOLLER_TRUMBORE));
+            check_bvh4_structure(a);
+            assert_true(accel_use_triangle_test(a, TRIANGLE_TEST_WATERTIGHT));
+            check_bvh4_structure(a);
             accel_destroy(a);
         }
         triangle_set_free(&set);
@@ -268,18 +292,29 @@ static accel *bvh4_of_mesh_kind(accel_check_mesh kind, mesh *m, triangle_set *se
     return bvh4_build(set, BVH_SPLIT_SAH);
 }
 
+static void check_bvh4_hit_records(triangle_test test);
+
 /* The hit record of a lane marked BVH4_LANE_EXACT is made from the packet's
- * P0, E1, E2 instead of the set's triangle: it must be the very record the
- * set's triangle gives (point, normals, material, bit for bit), on every
- * mesh, and both kinds of lane must occur, so that both paths are checked. */
+ * corners (watertight test) or P0, E1, E2 (Moller-Trumbore) instead of the
+ * set's triangle: it must be the very record the set's triangle gives
+ * (point, normals, material, bit for bit), on every mesh. With
+ * Moller-Trumbore both kinds of lane must occur, so that both paths are
+ * checked; the watertight test's lanes are all exact. */
 static void test_bvh4_hit_records_equal_the_sets(void **state)
 {
     (void)state;
+    for (int test = 0; test < 2; test++)
+        check_bvh4_hit_records((triangle_test)test);
+}
+
+static void check_bvh4_hit_records(triangle_test test)
+{
     long exact_hits = 0, other_hits = 0;
     for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
         mesh m;
         triangle_set set;
         accel *a = bvh4_of_mesh_kind((accel_check_mesh)kind, &m, &set);
+        assert_true(accel_use_triangle_test(a, test));
         const bvh4 *b = (const bvh4 *)a;
         bool *exact = calloc((size_t)set.count + 1, sizeof *exact);
         for (int lane = 0; lane < 4 * b->packet_count; lane++) {
@@ -310,12 +345,16 @@ static void test_bvh4_hit_records_equal_the_sets(void **state)
         triangle_set_free(&set);
         mesh_free(&m);
     }
-    print_message("bvh4 hit records: %ld from exact lanes, %ld from the set's triangles\n", exact_hits, other_hits);
-    assert_true(exact_hits > 0 && other_hits > 0);
+    print_message("bvh4 hit records, %s: %ld from exact lanes, %ld from the set's triangles\n",
+                  triangle_test_name(test), exact_hits, other_hits);
+    if (test == TRIANGLE_TEST_MOLLER_TRUMBORE)
+        assert_true(exact_hits > 0 && other_hits > 0);
+    else
+        assert_true(exact_hits > 0 && other_hits == 0);
 }
 
 /* The SSE and the scalar kernel: the same hits, the same floats, the same
- * counters, ray by ray, on the tori field. */
+ * counters, ray by ray, on the tori field, with either triangle test. */
 static void test_bvh4_kernels_give_identical_answers(void **state)
 {
     (void)state;
@@ -329,6 +368,8 @@ static void test_bvh4_kernels_give_identical_answers(void **state)
     pcg32 rng = pcg32_for_pixel(6, 44);
     int hits = 0;
     for (int i = 0; i < 20000; i++) {
+        /* the watertight test on three rays in four, Moller-Trumbore on the fourth */
+        assert_true(accel_use_triangle_test(a, i % 4 == 3 ? TRIANGLE_TEST_MOLLER_TRUMBORE : TRIANGLE_TEST_WATERTIGHT));
         ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
         hit_record sse_hit, scalar_hit;
         ray_counters sse = {0}, scalar = {0};
@@ -428,37 +469,35 @@ static void test_bvh4_slab_test_matches_chapter_03(void **state)
     assert_true(hits > 10000 && nan_cases > 3000);
 }
 
-/* The 4-lane Moller-Trumbore, both kernels, against chapter 01's
- * triangle_intersect_barycentric(): the same hit or miss, and the same t,
- * b1, b2 bit for bit, on rays aimed at vertices and edges (the near-ties)
- * and with degenerate lanes (zero area, and the empty lane). */
+/* The 4-lane tests, both kernels, against chapter 01's: the watertight
+ * test against triangle_intersect_watertight(), Moller-Trumbore against
+ * triangle_intersect_barycentric(). The same hit or miss, and the same t,
+ * b1, b2 bit for bit, on rays aimed at vertices and edges (the near-ties,
+ * and the watertight test's double-precision path) and with degenerate
+ * lanes (zero area, and the empty lane). */
 static void test_bvh4_triangle_test_matches_chapter_01(void **state)
 {
     (void)state;
     pcg32 rng = pcg32_for_pixel(607, 4);
     int hits = 0;
     for (int i = 0; i < 50000; i++) {
+        triangle_test test = i % 2 ? TRIANGLE_TEST_MOLLER_TRUMBORE : TRIANGLE_TEST_WATERTIGHT;
         triangle tris[4];
         bvh4_packet packet;
         memset(&packet, 0, sizeof packet);
+        bool empty_lane = i % 8 < 2; /* lane 3 left as an empty lane */
         for (int k = 0; k < 4; k++) {
             vec3 p[3];
             for (int j = 0; j < 3; j++)
                 p[j] = vec3_make(pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1, pcg32_float(&rng) * 2 - 1);
-            if (k == 3 && i % 4 == 0)
+            if (k == 3 && i % 8 == 4)
                 p[2] = p[1]; /* zero area */
             tris[k] = (triangle){p[0], p[1], p[2]};
-            vec3 e1 = vec3_sub(p[1], p[0]), e2 = vec3_sub(p[2], p[0]);
-            for (int axis = 0; axis < 3; axis++) {
-                packet.p0[axis][k] = vec3_axis(p[0], axis);
-                packet.e1[axis][k] = vec3_axis(e1, axis);
-                packet.e2[axis][k] = vec3_axis(e2, axis);
-            }
+            if (k == 3 && empty_lane)
+                bvh4_packet_set_lane(&packet, k, NULL, -1, test);
+            else
+                bvh4_packet_set_lane(&packet, k, &tris[k], k, test);
         }
-        bool empty_lane = i % 4 == 1; /* lane 3 left as an empty lane */
-        if (empty_lane)
-            for (int axis = 0; axis < 3; axis++)
-                packet.p0[axis][3] = packet.e1[axis][3] = packet.e2[axis][3] = 0.0f;
         /* aim at a vertex or an edge midpoint of lane i % 3's triangle */
         const triangle *aim = &tris[i % 3];
         vec3 target = i % 2 ? aim->p1 : vec3_scale(vec3_add(aim->p0, aim->p2), 0.5f);
@@ -467,11 +506,14 @@ static void test_bvh4_triangle_test_matches_chapter_01(void **state)
         float t_max = i % 5 == 0 ? 0.9f : INFINITY;
         for (int kernel = 0; kernel < 2; kernel++) {
             float t[4] = {0}, b1[4] = {0}, b2[4] = {0};
-            int mask = bvh4_triangle_test(&packet, r, t_max, t, b1, b2, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+            int mask =
+                bvh4_triangle_test(&packet, r, t_max, t, b1, b2, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE, test);
             for (int k = 0; k < 4; k++) {
                 float want_t = 0.0f, want_b1 = 0.0f, want_b2 = 0.0f;
                 bool want = !(k == 3 && empty_lane) &&
-                            triangle_intersect_barycentric(&tris[k], &r, &want_t, &want_b1, &want_b2) &&
+                            (test == TRIANGLE_TEST_WATERTIGHT
+                                 ? triangle_intersect_watertight(&tris[k], &r, &want_t, &want_b1, &want_b2)
+                                 : triangle_intersect_barycentric(&tris[k], &r, &want_t, &want_b1, &want_b2)) &&
                             want_t < t_max;
                 bool got = mask >> k & 1;
                 if (want != got || (want && (t[k] != want_t || b1[k] != want_b1 || b2[k] != want_b2)))
@@ -1116,9 +1158,10 @@ static bool inside_triangle_box(const triangle_set *set, int index, vec3 p)
  * two room sizes back along its line, its origin on the plane or 2^-16 off
  * it. Each lane is compared with the ray alone (flat.c, "Groups").
  *
- * A ray in a triangle's plane, within rounding, is where Moller-Trumbore
- * means nothing: its determinant is rounding noise, and it may report a
- * "hit" hundreds of units from the triangle. A packet whose rays all miss
+ * A ray in a triangle's plane, within rounding, is where a triangle test
+ * means nothing: the watertight test's determinant is rounding noise, and
+ * its t (where the ray meets a plane it nearly lies in) may put the "hit"
+ * hundreds of units from the triangle. A packet whose rays all miss
  * that triangle's box skips it and gives the true nearest hit instead. So
  * a lane may differ from the ray alone only there: where the lone ray's
  * hit point o + t d lies outside its triangle's box. Returns
@@ -1506,6 +1549,421 @@ static double sincos_worst_ulps(sincos_fn f)
     return worst;
 }
 
+/* ==== leaks: rays through the shared edges and vertices of closed meshes ====
+ * The system-level watertightness test (docs/hard-cases.md, section 1): closed
+ * meshes -- jittered icospheres of 20 to 5120 triangles, a jittered torus of
+ * 64, and a jittered torus of 2304 written as an OBJ file of quads and loaded
+ * back through mesh_load_obj() -- each at scales 1e-4 to 1e4 and offset from
+ * the origin by up to 3000 of its sizes (at most 1e5: a mesh of size 1e-4
+ * at 1e5 would be one float point), with rays from outside aimed at float
+ * points of shared edges and at vertices (tests/leak_check.h). Every ray
+ * crosses the surface at its target, so each entry point must report a
+ * triangle there or before it: every accelerator's closest and any hit, the
+ * lecture's recursive BVH traversal, the 4-wide BVH's streams, the flat set's
+ * eight-ray packets, and what the renderers call: chapter 01's scene,
+ * chapter 09's scene on each --accel structure and on chapter 13's, the
+ * eight-path renderer's packet calls, chapter 10's moving mesh. For the
+ * renderers the first hit must also be a front face: a camera inside
+ * nothing sees the outside of every closed mesh. The watertight test leaks
+ * nowhere; its twin, every switchable entry point on Moller-Trumbore,
+ * leaks everywhere, and reports how often. */
+
+/* What one entry point saw, over every case: rays, and the rays that leaked. */
+enum { LEAK_ENTRIES_MAX = 96, LEAK_NAME_SIZE = 72 };
+typedef struct {
+    char name[LEAK_ENTRIES_MAX][LEAK_NAME_SIZE];
+    long rays[LEAK_ENTRIES_MAX], leaks[LEAK_ENTRIES_MAX];
+    bool switchable[LEAK_ENTRIES_MAX]; /* runs Moller-Trumbore when asked (the twin's entry points) */
+    int count;
+} leak_tally;
+
+static void leak_add(leak_tally *t, const char *name, bool switchable, long rays, long leaks)
+{
+    int e = 0;
+    while (e < t->count && strcmp(t->name[e], name) != 0)
+        e++;
+    if (e == t->count) {
+        assert_true(t->count < LEAK_ENTRIES_MAX);
+        snprintf(t->name[e], LEAK_NAME_SIZE, "%s", name);
+        t->count++;
+    }
+    t->switchable[e] = switchable;
+    t->rays[e] += rays;
+    t->leaks[e] += leaks;
+}
+
+/* The rays of one case, and the test the switchable entry points run. */
+typedef struct {
+    const mesh *m;
+    const ray *rays;
+    int n;
+    triangle_test test;
+} leak_case;
+
+/* A renderer's first hit: a triangle at the target or before, its front. */
+static bool leak_front_ok(bool found, const hit_record *hit) { return leak_closest_ok(found, hit) && hit->front_face; }
+
+/* Closest and any hit through an accel_ops structure. */
+static void leak_through_accel(leak_tally *t, const char *name, const accel *a, const leak_case *c)
+{
+    long closest = 0, any = 0;
+    ray_counters counters = {0};
+    for (int i = 0; i < c->n; i++) {
+        hit_record hit;
+        closest += !leak_closest_ok(accel_closest_hit(a, c->rays[i], &hit, &counters), &hit);
+        any += !accel_any_hit(a, leak_segment(c->rays[i]), &counters);
+    }
+    char entry[LEAK_NAME_SIZE];
+    snprintf(entry, sizeof entry, "%.40s: closest hit", name);
+    leak_add(t, entry, true, c->n, closest);
+    snprintf(entry, sizeof entry, "%.40s: any hit", name);
+    leak_add(t, entry, true, c->n, any);
+}
+
+/* The 4-wide BVH's streams (bvh4_closest_hit_stream, bvh4_any_hit_stream). */
+static void leak_through_streams(leak_tally *t, const char *name, const accel *a, const leak_case *c)
+{
+    hit_record *hits = calloc((size_t)c->n, sizeof *hits);
+    bool *found = calloc((size_t)c->n, sizeof *found);
+    ray *segments = calloc((size_t)c->n, sizeof *segments);
+    ray_counters counters = {0};
+    long closest = 0, any = 0;
+    bvh4_closest_hit_stream(a, c->rays, c->n, hits, found, &counters);
+    for (int i = 0; i < c->n; i++) {
+        closest += !leak_closest_ok(found[i], &hits[i]);
+        segments[i] = leak_segment(c->rays[i]);
+    }
+    bvh4_any_hit_stream(a, segments, c->n, found, &counters);
+    for (int i = 0; i < c->n; i++)
+        any += !found[i];
+    char entry[LEAK_NAME_SIZE];
+    snprintf(entry, sizeof entry, "%.40s stream: closest hit", name);
+    leak_add(t, entry, true, c->n, closest);
+    snprintf(entry, sizeof entry, "%.40s stream: any hit", name);
+    leak_add(t, entry, true, c->n, any);
+    free(hits);
+    free(found);
+    free(segments);
+}
+
+/* The flat set's eight-ray packets (flat_closest_hit8, flat_any_hit8). */
+static void leak_through_packets(leak_tally *t, const char *name, const accel *a, const leak_case *c)
+{
+    long closest = 0, any = 0;
+    ray_counters counters = {0};
+    for (int i = 0; i < c->n; i += FLAT_LANES) {
+        int lanes = c->n - i < FLAT_LANES ? c->n - i : FLAT_LANES, active = (1 << lanes) - 1;
+        ray rays[FLAT_LANES], segments[FLAT_LANES];
+        hit_record hits[FLAT_LANES];
+        bool found[FLAT_LANES] = {false}, blocked[FLAT_LANES] = {false};
+        for (int k = 0; k < lanes; k++) {
+            rays[k] = c->rays[i + k];
+            segments[k] = leak_segment(rays[k]);
+        }
+        flat_closest_hit8(a, rays, active, hits, found, &counters);
+        flat_any_hit8(a, segments, active, blocked, &counters);
+        for (int k = 0; k < lanes; k++) {
+            closest += !leak_closest_ok(found[k], &hits[k]);
+            any += !blocked[k];
+        }
+    }
+    char entry[LEAK_NAME_SIZE];
+    snprintf(entry, sizeof entry, "%.40s packets: closest hit", name);
+    leak_add(t, entry, true, c->n, closest);
+    snprintf(entry, sizeof entry, "%.40s packets: any hit", name);
+    leak_add(t, entry, true, c->n, any);
+}
+
+/* Chapter 09's scene (pt_scene_intersect, pt_scene_occluded) on its
+ * current structure, switched to the case's test. */
+static void leak_through_pt_scene(leak_tally *t, const char *name, pt_scene *sc, const leak_case *c)
+{
+    assert_true(accel_use_triangle_test(sc->bvh, c->test));
+    long closest = 0, any = 0;
+    ray_counters counters = {0};
+    for (int i = 0; i < c->n; i++) {
+        hit_record hit;
+        closest += !leak_front_ok(pt_scene_intersect(sc, c->rays[i], &hit, &counters), &hit);
+        any += !pt_scene_occluded(sc, leak_segment(c->rays[i]), &counters);
+    }
+    char entry[LEAK_NAME_SIZE];
+    snprintf(entry, sizeof entry, "%.40s: first hit a front face", name);
+    leak_add(t, entry, true, c->n, closest);
+    snprintf(entry, sizeof entry, "%.40s: shadow ray blocked", name);
+    leak_add(t, entry, true, c->n, any);
+}
+
+/* The eight-path renderer's two calls (path_tracer_wide.c): the closest
+ * hits of eight rays on the scene's flat set, made into hit records as its
+ * hit_record_lane() does, and eight shadow rays (no walls in a closed
+ * mesh seen from outside: every one goes to all the triangles). */
+static void leak_through_eight_paths(leak_tally *t, const pt_scene *sc, const leak_case *c)
+{
+    const accel *all = walls_all(sc->bvh);
+    long closest = 0, any = 0;
+    ray_counters counters = {0};
+    assert_false(walls_found(sc->bvh));
+    for (int i = 0; i < c->n; i += FLAT_LANES) {
+        int lanes = c->n - i < FLAT_LANES ? c->n - i : FLAT_LANES, active = (1 << lanes) - 1;
+        flat_rays8 rays = {0}, segments = {0};
+        for (int k = 0; k < lanes; k++) {
+            flat_rays8_set(&rays, k, c->rays[i + k]);
+            flat_rays8_set(&segments, k, leak_segment(c->rays[i + k]));
+        }
+        flat_hits8 hits;
+        int hit = flat_closest_hit8_raw(all, &rays, active, &hits, &counters);
+        int blocked = flat_any_hit8_raw(all, &segments, active, &counters);
+        for (int k = 0; k < lanes; k++) {
+            hit_record record;
+            bool found = (hit >> k) & 1;
+            if (found)
+                triangle_set_fill_hit(&sc->triangles, hits.index[k], c->rays[i + k], hits.t[k], hits.b1[k],
+                                      hits.b2[k], &record);
+            closest += !leak_front_ok(found, &record);
+            any += !((blocked >> k) & 1);
+        }
+    }
+    leak_add(t, "ch13 eight-path renderer: first hit a front face", true, c->n, closest);
+    leak_add(t, "ch13 eight-path renderer: shadow ray blocked", true, c->n, any);
+}
+
+/* Every entry point on one case. */
+static void leak_trace_case(const leak_case *c, leak_tally *t)
+{
+    triangle_set set;
+    triangle_set_from_mesh(&set, c->m);
+    /* the structures, each switched to the case's test */
+    enum { STRUCTURES = 12 };
+    struct {
+        char name[48];
+        accel *a;
+    } s[STRUCTURES];
+    int n = 0;
+    snprintf(s[n].name, sizeof s[n].name, "ch03 brute force"), s[n++].a = brute_force_build(&set);
+    snprintf(s[n].name, sizeof s[n].name, "ch04 grid"), s[n++].a = grid_build(&set, GRID_DEFAULT_DENSITY);
+    snprintf(s[n].name, sizeof s[n].name, "ch05 kd-tree"), s[n++].a = kdtree_build(&set);
+    snprintf(s[n].name, sizeof s[n].name, "ch06 bvh sah"), s[n++].a = bvh_build(&set, BVH_SPLIT_SAH);
+    const int bvh_sah = n - 1;
+    snprintf(s[n].name, sizeof s[n].name, "ch06 bvh sah, distance order"), s[n].a = bvh_build(&set, BVH_SPLIT_SAH);
+    bvh_set_order(s[n++].a, BVH_ORDER_DISTANCE);
+    snprintf(s[n].name, sizeof s[n].name, "ch06 bvh median"), s[n++].a = bvh_build(&set, BVH_SPLIT_MEDIAN);
+    const int bvh4_first = n;
+    snprintf(s[n].name, sizeof s[n].name, "ch13 bvh4 (scalar)"), s[n].a = bvh4_build(&set, BVH_SPLIT_SAH);
+    assert_true(bvh4_set_kernel(s[n++].a, BVH4_KERNEL_SCALAR));
+    if (BVH4_HAVE_SSE)
+        snprintf(s[n].name, sizeof s[n].name, "ch13 bvh4 (sse)"), s[n++].a = bvh4_build(&set, BVH_SPLIT_SAH);
+    const int flat_first = n;
+    const flat_kernel kernels[] = {FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR};
+    const char *kernel_names[] = {"avx-512 registers", "avx", "sse", "scalar"};
+    for (int k = 0; k < 4; k++)
+        if (flat_kernel_runs(kernels[k])) {
+            snprintf(s[n].name, sizeof s[n].name, "ch13 flat (%s)", kernel_names[k]);
+            s[n].a = flat_build(&set);
+            assert_true(flat_set_kernel(s[n++].a, kernels[k]));
+        }
+    for (int k = 0; k < n; k++) {
+        assert_true(accel_use_triangle_test(s[k].a, c->test));
+        leak_through_accel(t, s[k].name, s[k].a, c);
+        if (k >= bvh4_first && k < flat_first)
+            leak_through_streams(t, s[k].name, s[k].a, c);
+        if (k >= flat_first)
+            leak_through_packets(t, s[k].name, s[k].a, c);
+    }
+    long recursive = 0;
+    for (int i = 0; i < c->n; i++) {
+        hit_record hit;
+        ray_counters counters = {0};
+        recursive += !leak_closest_ok(bvh_closest_hit_recursive((const bvh *)s[bvh_sah].a, c->rays[i], &hit, &counters),
+                                      &hit);
+    }
+    leak_add(t, "ch06 bvh sah, the lecture's recursion: closest hit", true, c->n, recursive);
+    for (int k = 0; k < n; k++)
+        accel_destroy(s[k].a);
+    triangle_set_free(&set);
+
+    /* The renderers. Chapter 09's scene (so chapters 10-12's, which trace
+     * through it), on each --accel structure and on chapter 13's. */
+    pt_scene sc;
+    pt_scene_init(&sc);
+    int material = pt_scene_add_material(&sc, pt_diffuse(vec3_splat(0.5f)));
+    for (int f = 0; f < c->m->face_count; f++)
+        pt_scene_add_triangle(&sc, mesh_vertex(c->m, f, 0), mesh_vertex(c->m, f, 1), mesh_vertex(c->m, f, 2), material);
+    pt_scene_finish(&sc);
+    for (int k = 0; PT_ACCEL_NAMES[k] != NULL; k++) {
+        char entry[LEAK_NAME_SIZE];
+        snprintf(entry, sizeof entry, "ch09 scene, --accel %s", PT_ACCEL_NAMES[k]);
+        pt_scene_use_accel(&sc, pt_accel_builder_named(PT_ACCEL_NAMES[k]), NULL);
+        leak_through_pt_scene(t, entry, &sc, c);
+    }
+    pt_scene_use_accel(&sc, production_scene_accel, &sc);
+    leak_through_pt_scene(t, "ch13 scene, production structure", &sc, c);
+    if (flat_is(walls_all(sc.bvh))) /* at most 64 triangles: what the eight-path renderer runs on */
+        leak_through_eight_paths(t, &sc, c);
+    pt_scene_free(&sc);
+
+    /* Chapter 10's moving mesh (through chapter 06's BVH, the ray moved into
+     * the mesh's frame), here at rest. */
+    motion_scene ms;
+    motion_scene_init(&ms);
+    pt_scene_finish(&ms.base);
+    mesh copy;
+    mesh_init(&copy);
+    for (int i = 0; i < c->m->position_count; i++)
+        mesh_add_position(&copy, c->m->positions[i]);
+    for (int f = 0; f < c->m->face_count; f++)
+        mesh_add_triangle(&copy, c->m->faces[f].position[0], c->m->faces[f].position[1], c->m->faces[f].position[2],
+                          -1);
+    motion_scene_add_mesh(&ms, &copy, vec3_splat(0.0f));
+    assert_true(accel_use_triangle_test(ms.meshes[0]->bvh, c->test));
+    long moving = 0, moving_any = 0;
+    for (int i = 0; i < c->n; i++) {
+        hit_record hit;
+        ray_counters counters = {0};
+        moving += !leak_front_ok(motion_scene_intersect(&ms, (timed_ray){c->rays[i], 0.5f}, &hit, &counters), &hit);
+        moving_any += !motion_scene_occluded(&ms, (timed_ray){leak_segment(c->rays[i]), 0.5f}, &counters);
+    }
+    leak_add(t, "ch10 moving mesh: first hit a front face", true, c->n, moving);
+    leak_add(t, "ch10 moving mesh: shadow ray blocked", true, c->n, moving_any);
+    motion_scene_free(&ms);
+
+    /* Chapter 01's scene of shapes (chapter 02 renders it too): the
+     * watertight test, with no other to switch to. */
+    if (c->test == TRIANGLE_TEST_WATERTIGHT) {
+        scene s01;
+        scene_init(&s01);
+        int m01 = scene_add_material(&s01, material_blinn_phong(vec3_splat(0.5f), vec3_splat(0.0f), 1.0f));
+        for (int f = 0; f < c->m->face_count; f++)
+            scene_add_triangle(&s01, mesh_vertex(c->m, f, 0), mesh_vertex(c->m, f, 1), mesh_vertex(c->m, f, 2), m01);
+        long closest = 0, any = 0;
+        for (int i = 0; i < c->n; i++) {
+            hit_record hit;
+            ray_counters counters = {0};
+            closest += !leak_front_ok(scene_intersect(&s01, c->rays[i], &hit, &counters), &hit);
+            any += !scene_occluded(&s01, leak_segment(c->rays[i]), &counters);
+        }
+        leak_add(t, "ch01 scene: first hit a front face", false, c->n, closest);
+        leak_add(t, "ch01 scene: shadow ray blocked", false, c->n, any);
+        scene_free(&s01);
+    }
+}
+
+/* The 2304-triangle torus as an OBJ file of 48 x 24 quads, read back by
+ * mesh_load_obj() (which splits each quad into two triangles). */
+static void leak_mesh_from_obj(mesh *m, pcg32 *rng)
+{
+    enum { U = 48, V = 24 };
+    mesh generated;
+    leak_mesh_jittered_torus(&generated, 0.35f, U, V, rng);
+    char dir[] = "/tmp/leak_obj.XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char path[64];
+    snprintf(path, sizeof path, "%s/torus.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    for (int i = 0; i < generated.position_count; i++) /* %.9g: every float reads back as itself */
+        fprintf(f, "v %.9g %.9g %.9g\n", (double)generated.positions[i].x, (double)generated.positions[i].y,
+                (double)generated.positions[i].z);
+    for (int i = 0; i < U; i++) /* mesh_torus's grid, as quads (1-based) */
+        for (int j = 0; j < V; j++)
+            fprintf(f, "f %d %d %d %d\n", 1 + i * V + j, 1 + ((i + 1) % U) * V + j, 1 + ((i + 1) % U) * V + (j + 1) % V,
+                    1 + i * V + (j + 1) % V);
+    assert_int_equal(fclose(f), 0);
+    mesh_init(m);
+    char err[MESH_ERROR_SIZE];
+    if (!mesh_load_obj(m, path, err, sizeof err))
+        fail_msg("%s", err);
+    assert_int_equal(m->face_count, 2 * U * V);
+    unlink(path);
+    rmdir(dir);
+    mesh_free(&generated);
+}
+
+/* The meshes, scales and offsets of the cases (see the section's comment). */
+enum { LEAK_MESHES = 7, LEAK_SCALES = 5, LEAK_OFFSETS = 3 };
+static const float leak_scales[LEAK_SCALES] = {1e-4f, 1e-2f, 1.0f, 1e2f, 1e4f};
+/* Offsets in units of the mesh's size, each at most LEAK_OFFSET_MAX away. */
+static const float leak_offset_sizes[LEAK_OFFSETS] = {0.0f, 30.0f, 3000.0f};
+static const float LEAK_OFFSET_MAX = 1e5f;
+
+static void leak_mesh_make(mesh *m, int which, pcg32 *rng)
+{
+    if (which < 5) /* 20, 80, 320, 1280, 5120 triangles */
+        leak_mesh_jittered_icosphere(m, which, rng);
+    else if (which == 5) /* 64 triangles: the eight-path renderer's flat set */
+        leak_mesh_jittered_torus(m, 0.4f, 8, 4, rng);
+    else
+        leak_mesh_from_obj(m, rng);
+}
+
+/* Every case with rays_per_case rays, every entry point, one test. */
+static void leak_run(triangle_test test, int rays_per_case, leak_tally *t)
+{
+    ray *rays = calloc((size_t)rays_per_case, sizeof *rays);
+    for (int which = 0; which < LEAK_MESHES; which++) {
+        pcg32 rng = pcg32_for_pixel(test_seed(2013), (uint64_t)which);
+        mesh unit;
+        leak_mesh_make(&unit, which, &rng);
+        for (int s = 0; s < LEAK_SCALES; s++)
+            for (int o = 0; o < LEAK_OFFSETS; o++) {
+                mesh m;
+                mesh_init(&m);
+                for (int i = 0; i < unit.position_count; i++)
+                    mesh_add_position(&m, unit.positions[i]);
+                for (int f = 0; f < unit.face_count; f++)
+                    mesh_add_triangle(&m, unit.faces[f].position[0], unit.faces[f].position[1],
+                                      unit.faces[f].position[2], -1);
+                float offset = fminf(LEAK_OFFSET_MAX, leak_offset_sizes[o] * leak_scales[s]);
+                leak_mesh_transform(&m, leak_scales[s], vec3_scale(leak_random_unit(&rng), offset));
+                int n = leak_rays_make(&m, rays_per_case, &rng, rays);
+                assert_int_equal(n, rays_per_case);
+                leak_case c = {&m, rays, n, test};
+                leak_trace_case(&c, t);
+                mesh_free(&m);
+            }
+        mesh_free(&unit);
+    }
+    free(rays);
+}
+
+/* make test: LEAK_RAYS rays through each entry point (about 50,000: 480
+ * per case); make test-seeds runs it over 200 other seeds, 10^7 rays per
+ * entry point. The twin needs few: Moller-Trumbore leaks a few percent. */
+enum { LEAK_RAYS_PER_CASE = 480, LEAK_TWIN_RAYS_PER_CASE = 48 };
+
+static void test_no_ray_leaks_through_a_closed_mesh_anywhere(void **state)
+{
+    (void)state;
+    leak_tally t = {0};
+    leak_run(TRIANGLE_TEST_WATERTIGHT, LEAK_RAYS_PER_CASE, &t);
+    long total = 0;
+    for (int e = 0; e < t.count; e++) {
+        if (t.leaks[e] != 0)
+            print_message("LEAK %s: %ld of %ld rays\n", t.name[e], t.leaks[e], t.rays[e]);
+        total += t.leaks[e];
+    }
+    print_message("watertight: %d entry points, %ld rays each (%d meshes x %d scales x %d offsets), %ld leaks\n",
+                  t.count, t.rays[0], LEAK_MESHES, LEAK_SCALES, LEAK_OFFSETS, total);
+    assert_int_equal(total, 0);
+}
+
+/* The twin: the same cases with every switchable entry point on
+ * Moller-Trumbore. Each must leak, and the rate is reported. */
+static void test_moller_trumbore_leaks_through_every_entry_point(void **state)
+{
+    (void)state;
+    leak_tally t = {0};
+    leak_run(TRIANGLE_TEST_MOLLER_TRUMBORE, LEAK_TWIN_RAYS_PER_CASE, &t);
+    int quiet = 0;
+    for (int e = 0; e < t.count; e++) {
+        if (!t.switchable[e])
+            continue;
+        print_message("Moller-Trumbore, %s: %ld of %ld rays leak (%.2f %%)\n", t.name[e], t.leaks[e], t.rays[e],
+                      100.0 * (double)t.leaks[e] / (double)t.rays[e]);
+        quiet += t.leaks[e] == 0;
+    }
+    assert_int_equal(quiet, 0);
+}
+
 static void test_fast_sincos_turns_is_within_a_few_ulps(void **state)
 {
     (void)state;
@@ -1648,6 +2106,8 @@ int main(void)
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
         cmocka_unit_test(test_fast_sincos_turns_is_within_a_few_ulps),
         cmocka_unit_test(test_lanes_light_sample_is_chapter_09s),
+        cmocka_unit_test(test_no_ray_leaks_through_a_closed_mesh_anywhere),
+        cmocka_unit_test(test_moller_trumbore_leaks_through_every_entry_point),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

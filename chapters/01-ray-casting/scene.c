@@ -105,7 +105,10 @@ bool shape_intersect(const shape *s, ray r, hit_record *hit)
     case SHAPE_PLANE:
         return plane_intersect(&s->as.plane, r, hit);
     case SHAPE_TRIANGLE:
-        return triangle_intersect(&s->as.triangle, r, hit);
+        /* The watertight test, not the lecture's Moller-Trumbore
+         * (triangle_intersect()): triangles that share an edge must not let
+         * a ray through between them (shapes.h). */
+        return triangle_intersect_watertight_hit(&s->as.triangle, r, hit);
     case SHAPE_IMPLICIT:
         return implicit_intersect(&s->as.torus, r, hit);
     }

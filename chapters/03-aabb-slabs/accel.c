@@ -81,46 +81,66 @@ void triangle_set_shade_vertex_normal(const triangle_set *set, int index, float 
     }
 }
 
-/* ---- brute force ---------------------------------------------------------- */
+/* ---- brute force ----------------------------------------------------------
+ * Every triangle, in order; a later one must be strictly nearer to replace
+ * the closest so far, so of equal t the lower index wins. With the
+ * watertight test the ray's part of it is computed once, here. */
 
-static bool brute_force_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+static inline int brute_force_walk(const accel *a, ray *r, bool any, triangle_test test, float *b1_out,
+                                   float *b2_out, ray_counters *counters)
 {
     const triangle_set *set = a->set;
+    watertight_ray wr = watertight_ray_make(r);
     int best = -1;
-    float best_b1 = 0, best_b2 = 0;
     for (int i = 0; i < set->count; i++) {
         float t, b1, b2;
-        if (triangle_intersect_barycentric(&set->triangles[i], &r, &t, &b1, &b2)) {
+        if (triangle_intersect_with(test, &wr, &set->triangles[i], r, r->t_max, &t, &b1, &b2)) {
             best = i;
-            r.t_max = t; /* only closer hits from now on */
-            best_b1 = b1;
-            best_b2 = b2;
+            r->t_max = t; /* only closer hits from now on */
+            *b1_out = b1;
+            *b2_out = b2;
+            if (any) {
+                counters->primitive_tests += (uint64_t)i + 1;
+                return best;
+            }
         }
     }
     counters->primitive_tests += (uint64_t)set->count;
+    return best;
+}
+
+static bool brute_force_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    float b1 = 0.0f, b2 = 0.0f;
+    int best = a->triangle_test == TRIANGLE_TEST_WATERTIGHT
+                   ? brute_force_walk(a, &r, false, TRIANGLE_TEST_WATERTIGHT, &b1, &b2, counters)
+                   : brute_force_walk(a, &r, false, TRIANGLE_TEST_MOLLER_TRUMBORE, &b1, &b2, counters);
     if (best < 0)
         return false;
-    triangle_set_fill_hit(set, best, r, r.t_max, best_b1, best_b2, hit);
+    triangle_set_fill_hit(a->set, best, r, r.t_max, b1, b2, hit);
     return true;
 }
 
 static bool brute_force_any_hit(const accel *a, ray r, ray_counters *counters)
 {
-    const triangle_set *set = a->set;
-    for (int i = 0; i < set->count; i++) {
-        float t, b1, b2;
-        if (triangle_intersect_barycentric(&set->triangles[i], &r, &t, &b1, &b2)) {
-            counters->primitive_tests += (uint64_t)i + 1;
-            return true;
-        }
-    }
-    counters->primitive_tests += (uint64_t)set->count;
-    return false;
+    float b1, b2;
+    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
+        return brute_force_walk(a, &r, true, TRIANGLE_TEST_WATERTIGHT, &b1, &b2, counters) >= 0;
+    return brute_force_walk(a, &r, true, TRIANGLE_TEST_MOLLER_TRUMBORE, &b1, &b2, counters) >= 0;
 }
 
 static void brute_force_destroy(accel *a) { free(a); }
 
-static const accel_ops brute_force_ops = {brute_force_closest_hit, brute_force_any_hit, brute_force_destroy};
+/* The structures that test the set's own triangles (brute force, the grid,
+ * the kd-tree) store nothing per test: switching is the field alone. */
+bool accel_use_triangle_test_of_set(accel *a, triangle_test test)
+{
+    a->triangle_test = test;
+    return true;
+}
+
+static const accel_ops brute_force_ops = {brute_force_closest_hit, brute_force_any_hit, brute_force_destroy,
+                                          accel_use_triangle_test_of_set};
 
 accel *brute_force_build(const triangle_set *set)
 {

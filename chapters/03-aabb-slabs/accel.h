@@ -120,6 +120,8 @@ typedef struct {
     /* Is there any hit in (r.t_min, r.t_max)? May stop at the first found. */
     bool (*any_hit)(const accel *a, ray r, ray_counters *counters);
     void (*destroy)(accel *a);
+    /* Switch the triangle test (may be NULL: only the watertight one). */
+    bool (*use_triangle_test)(accel *a, triangle_test test);
 } accel_ops;
 
 /* Each structure's own type starts with this, so a pointer to it is a
@@ -128,6 +130,10 @@ struct accel {
     const accel_ops *ops;
     const triangle_set *set;
     accel_stats stats;
+    /* Which ray-triangle test its closest and any hit run: the watertight
+     * one (0, what a zeroed allocation gives), or Moller-Trumbore, which
+     * only tests and benchmarks ask for (accel_use_triangle_test). */
+    triangle_test triangle_test;
 };
 
 static inline bool accel_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
@@ -146,8 +152,23 @@ static inline void accel_destroy(accel *a)
         a->ops->destroy(a);
 }
 
+/* Trace with `test` from now on: every structure runs the watertight test
+ * unless told otherwise. Moller-Trumbore is there to be measured against:
+ * the leak tests' twins, and the benchmark's column beside the watertight
+ * one. A structure that stores its triangles in the form its test reads
+ * (chapter 06's P0, E1, E2 for Moller-Trumbore; the corners for the
+ * watertight test) rewrites them from the set. False if the structure has
+ * no such choice (it then keeps its test). Not while rays are in flight. */
+static inline bool accel_use_triangle_test(accel *a, triangle_test test)
+{
+    return a->ops->use_triangle_test != NULL && a->ops->use_triangle_test(a, test);
+}
+
 /* Brute force: every ray tests every triangle. The baseline every structure
  * must agree with, and beat. */
 accel *brute_force_build(const triangle_set *set);
+/* An accel_ops.use_triangle_test for structures that read the set's
+ * triangles as they are (brute force, grid, kd-tree): sets the field. */
+bool accel_use_triangle_test_of_set(accel *a, triangle_test test);
 
 #endif

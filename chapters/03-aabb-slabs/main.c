@@ -58,6 +58,9 @@ static vec3 boxed_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *cou
     (void)rng;
     const boxed_scene *sc = ctx;
     slab_ray sr = slab_ray_make(r);
+    /* The triangle test is the watertight one (chapter 01's shapes.h): its
+     * ray part once, here, for every triangle below. */
+    watertight_ray wr = watertight_ray_make(&r);
     uint64_t tests_before = counters->primitive_tests;
     int best = -1;
     float best_t = INFINITY, best_b1 = 0, best_b2 = 0;
@@ -81,7 +84,7 @@ static vec3 boxed_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *cou
         counters->primitive_tests += (uint64_t)(sc->first[k + 1] - sc->first[k]);
         for (int i = sc->first[k]; i < sc->first[k + 1]; i++) {
             float t, b1, b2;
-            if (triangle_intersect_barycentric(&sc->set.triangles[i], &r, &t, &b1, &b2)) {
+            if (watertight_intersect_triangle(&wr, &sc->set.triangles[i], r.t_max, &t, &b1, &b2)) {
                 best = i;
                 r.t_max = best_t = t; /* only closer hits from now on */
                 best_b1 = b1;

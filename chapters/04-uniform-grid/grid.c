@@ -45,7 +45,7 @@ static const uint64_t GRID_MAX_REFERENCES = (uint64_t)1 << 26;
  * comes within rounding of one, is then stored in the cells on both sides.
  * It covers the two roundings that decide which side of a boundary a hit
  * lies on: the traversal's, computed in double (about 2^-53 relative,
- * nothing next to this), and the float t that Moller-Trumbore returns for
+ * nothing next to this), and the float t that the triangle test returns for
  * the hit (a few ulps of the distance travelled, so rays starting within
  * several scene sizes of the scene are covered with room to spare). The cost
  * is a handful of extra references, for triangles within 64 ulps of a
@@ -255,8 +255,8 @@ typedef enum {
  * few hundred steps, more than the 64-ulp insertion pad. In double a walk of
  * 10^6 steps drifts by about 10^-10 of the distance travelled, over 30000
  * times less than the pad. */
-static inline int grid_walk(const grid *g, ray *r, walk_rule rule, float *b1_out, float *b2_out,
-                            ray_counters *counters)
+static inline int grid_walk(const grid *g, ray *r, walk_rule rule, triangle_test test, float *b1_out,
+                            float *b2_out, ray_counters *counters)
 {
     const triangle_set *set = g->base.set;
     /* Find the entry point: clip the ray to the grid's bounds (slab test) */
@@ -308,6 +308,8 @@ static inline int grid_walk(const grid *g, ray *r, walk_rule rule, float *b1_out
     long c = x + cell_stride[1] * y + cell_stride[2] * z;
 
     const triangle *triangles = set->triangles;
+    /* the watertight triangle test's part for the ray, once (chapter 01) */
+    const watertight_ray wr = watertight_ray_make(r);
     const uint32_t *cell_start = g->cell_start, *triangle_index = g->triangle_index;
     const uint64_t *occupied = g->occupied;
     uint64_t cells_visited = 0, tests = 0;
@@ -323,7 +325,7 @@ static inline int grid_walk(const grid *g, ray *r, walk_rule rule, float *b1_out
             for (uint32_t k = begin; k < end; k++) {
                 uint32_t i = triangle_index[k];
                 float t, b1, b2;
-                if (triangle_intersect_barycentric(&triangles[i], r, &t, &b1, &b2)) {
+                if (triangle_intersect_with(test, &wr, &triangles[i], r, r->t_max, &t, &b1, &b2)) {
                     best = (int)i;
                     r->t_max = t; /* only closer hits from now on */
                     t_best = t;
@@ -378,10 +380,18 @@ done:
     return best;
 }
 
+/* The walk compiled once per triangle test (the test a constant inside). */
+static int grid_walk_with(const accel *a, ray *r, walk_rule rule, float *b1, float *b2, ray_counters *counters)
+{
+    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
+        return grid_walk((const grid *)a, r, rule, TRIANGLE_TEST_WATERTIGHT, b1, b2, counters);
+    return grid_walk((const grid *)a, r, rule, TRIANGLE_TEST_MOLLER_TRUMBORE, b1, b2, counters);
+}
+
 static bool grid_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
     float b1 = 0.0f, b2 = 0.0f;
-    int best = grid_walk((const grid *)a, &r, WALK_CLOSEST, &b1, &b2, counters);
+    int best = grid_walk_with(a, &r, WALK_CLOSEST, &b1, &b2, counters);
     if (best < 0)
         return false;
     triangle_set_fill_hit(a->set, best, r, r.t_max, b1, b2, hit);
@@ -391,13 +401,13 @@ static bool grid_closest_hit(const accel *a, ray r, hit_record *hit, ray_counter
 static bool grid_any_hit(const accel *a, ray r, ray_counters *counters)
 {
     float b1, b2;
-    return grid_walk((const grid *)a, &r, WALK_ANY, &b1, &b2, counters) >= 0;
+    return grid_walk_with(a, &r, WALK_ANY, &b1, &b2, counters) >= 0;
 }
 
 static bool grid_naive_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
     float b1 = 0.0f, b2 = 0.0f;
-    int best = grid_walk((const grid *)a, &r, WALK_NAIVE_EXIT, &b1, &b2, counters);
+    int best = grid_walk_with(a, &r, WALK_NAIVE_EXIT, &b1, &b2, counters);
     if (best < 0)
         return false;
     triangle_set_fill_hit(a->set, best, r, r.t_max, b1, b2, hit);
@@ -413,8 +423,9 @@ static void grid_destroy(accel *a)
     free(g);
 }
 
-static const accel_ops grid_ops = {grid_closest_hit, grid_any_hit, grid_destroy};
-static const accel_ops grid_naive_ops = {grid_naive_closest_hit, grid_any_hit, grid_destroy};
+static const accel_ops grid_ops = {grid_closest_hit, grid_any_hit, grid_destroy, accel_use_triangle_test_of_set};
+static const accel_ops grid_naive_ops = {grid_naive_closest_hit, grid_any_hit, grid_destroy,
+                                         accel_use_triangle_test_of_set};
 
 /* ---- what the grid looks like inside ------------------------------------- */
 

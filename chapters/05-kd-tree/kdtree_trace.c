@@ -34,8 +34,8 @@
  * visits every child the exact ray touches (and, rarely, one it misses by a
  * few ulps, which costs a node and nothing else). */
 static const float SPLIT_SLACK = 2.0f * (3.0f * 0x1.0p-24f) / (1.0f - 3.0f * 0x1.0p-24f);
-/* Moller-Trumbore's t is not exact, and the error grows as the ray grazes
- * the triangle: measured over random triangles, about 2.4 ulps / sin(angle)
+/* The triangle test's t is not exact, and the error grows as the ray grazes
+ * the triangle: measured for Moller-Trumbore over random triangles, about 2.4 ulps / sin(angle)
  * relative (16 ulps at 10 degrees, 141 at 1 degree, 592 at 0.3 degree). A
  * triangle in the next cell, which the ray reaches only at or after the
  * hit found, can so report a t a little *below* it; brute force, which takes
@@ -47,16 +47,6 @@ static const float SPLIT_SLACK = 2.0f * (3.0f * 0x1.0p-24f) / (1.0f - 3.0f * 0x1
  * planes go through vertices). */
 static const float HIT_MARGIN = 0x1.0p-16f;
 
-/* Moller-Trumbore: chapter 01's test, inline (shapes.h), so the same t
- * and barycentrics, bit for bit, as brute force gets, while a leaf's loop
- * keeps the ray in registers instead of calling into another library for
- * every triangle. */
-static inline bool leaf_triangle_intersect(const triangle *tri, const ray *r, float *t_out, float *b1_out,
-                                           float *b2_out)
-{
-    return triangle_intersect_edges(tri->p0, vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0), r, r->t_max,
-                                    t_out, b1_out, b2_out);
-}
 
 typedef struct {
     uint32_t node;
@@ -67,8 +57,8 @@ typedef struct {
 /* One walk for both queries: closest (stop in the first cell holding a hit
  * in that cell) or any (stop at the first hit at all). Returns the triangle
  * index or -1; *r ends with t_max = the hit's t. */
-static inline int kdtree_walk(const kd_tree *tree, ray *ray_io, bool any, float *b1_out, float *b2_out,
-                              ray_counters *counters)
+static inline int kdtree_walk(const kd_tree *tree, ray *ray_io, bool any, triangle_test test, float *b1_out,
+                              float *b2_out, ray_counters *counters)
 {
     /* A local copy: the compiler keeps it in registers through the loops
      * (through the pointer it would reload it after every store). */
@@ -79,6 +69,10 @@ static inline int kdtree_walk(const kd_tree *tree, ray *ray_io, bool any, float 
     const triangle *triangles = tree->base.set->triangles;
     /* What slab_ray_make() computes, once per ray: the origin and 1/d. */
     slab_ray sr = {r->origin, vec3_make(1.0f / r->direction.x, 1.0f / r->direction.y, 1.0f / r->direction.z)};
+    /* and the watertight triangle test's part for the ray (chapter 01): the
+     * leaves run chapter 01's test inline (shapes.h), so the same t and
+     * barycentrics, bit for bit, as brute force gets */
+    const watertight_ray wr = watertight_ray_make(r);
     uint64_t nodes_visited = 1, triangles_tested = 0;
     float t_enter, t_exit;
     int best = -1;
@@ -168,7 +162,7 @@ static inline int kdtree_walk(const kd_tree *tree, ray *ray_io, bool any, float 
             triangles_tested += count;
             for (uint32_t i = 0; i < count; i++) {
                 float t, b1, b2;
-                if (leaf_triangle_intersect(&triangles[refs[i]], r, &t, &b1, &b2)) {
+                if (triangle_intersect_with(test, &wr, &triangles[refs[i]], r, r->t_max, &t, &b1, &b2)) {
                     best = (int)refs[i];
                     r->t_max = t;
                     best_b1 = b1;
@@ -215,10 +209,18 @@ done:
     return best;
 }
 
+/* The walk compiled once per triangle test (the test a constant inside). */
+static int kdtree_walk_with(const accel *a, ray *r, bool any, float *b1, float *b2, ray_counters *counters)
+{
+    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
+        return kdtree_walk((const kd_tree *)a, r, any, TRIANGLE_TEST_WATERTIGHT, b1, b2, counters);
+    return kdtree_walk((const kd_tree *)a, r, any, TRIANGLE_TEST_MOLLER_TRUMBORE, b1, b2, counters);
+}
+
 static bool kdtree_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
     float b1 = 0.0f, b2 = 0.0f;
-    int best = kdtree_walk((const kd_tree *)a, &r, false, &b1, &b2, counters);
+    int best = kdtree_walk_with(a, &r, false, &b1, &b2, counters);
     if (best < 0)
         return false;
     triangle_set_fill_hit(a->set, best, r, r.t_max, b1, b2, hit);
@@ -228,7 +230,7 @@ static bool kdtree_closest_hit(const accel *a, ray r, hit_record *hit, ray_count
 static bool kdtree_any_hit(const accel *a, ray r, ray_counters *counters)
 {
     float b1, b2;
-    return kdtree_walk((const kd_tree *)a, &r, true, &b1, &b2, counters) >= 0;
+    return kdtree_walk_with(a, &r, true, &b1, &b2, counters) >= 0;
 }
 
 static void kdtree_destroy(accel *a)
@@ -239,4 +241,4 @@ static void kdtree_destroy(accel *a)
     free(tree);
 }
 
-const accel_ops kdtree_ops = {kdtree_closest_hit, kdtree_any_hit, kdtree_destroy};
+const accel_ops kdtree_ops = {kdtree_closest_hit, kdtree_any_hit, kdtree_destroy, accel_use_triangle_test_of_set};

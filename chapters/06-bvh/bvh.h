@@ -60,10 +60,24 @@ static inline int bvh_node_triangles(const bvh_node *n) { return (int)(n->count_
 static inline int bvh_node_axis(const bvh_node *n) { return (int)(n->count_axis & 3u); }
 static inline bool bvh_node_is_leaf(const bvh_node *n) { return n->count_axis >> 2 != 0; }
 
-/* A triangle as Moller-Trumbore uses it: P0 and the edges E1 = P1 - P0,
- * E2 = P2 - P0, computed once at build time instead of once per test. */
+/* A triangle as the traversal's triangle test reads it (accel.triangle_test):
+ *   watertight (the default)  its three corners; a degenerate triangle
+ *                             (triangle_is_degenerate) as NaN corners, which
+ *                             no ray hits, so the test need not ask
+ *   Moller-Trumbore           P0 and the edges E1 = P1 - P0, E2 = P2 - P0,
+ *                             computed once at build time instead of once
+ *                             per test
+ * accel_use_triangle_test() rewrites them from the set. */
 typedef struct {
-    vec3 p0, e1, e2;
+    vec3 p0;
+    union {
+        struct {
+            vec3 p1, p2;
+        };
+        struct {
+            vec3 e1, e2;
+        };
+    };
 } bvh_triangle;
 
 /* Traversal keeps the nodes still to visit in a fixed array of this many

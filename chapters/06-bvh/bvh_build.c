@@ -393,11 +393,37 @@ void bvh_nodes_free(bvh_node *nodes)
 
 /* ---- after the build -------------------------------------------------------- */
 
-static bvh_triangle bvh_triangle_make(const triangle *t)
+static bvh_triangle bvh_triangle_make(const triangle *t, triangle_test test)
 {
-    /* E1 = P1 - P0, E2 = P2 - P0, exactly as triangle_intersect_barycentric()
-     * computes them, so that the tests give the same t bit for bit. */
-    return (bvh_triangle){t->p0, vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)};
+    bvh_triangle b;
+    b.p0 = t->p0;
+    if (test == TRIANGLE_TEST_MOLLER_TRUMBORE) {
+        /* E1 = P1 - P0, E2 = P2 - P0, exactly as triangle_intersect_barycentric()
+         * computes them, so that the tests give the same t bit for bit. */
+        b.e1 = vec3_sub(t->p1, t->p0);
+        b.e2 = vec3_sub(t->p2, t->p0);
+    } else if (triangle_is_degenerate(t)) {
+        /* no ray may hit it (chapter 01): NaN fails the test's last comparison */
+        b.p0 = b.p1 = b.p2 = vec3_splat(NAN);
+    } else {
+        b.p1 = t->p1;
+        b.p2 = t->p2;
+    }
+    return b;
+}
+
+/* The leaves' triangles, in leaf order, in the form b's triangle test reads. */
+static void bvh_triangles_fill(bvh *b)
+{
+    for (int i = 0; i < b->triangle_count; i++)
+        b->triangles[i] = bvh_triangle_make(&b->base.set->triangles[b->triangle_index[i]], b->base.triangle_test);
+}
+
+bool bvh_use_triangle_test(accel *a, triangle_test test)
+{
+    a->triangle_test = test;
+    bvh_triangles_fill((bvh *)a);
+    return true;
 }
 
 static void bvh_fill_stats(bvh *b, const char *name, int leaves, int max_depth)
@@ -465,13 +491,12 @@ accel *bvh_build_with(const triangle_set *set, bvh_split split, const bvh_sah_pa
     memcpy(result->nodes, b.nodes, (size_t)b.node_count * sizeof *b.nodes);
     result->node_count = b.node_count;
     bvh_nodes_free(b.nodes);
-    /* Copy the triangles in leaf order, with their edges precomputed. */
+    /* Copy the triangles in leaf order, as the triangle test reads them. */
     result->triangles = memory_allocate((size_t)n, sizeof *result->triangles);
     result->triangle_index = memory_allocate((size_t)n, sizeof *result->triangle_index);
-    for (int i = 0; i < n; i++) {
+    for (int i = 0; i < n; i++)
         result->triangle_index[i] = b.tris[i].index;
-        result->triangles[i] = bvh_triangle_make(&set->triangles[b.tris[i].index]);
-    }
+    bvh_triangles_fill(result);
     free(b.tris);
 
     bvh_fill_stats(result, split == BVH_SPLIT_SAH ? "bvh sah" : "bvh median", b.leaves, b.max_depth);
@@ -517,10 +542,9 @@ accel *bvh_from_nodes(const triangle_set *set, const bvh_node *nodes, int node_c
     b->triangle_count = triangle_count;
     b->triangles = memory_allocate((size_t)(triangle_count > 0 ? triangle_count : 1), sizeof *b->triangles);
     b->triangle_index = memory_allocate((size_t)(triangle_count > 0 ? triangle_count : 1), sizeof *b->triangle_index);
-    for (int i = 0; i < triangle_count; i++) {
+    for (int i = 0; i < triangle_count; i++)
         b->triangle_index[i] = triangle_index[i];
-        b->triangles[i] = bvh_triangle_make(&set->triangles[triangle_index[i]]);
-    }
+    bvh_triangles_fill(b);
     bvh_fill_stats(b, "bvh by hand", leaves, max_depth);
     return &b->base;
 }

@@ -72,6 +72,8 @@ static inline bool bvh_slab_test(const bvh_node *node, const bvh_ray *r, float t
 
 extern const accel_ops bvh_ops_axis_sign; /* BVH_ORDER_AXIS_SIGN */
 extern const accel_ops bvh_ops_distance;  /* BVH_ORDER_DISTANCE */
+/* Their use_triangle_test: rewrites bvh.triangles for the test (bvh.h). */
+bool bvh_use_triangle_test(accel *a, triangle_test test);
 
 /* The node array, placed so that each pair of children shares a cache line
  * (see bvh_build.c); free it with bvh_nodes_free(). */

@@ -7,7 +7,17 @@
 #include "06-bvh/bvh.h"
 #include "06-bvh/bvh_internal.h"
 
-/* Moller-Trumbore with the edges stored (bvh_triangle): the lecture's
+/* The triangle tests and the leaf loop are inlined into each traversal
+ * whatever the compiler's size heuristics say: GCC 12 left
+ * bvh_triangle_test() out of line, a call per triangle. */
+#if defined(__GNUC__)
+#define BVH_INLINE static inline __attribute__((always_inline))
+#else
+#define BVH_INLINE static inline
+#endif
+
+/* Moller-Trumbore with the edges stored (bvh_triangle), for a BVH told to
+ * use it (accel_use_triangle_test): the lecture's
  *     [t, b1, b2] = 1 / (S1 . E1) [S2 . E2, S1 . S, S2 . D]
  * with E1 = P1 - P0, E2 = P2 - P0, S = O - P0, S1 = D x E2, S2 = S x E1.
  * Every product is computed in the same order as in
@@ -15,7 +25,7 @@
  * float, bit for bit; only the two subtractions for E1 and E2 moved to the
  * build. The same rules too: only an exactly zero determinant is refused,
  * and the comparisons are false for NaN. */
-static inline bool bvh_triangle_intersect(const bvh_triangle *tri, const ray *r, float t_max, float *t_out,
+BVH_INLINE bool bvh_triangle_intersect(const bvh_triangle *tri, const ray *r, float t_max, float *t_out,
                                           float *b1_out, float *b2_out)
 {
     vec3 s1 = vec3_cross(r->direction, tri->e2);
@@ -40,9 +50,20 @@ static inline bool bvh_triangle_intersect(const bvh_triangle *tri, const ray *r,
     return true;
 }
 
+/* The watertight test (chapter 01's, what the BVH runs unless told
+ * otherwise) on the stored corners, or Moller-Trumbore on the stored edges:
+ * with `test` a constant, each traversal below is compiled for one. */
+BVH_INLINE bool bvh_triangle_test(triangle_test test, const bvh_triangle *tri, const ray *r,
+                                     const watertight_ray *wr, float t_max, float *t, float *b1, float *b2)
+{
+    if (test == TRIANGLE_TEST_WATERTIGHT)
+        return watertight_intersect(wr, &tri->p0.x, &tri->p1.x, &tri->p2.x, t_max, t, b1, b2);
+    return bvh_triangle_intersect(tri, r, t_max, t, b1, b2);
+}
+
 /* Skipping a box that begins beyond the closest hit so far is only safe if
  * no triangle inside can be reported closer than the box begins. The box
- * test is exact to a few ulps, but Moller-Trumbore's t is not: a triangle
+ * test is exact to a few ulps, but a triangle test's t is not: a triangle
  * whose exact hit lies in a box that begins just beyond the closest hit may
  * still come out of the test in front of it, and brute force, which tests
  * every triangle, then returns it. Rays aimed at a vertex shared by several
@@ -63,13 +84,13 @@ typedef struct {
 
 /* Test the triangles of a leaf against (t_min, found->t); with
  * stop_at_first, return true at the first hit. */
-static inline bool test_leaf(const bvh *b, const bvh_node *node, const ray *r, bvh_found *found,
-                             bool stop_at_first, uint64_t *primitive_tests)
+BVH_INLINE bool test_leaf(const bvh *b, const bvh_node *node, const ray *r, const watertight_ray *wr,
+                             triangle_test test, bvh_found *found, bool stop_at_first, uint64_t *primitive_tests)
 {
     int first = node->first, end = first + bvh_node_triangles(node);
     for (int i = first; i < end; i++) {
         float t, b1, b2;
-        if (bvh_triangle_intersect(&b->triangles[i], r, found->t, &t, &b1, &b2)) {
+        if (bvh_triangle_test(test, &b->triangles[i], r, wr, found->t, &t, &b1, &b2)) {
             *found = (bvh_found){i, t, b1, b2};
             if (stop_at_first) {
                 *primitive_tests += (uint64_t)(i + 1 - first);
@@ -85,12 +106,14 @@ static inline bool test_leaf(const bvh *b, const bvh_node *node, const ray *r, b
 
 /* The box of every node popped is tested against [t_min, closest hit], so a
  * far child that begins beyond the closest hit fails its box test. */
-static inline bvh_found traverse_axis_sign(const bvh *b, const ray *r, bool stop_at_first, ray_counters *counters)
+static inline bvh_found traverse_axis_sign(const bvh *b, const ray *r, bool stop_at_first, triangle_test test,
+                                           ray_counters *counters)
 {
     bvh_found found = {-1, r->t_max, 0.0f, 0.0f};
     if (b->node_count == 0)
         return found;
     bvh_ray br = bvh_ray_make(r);
+    watertight_ray wr = watertight_ray_make(r);
     /* Along an axis where d is negative, the ray meets the upper child (the
      * second: larger centroids) first. */
     const int negative[3] = {br.near_x != 0, br.near_y != 1, br.near_z != 2};
@@ -109,7 +132,7 @@ static inline bvh_found traverse_axis_sign(const bvh *b, const ray *r, bool stop
                 current = node->first + second_first;          /* near */
                 continue;
             }
-            if (test_leaf(b, node, r, &found, stop_at_first, &primitive_tests))
+            if (test_leaf(b, node, r, &wr, test, &found, stop_at_first, &primitive_tests))
                 break;
         }
         if (top == 0)
@@ -126,12 +149,14 @@ static inline bvh_found traverse_axis_sign(const bvh *b, const ray *r, bool stop
 /* Both children's boxes are tested at their parent; the far child goes on
  * the stack with its t_enter, and when it comes off, it is skipped without
  * another box test if a hit closer than t_enter was found meanwhile. */
-static inline bvh_found traverse_distance(const bvh *b, const ray *r, bool stop_at_first, ray_counters *counters)
+static inline bvh_found traverse_distance(const bvh *b, const ray *r, bool stop_at_first, triangle_test test,
+                                          ray_counters *counters)
 {
     bvh_found found = {-1, r->t_max, 0.0f, 0.0f};
     if (b->node_count == 0)
         return found;
     bvh_ray br = bvh_ray_make(r);
+    watertight_ray wr = watertight_ray_make(r);
     struct {
         int node;
         float t_enter;
@@ -163,7 +188,7 @@ static inline bvh_found traverse_distance(const bvh *b, const ray *r, bool stop_
                     current = node->first + hit1;
                     continue;
                 }
-            } else if (test_leaf(b, node, r, &found, stop_at_first, &primitive_tests)) {
+            } else if (test_leaf(b, node, r, &wr, test, &found, stop_at_first, &primitive_tests)) {
                 break;
             }
             /* Next from the stack, skipping nodes that begin beyond the
@@ -193,8 +218,9 @@ static inline bvh_found traverse_distance(const bvh *b, const ray *r, bool stop_
  *       return the closer of hit1, hit2;
  *   }
  *
- * with the lecture's own tests: chapter 03's slab test and chapter 01's
- * Moller-Trumbore. Every box and every triangle is tested over the whole ray
+ * with chapter 03's slab test and chapter 01's triangle test (the
+ * watertight one, as every structure runs, or the one it was told to use:
+ * accel_use_triangle_test). Every box and every triangle is tested over the whole ray
  * [t_min, t_max]; a hit found in one child changes nothing in the other. So
  * it visits every node whose parent's box the ray crosses, where the
  * iterative traversals above skip a box that begins beyond the closest hit
@@ -218,8 +244,8 @@ static bvh_found closer(bvh_found hit1, bvh_found hit2)
 
 /* The slide's Intersect(ray, node): the closest hit in the subtree of
  * nodes[node_index], or none (triangle -1). */
-static bvh_found intersect(const bvh *b, const ray *r, const slab_ray *sr, int node_index,
-                           ray_counters *counters)
+static bvh_found intersect(const bvh *b, const ray *r, const slab_ray *sr, const watertight_ray *wr,
+                           int node_index, ray_counters *counters)
 {
     const bvh_node *node = &b->nodes[node_index];
     const bvh_found none = {-1, r->t_max, 0.0f, 0.0f};
@@ -232,14 +258,15 @@ static bvh_found intersect(const bvh *b, const ray *r, const slab_ray *sr, int n
         bvh_found closest = none;
         for (int i = node->first; i < node->first + bvh_node_triangles(node); i++) {
             bvh_found hit = {b->triangle_index[i], 0.0f, 0.0f, 0.0f};
-            if (triangle_intersect_barycentric(&b->base.set->triangles[hit.triangle], r, &hit.t, &hit.b1, &hit.b2))
+            if (triangle_intersect_with(b->base.triangle_test, wr, &b->base.set->triangles[hit.triangle], r,
+                                        r->t_max, &hit.t, &hit.b1, &hit.b2))
                 closest = closer(closest, hit);
             counters->primitive_tests++;
         }
         return closest;
     }
-    bvh_found hit1 = intersect(b, r, sr, node->first, counters);     /* child1 */
-    bvh_found hit2 = intersect(b, r, sr, node->first + 1, counters); /* child2 */
+    bvh_found hit1 = intersect(b, r, sr, wr, node->first, counters);     /* child1 */
+    bvh_found hit2 = intersect(b, r, sr, wr, node->first + 1, counters); /* child2 */
     return closer(hit1, hit2);
 }
 
@@ -248,7 +275,8 @@ bool bvh_closest_hit_recursive(const bvh *b, ray r, hit_record *hit, ray_counter
     if (b->node_count == 0)
         return false;
     slab_ray sr = slab_ray_make(r);
-    bvh_found found = intersect(b, &r, &sr, 0, counters);
+    watertight_ray wr = watertight_ray_make(&r);
+    bvh_found found = intersect(b, &r, &sr, &wr, 0, counters);
     if (found.triangle < 0)
         return false;
     triangle_set_fill_hit(b->base.set, found.triangle, r, found.t, found.b1, found.b2, hit);
@@ -266,26 +294,41 @@ static bool finish_closest(const bvh *b, const bvh_found *found, const ray *r, h
     return true;
 }
 
+/* Each traversal compiled once per triangle test, chosen once per ray. */
+static bvh_found axis_sign_with(const accel *a, const ray *r, bool stop_at_first, ray_counters *counters)
+{
+    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
+        return traverse_axis_sign((const bvh *)a, r, stop_at_first, TRIANGLE_TEST_WATERTIGHT, counters);
+    return traverse_axis_sign((const bvh *)a, r, stop_at_first, TRIANGLE_TEST_MOLLER_TRUMBORE, counters);
+}
+
+static bvh_found distance_with(const accel *a, const ray *r, bool stop_at_first, ray_counters *counters)
+{
+    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
+        return traverse_distance((const bvh *)a, r, stop_at_first, TRIANGLE_TEST_WATERTIGHT, counters);
+    return traverse_distance((const bvh *)a, r, stop_at_first, TRIANGLE_TEST_MOLLER_TRUMBORE, counters);
+}
+
 static bool closest_hit_axis_sign(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
-    bvh_found found = traverse_axis_sign((const bvh *)a, &r, false, counters);
+    bvh_found found = axis_sign_with(a, &r, false, counters);
     return finish_closest((const bvh *)a, &found, &r, hit);
 }
 
 static bool any_hit_axis_sign(const accel *a, ray r, ray_counters *counters)
 {
-    return traverse_axis_sign((const bvh *)a, &r, true, counters).triangle >= 0;
+    return axis_sign_with(a, &r, true, counters).triangle >= 0;
 }
 
 static bool closest_hit_distance(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
-    bvh_found found = traverse_distance((const bvh *)a, &r, false, counters);
+    bvh_found found = distance_with(a, &r, false, counters);
     return finish_closest((const bvh *)a, &found, &r, hit);
 }
 
 static bool any_hit_distance(const accel *a, ray r, ray_counters *counters)
 {
-    return traverse_distance((const bvh *)a, &r, true, counters).triangle >= 0;
+    return distance_with(a, &r, true, counters).triangle >= 0;
 }
 
 static void bvh_destroy(accel *a)
@@ -297,8 +340,8 @@ static void bvh_destroy(accel *a)
     free(b);
 }
 
-const accel_ops bvh_ops_axis_sign = {closest_hit_axis_sign, any_hit_axis_sign, bvh_destroy};
-const accel_ops bvh_ops_distance = {closest_hit_distance, any_hit_distance, bvh_destroy};
+const accel_ops bvh_ops_axis_sign = {closest_hit_axis_sign, any_hit_axis_sign, bvh_destroy, bvh_use_triangle_test};
+const accel_ops bvh_ops_distance = {closest_hit_distance, any_hit_distance, bvh_destroy, bvh_use_triangle_test};
 
 void bvh_set_order(accel *a, bvh_order order)
 {

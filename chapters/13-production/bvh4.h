@@ -12,9 +12,12 @@
  * Built by collapsing the binary SAH tree (bvh_build.c): each 4-wide node
  * takes a binary node and pulls up grandchildren, the one with the largest
  * surface area first, until it has four children. Leaves hold triangles in
- * packets of four, also structure of arrays, tested by a 4-lane
- * Moller-Trumbore that does, per lane, exactly the scalar test's
- * arithmetic: the same t, bit for bit.
+ * packets of four, also structure of arrays, tested by a 4-lane watertight
+ * test (chapter 01's, what every renderer uses) that does, per lane,
+ * exactly the scalar test's arithmetic: the same t, bit for bit. On request
+ * (accel_use_triangle_test) the packets hold what Moller-Trumbore reads
+ * instead, and a 4-lane Moller-Trumbore tests them: the benchmark's
+ * column beside the watertight one, and the leak test's twin.
  *
  * The width is a compile-time constant, BVH4_WIDTH: 4, or 8 (build with
  * -DBVH4_WIDTH=8; `make test-bvh8`). An 8-wide node is two groups of four
@@ -84,24 +87,51 @@ typedef struct {
 
 _Static_assert(sizeof(bvh4_node) % 64 == 0, "a node is whole cache lines");
 
-/* Four triangles as the 4-lane Moller-Trumbore reads them: P0, E1 = P1 - P0
- * and E2 = P2 - P0, by coordinate then by lane (p0[1][k] is lane k's P0.y),
- * and which triangle of the set each lane is (right there, in the cache
- * lines just read, when a hit needs it). An empty lane is all zeros, with
- * index -1: its determinant is 0, so it never hits. 160 bytes.
+/* Four triangles as the 4-lane test reads them, by coordinate then by lane
+ * (p0[1][k] is lane k's P0.y), and which triangle of the set each lane is
+ * (right there, in the cache lines just read, when a hit needs it). 160
+ * bytes. What the lanes hold depends on the tree's triangle test:
+ *   watertight       the corners P0, P1, P2. An empty lane (index -1) and a
+ *                    degenerate triangle (triangle_is_degenerate) are NaN:
+ *                    no comparison with NaN holds, so no ray hits them, and
+ *                    their edge functions are never exactly 0 (which would
+ *                    send the lane to the test's double-precision path at
+ *                    every visit).
+ *   Moller-Trumbore  P0, E1 = P1 - P0 and E2 = P2 - P0. An empty lane is all
+ *                    zeros: its determinant is 0, so it never hits.
  *
- * A lane's index also carries BVH4_LANE_EXACT when P0 + E1 and P0 + E2
- * give back P1 and P2 bit for bit (the subtractions were exact, as they
- * are for most small triangles: Sterbenz's lemma). The hit record of such
- * a lane is made from the packet alone; for the others the set's copy of
- * the triangle is read, elsewhere in memory. */
+ * A lane's index also carries BVH4_LANE_EXACT when the packet gives back
+ * the set's triangle bit for bit: always for the watertight test's
+ * corners; for Moller-Trumbore when P0 + E1 and P0 + E2 give back P1 and
+ * P2 (the subtractions were exact, as they are for most small triangles:
+ * Sterbenz's lemma). The hit record of such a lane is made from the packet
+ * alone; for the others the set's copy of the triangle is read, elsewhere
+ * in memory. */
 enum { BVH4_LANE_EXACT = 0x40000000 };
 static inline int bvh4_lane_triangle(int32_t index) { return index < 0 ? index : index & (BVH4_LANE_EXACT - 1); }
 typedef struct {
     _Alignas(16) float p0[3][4];
-    float e1[3][4], e2[3][4];
+    union {
+        struct {
+            float p1[3][4], p2[3][4]; /* the watertight test's */
+        };
+        struct {
+            float e1[3][4], e2[3][4]; /* Moller-Trumbore's */
+        };
+    };
     int32_t index[4];
 } bvh4_packet;
+
+/* What a lane of a SIMD kernel holds for triangle tri (NULL: an empty
+ * lane) and `test`, as above (bvh4's packets, and flat.h's blocks): P0 in
+ * p0, P1 and P2 or E1 and E2 in v1 and v2. Returns whether they give the
+ * triangle back bit for bit (BVH4_LANE_EXACT). */
+bool bvh4_lane_coordinates(const triangle *tri, triangle_test test, float p0[3], float v1[3], float v2[3]);
+/* Lane k of a packet as `test` reads it: triangle `index` of the set (-1
+ * and tri NULL: an empty lane), with its BVH4_LANE_EXACT mark. */
+void bvh4_packet_set_lane(bvh4_packet *packet, int k, const triangle *tri, int index, triangle_test test);
+/* The bvh4's accel_ops.use_triangle_test: rewrites every lane for `test`. */
+bool bvh4_use_triangle_test(accel *a, triangle_test test);
 
 /* Which code tests boxes and triangles: the SSE intrinsics, or a plain C
  * loop over the four lanes with the same arithmetic (the same answers). */
@@ -129,12 +159,13 @@ bool bvh4_set_kernel(accel *a, bvh4_kernel kernel);
 
 /* The two tests the traversal runs, on their own (for the tests): the slab
  * test of a node's BVH4_WIDTH boxes, as bvh_slab_test() does for one, returning
- * the mask of boxes hit and their t_enter; and Moller-Trumbore on a packet's
- * four lanes in (r.t_min, t_max), as the scalar test, returning the mask of
- * lanes hit and their t, b1, b2 (lanes not hit are left as they were). */
+ * the mask of boxes hit and their t_enter; and the triangle test `test` on a
+ * packet's four lanes (filled for that test) in (r.t_min, t_max), as the
+ * scalar test, returning the mask of lanes hit and their t, b1, b2 (lanes
+ * not hit are left as they were). */
 int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float t_enter[BVH4_WIDTH], bvh4_kernel kernel);
 int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
-                       bvh4_kernel kernel);
+                       bvh4_kernel kernel, triangle_test test);
 
 /* Closest hits of a stream of independent rays: hit_found[i] and hits[i]
  * are what accel_closest_hit() gives for rays[i], bit for bit, but

@@ -31,7 +31,6 @@ typedef struct {
     bvh4_packet *packets;
     int packet_count, packet_capacity;
     int leaves, max_depth;
-    long exact_lanes;
 } collapser;
 
 static void set_child_box(bvh4_node *node, int k, aabb box)
@@ -109,24 +108,9 @@ static uint32_t emit_leaf(collapser *c, int first, int count, aabb box, int dept
             packet->index[lane] = -1;
             continue;
         }
-        int index = c->binary->triangle_index[first + i];
-        const triangle *t = &c->set->triangles[index];
-        /* E1 and E2 exactly as bvh_triangle_make() and chapter 01 compute them */
-        vec3 e1 = vec3_sub(t->p1, t->p0), e2 = vec3_sub(t->p2, t->p0);
-        packet->p0[0][lane] = t->p0.x;
-        packet->p0[1][lane] = t->p0.y;
-        packet->p0[2][lane] = t->p0.z;
-        packet->e1[0][lane] = e1.x;
-        packet->e1[1][lane] = e1.y;
-        packet->e1[2][lane] = e1.z;
-        packet->e2[0][lane] = e2.x;
-        packet->e2[1][lane] = e2.y;
-        packet->e2[2][lane] = e2.z;
-        vec3 p1 = vec3_add(t->p0, e1), p2 = vec3_add(t->p0, e2);
-        /* the same bits (== would take -0 for +0) */
-        bool exact = memcmp(&p1, &t->p1, sizeof p1) == 0 && memcmp(&p2, &t->p2, sizeof p2) == 0;
-        packet->index[lane] = index | (exact ? BVH4_LANE_EXACT : 0);
-        c->exact_lanes += exact;
+        /* the triangle's index now; its coordinates once the packets are
+         * in place (bvh4_packets_fill) */
+        packet->index[lane] = c->binary->triangle_index[first + i];
     }
     c->leaves++;
     return BVH4_LEAF | (uint32_t)count << BVH4_PACKET_SHIFT | (uint32_t)p;
@@ -215,6 +199,61 @@ static void collapse_interior(collapser *c, int binary_node, int n, int depth)
     }
 }
 
+/* ---- the lanes' coordinates ------------------------------------------------------ */
+
+bool bvh4_lane_coordinates(const triangle *tri, triangle_test test, float p0[3], float v1[3], float v2[3])
+{
+    if (test == TRIANGLE_TEST_MOLLER_TRUMBORE) {
+        if (tri == NULL) {
+            for (int axis = 0; axis < 3; axis++)
+                p0[axis] = v1[axis] = v2[axis] = 0.0f;
+            return true;
+        }
+        /* E1 and E2 exactly as bvh_triangle_make() and chapter 01 compute
+         * them; exact if they give P1 and P2 back, the same bits (== would
+         * take -0 for +0) */
+        vec3 e1 = vec3_sub(tri->p1, tri->p0), e2 = vec3_sub(tri->p2, tri->p0);
+        vec3 p1 = vec3_add(tri->p0, e1), p2 = vec3_add(tri->p0, e2);
+        memcpy(p0, &tri->p0, 3 * sizeof(float));
+        memcpy(v1, &e1, 3 * sizeof(float));
+        memcpy(v2, &e2, 3 * sizeof(float));
+        return memcmp(&p1, &tri->p1, sizeof p1) == 0 && memcmp(&p2, &tri->p2, sizeof p2) == 0;
+    }
+    if (tri == NULL || triangle_is_degenerate(tri)) {
+        for (int axis = 0; axis < 3; axis++)
+            p0[axis] = v1[axis] = v2[axis] = NAN;
+        return true;
+    }
+    memcpy(p0, &tri->p0, 3 * sizeof(float));
+    memcpy(v1, &tri->p1, 3 * sizeof(float));
+    memcpy(v2, &tri->p2, 3 * sizeof(float));
+    return true;
+}
+
+void bvh4_packet_set_lane(bvh4_packet *packet, int k, const triangle *tri, int index, triangle_test test)
+{
+    float p0[3], v1[3], v2[3]; /* P0 and the corners P1, P2 or the edges E1, E2 */
+    bool exact = bvh4_lane_coordinates(tri, test, p0, v1, v2);
+    for (int axis = 0; axis < 3; axis++) {
+        packet->p0[axis][k] = p0[axis];
+        packet->p1[axis][k] = v1[axis]; /* p1 and e1 are the same floats (bvh4.h) */
+        packet->p2[axis][k] = v2[axis];
+    }
+    packet->index[k] = index < 0 ? -1 : index | (exact ? BVH4_LANE_EXACT : 0);
+}
+
+bool bvh4_use_triangle_test(accel *a, triangle_test test)
+{
+    bvh4 *b = (bvh4 *)a;
+    a->triangle_test = test;
+    for (int i = 0; i < 4 * b->packet_count; i++) {
+        bvh4_packet *packet = &b->packets[i / 4];
+        int index = bvh4_lane_triangle(packet->index[i % 4]);
+        bvh4_packet_set_lane(packet, i % 4, index >= 0 ? &a->set->triangles[index] : NULL, index, test);
+    }
+    return true;
+}
+
 accel *bvh4_build(const triangle_set *set, bvh_split split)
 {
     double start = timer_seconds();
@@ -228,7 +267,7 @@ accel *bvh4_build(const triangle_set *set, bvh_split split)
     b->kernel = BVH4_HAVE_SSE ? BVH4_KERNEL_SSE : BVH4_KERNEL_SCALAR;
     b->triangle_count = set->count;
 
-    collapser c = {binary, set, NULL, 0, 0, NULL, 0, 0, 0, 0, 0};
+    collapser c = {binary, set, NULL, 0, 0, NULL, 0, 0, 0, 0};
     if (set->count >= BVH4_LANE_EXACT) {
         fprintf(stderr, "bvh4: more than %d triangles\n", BVH4_LANE_EXACT - 1);
         exit(1);
@@ -261,6 +300,7 @@ accel *bvh4_build(const triangle_set *set, bvh_split split)
     free(c.nodes);
     free(c.packets);
     accel_destroy(binary_accel);
+    bvh4_use_triangle_test(&b->base, TRIANGLE_TEST_WATERTIGHT); /* the lanes' coordinates */
 
     b->base.stats.name = split == BVH_SPLIT_SAH ? "bvh4 sah" : "bvh4 median";
     b->base.stats.bytes = sizeof *b + (size_t)b->node_count * sizeof(bvh4_node) +

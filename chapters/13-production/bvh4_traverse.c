@@ -1,9 +1,11 @@
 /* bvh4_traverse.c -- a ray through a 4-wide BVH: at each node, slab-test
  * the children's boxes at once (four, or eight: BVH4_WIDTH), go on with the
  * nearest child hit and put the others on the stack, farthest deepest; in
- * a leaf, test its triangles four at a time. Both tests exist twice, with SSE intrinsics and
- * as a plain C loop over the lanes; the two do the same float operations in
- * the same order, so they give the same answers (test_ch06 runs both). */
+ * a leaf, test its triangles four at a time, with the watertight test (or
+ * Moller-Trumbore, when asked). Every test exists twice, with SSE
+ * intrinsics and as a plain C loop over the lanes; the two do the same
+ * float operations in the same order, so they give the same answers
+ * (test_ch13 runs both). */
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,6 +15,17 @@
 
 #if BVH4_HAVE_SSE
 #include <immintrin.h>
+
+#include "13-production/watertight_simd.h"
+#endif
+
+/* traverse4(), test_leaf4() and triangle_test4() are inlined into each of
+ * their callers, so that `sse`, `watertight` and `stop_at_first` are
+ * constants there and the compiler drops the branches on them. */
+#if defined(__GNUC__)
+#define ALWAYS_INLINE inline __attribute__((always_inline))
+#else
+#define ALWAYS_INLINE inline
 #endif
 
 /* ---- the ray, prepared once ---------------------------------------------------- */
@@ -20,8 +33,12 @@
 typedef struct {
     bvh_ray scalar; /* origin, 1/d, and which plane of each axis is met first */
     int far_x, far_y, far_z;
+    watertight_ray watertight; /* the watertight test's part for the ray (chapter 01) */
 #if BVH4_HAVE_SSE
     __m128 origin[3], inverse_direction[3], direction[3];
+    /* the same, in the watertight test's axes: o_kx, o_ky, o_kz; the shear
+     * d_kx / d_kz, d_ky / d_kz; t_min */
+    __m128 w_origin[3], w_shear[2], w_t_min;
 #endif
 } bvh4_ray;
 
@@ -32,7 +49,15 @@ static inline bvh4_ray bvh4_ray_make(const ray *r)
     b.far_x = 3 - b.scalar.near_x;
     b.far_y = 5 - b.scalar.near_y;
     b.far_z = 7 - b.scalar.near_z;
+    b.watertight = watertight_ray_make(r);
 #if BVH4_HAVE_SSE
+    const watertight_ray *w = &b.watertight;
+    b.w_origin[0] = _mm_set1_ps(vec3_axis(w->origin, w->kx));
+    b.w_origin[1] = _mm_set1_ps(vec3_axis(w->origin, w->ky));
+    b.w_origin[2] = _mm_set1_ps(vec3_axis(w->origin, w->kz));
+    b.w_shear[0] = _mm_set1_ps(w->shear_x);
+    b.w_shear[1] = _mm_set1_ps(w->shear_y);
+    b.w_t_min = _mm_set1_ps(w->t_min);
     b.origin[0] = _mm_set1_ps(r->origin.x);
     b.origin[1] = _mm_set1_ps(r->origin.y);
     b.origin[2] = _mm_set1_ps(r->origin.z);
@@ -115,15 +140,78 @@ static inline int slab_test4_sse(const bvh4_node *node, const bvh4_ray *r, float
 }
 #endif
 
-/* ---- four triangle tests --------------------------------------------------------------
+/* ---- four triangle tests, watertight ---------------------------------------------------
+ * watertight_intersect() (chapter 01's shapes.h) on each lane: the same
+ * operations in the same order, so the same t, b1, b2, bit for bit, and the
+ * same rules. The lane's corners are read in the ray's axes: the packet
+ * stores them by coordinate, so "coordinate kx of the four P0" is the row
+ * p0[kx], and the permutation costs nothing. Returns the mask of lanes hit
+ * in (t_min, t_max). */
+
+static ALWAYS_INLINE int triangle_test4_watertight_scalar(const bvh4_packet *p, const bvh4_ray *r4, float t_max,
+                                                          float t[4], float b1[4], float b2[4])
+{
+    int mask = 0;
+    for (int k = 0; k < 4; k++) {
+        const float p0[3] = {p->p0[0][k], p->p0[1][k], p->p0[2][k]};
+        const float p1[3] = {p->p1[0][k], p->p1[1][k], p->p1[2][k]};
+        const float p2[3] = {p->p2[0][k], p->p2[1][k], p->p2[2][k]};
+        if (watertight_intersect(&r4->watertight, p0, p1, p2, t_max, &t[k], &b1[k], &b2[k]))
+            mask |= 1 << k;
+    }
+    return mask;
+}
+
+#if BVH4_HAVE_SSE
+/* The scalar test stops at the first failed condition; here every lane
+ * runs to the end and the conditions are and-ed, as in
+ * WATERTIGHT_INSIDE (watertight_simd.h), which says why the answers are the
+ * same. Only the lanes the ray passes inside, if any, go on to t. */
+static ALWAYS_INLINE int triangle_test4_watertight_sse(const bvh4_packet *p, const bvh4_ray *r4, float t_max,
+                                                       float t[4], float b1[4], float b2[4])
+{
+    const int kx = r4->watertight.kx, ky = r4->watertight.ky, kz = r4->watertight.kz;
+    const __m128 *o = r4->w_origin, *shear = r4->w_shear;
+    __m128 a_z = _mm_sub_ps(_mm_load_ps(p->p0[kz]), o[2]);
+    __m128 b_z = _mm_sub_ps(_mm_load_ps(p->p1[kz]), o[2]);
+    __m128 c_z = _mm_sub_ps(_mm_load_ps(p->p2[kz]), o[2]);
+    __m128 ax = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p->p0[kx]), o[0]), _mm_mul_ps(shear[0], a_z));
+    __m128 ay = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p->p0[ky]), o[1]), _mm_mul_ps(shear[1], a_z));
+    __m128 bx = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p->p1[kx]), o[0]), _mm_mul_ps(shear[0], b_z));
+    __m128 by = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p->p1[ky]), o[1]), _mm_mul_ps(shear[1], b_z));
+    __m128 cx = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p->p2[kx]), o[0]), _mm_mul_ps(shear[0], c_z));
+    __m128 cy = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p->p2[ky]), o[1]), _mm_mul_ps(shear[1], c_z));
+    __m128 u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+    __m128 v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+    __m128 w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+    WATERTIGHT_INSIDE(__m128, _mm, WATERTIGHT_IN_DOUBLE4, ok, determinant, ax, ay, bx, by, cx, cy, u, v, w);
+    if (_mm_movemask_ps(ok) == 0)
+        return 0; /* most packets: the ray passes beside all four */
+    WATERTIGHT_PLANE_T(__m128, _mm, distance, _mm_load_ps(p->p0[0]), _mm_load_ps(p->p0[1]), _mm_load_ps(p->p0[2]),
+                       _mm_load_ps(p->p1[0]), _mm_load_ps(p->p1[1]), _mm_load_ps(p->p1[2]), _mm_load_ps(p->p2[0]),
+                       _mm_load_ps(p->p2[1]), _mm_load_ps(p->p2[2]), r4->origin[0], r4->origin[1], r4->origin[2],
+                       r4->direction[0], r4->direction[1], r4->direction[2]);
+    ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmpgt_ps(distance, r4->w_t_min), _mm_cmplt_ps(distance, _mm_set1_ps(t_max))));
+    int mask = _mm_movemask_ps(ok);
+    if (mask != 0) { /* all four lanes: the caller reads only those hit */
+        __m128 inverse = _mm_div_ps(_mm_set1_ps(1.0f), determinant);
+        _mm_storeu_ps(t, distance);
+        _mm_storeu_ps(b1, _mm_mul_ps(v, inverse));
+        _mm_storeu_ps(b2, _mm_mul_ps(w, inverse));
+    }
+    return mask;
+}
+#endif
+
+/* ---- four triangle tests, Moller-Trumbore ------------------------------------------------
  * bvh_triangle_intersect() (bvh_traverse.c) on each lane: the same products
  * in the same order (vec3_cross, vec3_dot: (x + y) + z), so the same t, b1,
  * b2, bit for bit, and the same rules: a determinant of exactly 0 is refused,
  * every comparison is false for NaN. Returns the mask of lanes hit in
  * (t_min, t_max). */
 
-static inline int triangle_test4_scalar(const bvh4_packet *p, const ray *r, float t_max, float t[4], float b1[4],
-                                        float b2[4])
+static ALWAYS_INLINE int triangle_test4_scalar(const bvh4_packet *p, const ray *r, float t_max, float t[4],
+                                               float b1[4], float b2[4])
 {
     int mask = 0;
     for (int k = 0; k < 4; k++) {
@@ -141,8 +229,8 @@ static inline int triangle_test4_scalar(const bvh4_packet *p, const ray *r, floa
  * runs to the end and the conditions are and-ed. A lane the scalar test
  * leaves early (determinant 0) computes 1/0 = inf and NaN on the way, which
  * fail its remaining comparisons: the mask is the same. */
-static inline int triangle_test4_sse(const bvh4_packet *p, const bvh4_ray *r4, const ray *r, float t_max, float t[4],
-                                     float b1[4], float b2[4])
+static ALWAYS_INLINE int triangle_test4_sse(const bvh4_packet *p, const bvh4_ray *r4, const ray *r, float t_max,
+                                            float t[4], float b1[4], float b2[4])
 {
     const __m128 *d = r4->direction;
     __m128 e1x = _mm_load_ps(p->e1[0]), e1y = _mm_load_ps(p->e1[1]), e1z = _mm_load_ps(p->e1[2]);
@@ -192,20 +280,27 @@ int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float
     return slab_test4_scalar(node, &r4, t_min, t_max, t_enter);
 }
 
+/* The four lanes by the tree's triangle test and the kernel. */
+static ALWAYS_INLINE int triangle_test4(const bvh4_packet *p, const bvh4_ray *r4, const ray *r, float t_max, float t[4],
+                                        float b1[4], float b2[4], bool sse, bool watertight)
+{
+#if BVH4_HAVE_SSE
+    if (sse)
+        return watertight ? triangle_test4_watertight_sse(p, r4, t_max, t, b1, b2)
+                          : triangle_test4_sse(p, r4, r, t_max, t, b1, b2);
+#endif
+    (void)sse;
+    return watertight ? triangle_test4_watertight_scalar(p, r4, t_max, t, b1, b2)
+                      : triangle_test4_scalar(p, r, t_max, t, b1, b2);
+}
+
 int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
-                       bvh4_kernel kernel)
+                       bvh4_kernel kernel, triangle_test test)
 {
     bvh4_ray r4 = bvh4_ray_make(&r);
     float lane_t[4], lane_b1[4], lane_b2[4];
-    int mask;
-#if BVH4_HAVE_SSE
-    if (kernel == BVH4_KERNEL_SSE)
-        mask = triangle_test4_sse(packet, &r4, &r, t_max, lane_t, lane_b1, lane_b2);
-    else
-#endif
-        mask = triangle_test4_scalar(packet, &r, t_max, lane_t, lane_b1, lane_b2);
-    (void)kernel;
-    (void)r4;
+    int mask = triangle_test4(packet, &r4, &r, t_max, lane_t, lane_b1, lane_b2, kernel == BVH4_KERNEL_SSE,
+                              test == TRIANGLE_TEST_WATERTIGHT);
     for (int k = 0; k < 4; k++) /* lanes not hit keep what they had */
         if (mask >> k & 1) {
             t[k] = lane_t[k];
@@ -217,14 +312,6 @@ int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4]
 
 /* ---- traversal ------------------------------------------------------------------- */
 
-/* traverse4() and test_leaf4() are inlined into each of the four callers,
- * so that `sse` and `stop_at_first` are constants there and the compiler
- * drops the branches on them. */
-#if defined(__GNUC__)
-#define ALWAYS_INLINE inline __attribute__((always_inline))
-#else
-#define ALWAYS_INLINE inline
-#endif
 
 /* What a traversal found: the closest triangle so far (4 packet + lane). */
 typedef struct {
@@ -298,21 +385,13 @@ static ALWAYS_INLINE void prefetch_hit(const bvh4 *b, int32_t lane_index)
  * all lie before found->t; the closest of them, the first among equals,
  * wins: what testing the triangles one by one in lane order gives. */
 static ALWAYS_INLINE bool test_leaf4(const bvh4 *b, uint32_t ref, const bvh4_ray *r4, const ray *r, bvh4_found *found,
-                              bool stop_at_first, bool sse, uint64_t *primitive_tests)
+                              bool stop_at_first, bool sse, bool watertight, uint64_t *primitive_tests)
 {
     int count = bvh4_leaf_triangles(ref), first = bvh4_leaf_first_packet(ref);
     for (int p = 0; p * 4 < count; p++) {
         float t[4], b1[4], b2[4];
         const bvh4_packet *packet = &b->packets[first + p];
-        int mask;
-#if BVH4_HAVE_SSE
-        if (sse)
-            mask = triangle_test4_sse(packet, r4, r, found->t, t, b1, b2);
-        else
-#endif
-            mask = triangle_test4_scalar(packet, r, found->t, t, b1, b2);
-        (void)sse;
-        (void)r4;
+        int mask = triangle_test4(packet, r4, r, found->t, t, b1, b2, sse, watertight);
         *primitive_tests += (uint64_t)(count - 4 * p < 4 ? count - 4 * p : 4);
         if (mask == 0)
             continue;
@@ -368,7 +447,8 @@ static ALWAYS_INLINE bool traversal_begin(const bvh4 *b, const ray *r, bvh4_trav
 /* Visit w->current -- slab-test a node's children, or test a leaf's
  * triangles -- and choose the next one to visit. Returns false when the
  * walk is over: the stack is empty, or (any hit) a triangle was hit. */
-static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool stop_at_first, bool sse)
+static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool stop_at_first, bool sse,
+                                         bool watertight)
 {
     if (!bvh4_is_leaf(w->current)) {
         const bvh4_node *node = &b->nodes[w->current];
@@ -425,7 +505,8 @@ static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool 
             w->current = hits[n - 1].ref;
             return true;
         }
-    } else if (test_leaf4(b, w->current, &w->r4, &w->r, &w->found, stop_at_first, sse, &w->primitive_tests)) {
+    } else if (test_leaf4(b, w->current, &w->r4, &w->r, &w->found, stop_at_first, sse, watertight,
+                          &w->primitive_tests)) {
         return false;
     }
     /* Next from the stack, skipping entries that begin beyond the
@@ -439,11 +520,12 @@ static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool 
     return true;
 }
 
-static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_first, bool sse, ray_counters *counters)
+static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_first, bool sse, bool watertight,
+                                          ray_counters *counters)
 {
     bvh4_traversal w;
     if (traversal_begin(b, r, &w))
-        while (traversal_step(b, &w, stop_at_first, sse))
+        while (traversal_step(b, &w, stop_at_first, sse, watertight))
             ;
     counters->box_tests += w.box_tests;
     counters->primitive_tests += w.primitive_tests;
@@ -464,33 +546,54 @@ static bool finish_closest(const bvh4 *b, const bvh4_found *found, const ray *r,
     }
     /* the set's triangle, bit for bit, from the cache lines the test read */
     vec3 p0 = vec3_make(p->p0[0][k], p->p0[1][k], p->p0[2][k]);
-    triangle tri = {p0, vec3_add(p0, vec3_make(p->e1[0][k], p->e1[1][k], p->e1[2][k])),
-                    vec3_add(p0, vec3_make(p->e2[0][k], p->e2[1][k], p->e2[2][k]))};
+    vec3 v1 = vec3_make(p->p1[0][k], p->p1[1][k], p->p1[2][k]), v2 = vec3_make(p->p2[0][k], p->p2[1][k], p->p2[2][k]);
+    triangle tri = {p0, v1, v2}; /* the watertight test's corners */
+    if (b->base.triangle_test == TRIANGLE_TEST_MOLLER_TRUMBORE)
+        tri = (triangle){p0, vec3_add(p0, v1), vec3_add(p0, v2)}; /* P0 + E1, P0 + E2 */
     triangle_set_fill_hit_from(b->base.set, &tri, index, *r, found->t, found->b1, found->b2, record);
     return true;
 }
 
+/* One entry point per kernel, query and triangle test, each with all three
+ * constant inside (ALWAYS_INLINE), the test chosen once per ray. */
+static bvh4_found traverse4_with(const accel *a, const ray *r, bool stop_at_first, bool sse, ray_counters *counters)
+{
+    const bvh4 *b = (const bvh4 *)a;
+    bool wt = a->triangle_test == TRIANGLE_TEST_WATERTIGHT;
+#if BVH4_HAVE_SSE
+    if (sse) {
+        if (stop_at_first)
+            return wt ? traverse4(b, r, true, true, true, counters) : traverse4(b, r, true, true, false, counters);
+        return wt ? traverse4(b, r, false, true, true, counters) : traverse4(b, r, false, true, false, counters);
+    }
+#endif
+    (void)sse;
+    if (stop_at_first)
+        return wt ? traverse4(b, r, true, false, true, counters) : traverse4(b, r, true, false, false, counters);
+    return wt ? traverse4(b, r, false, false, true, counters) : traverse4(b, r, false, false, false, counters);
+}
+
 static bool closest_hit_scalar(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
-    bvh4_found found = traverse4((const bvh4 *)a, &r, false, false, counters);
+    bvh4_found found = traverse4_with(a, &r, false, false, counters);
     return finish_closest((const bvh4 *)a, &found, &r, hit);
 }
 
 static bool any_hit_scalar(const accel *a, ray r, ray_counters *counters)
 {
-    return traverse4((const bvh4 *)a, &r, true, false, counters).lane >= 0;
+    return traverse4_with(a, &r, true, false, counters).lane >= 0;
 }
 
 #if BVH4_HAVE_SSE
 static bool closest_hit_sse(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
-    bvh4_found found = traverse4((const bvh4 *)a, &r, false, true, counters);
+    bvh4_found found = traverse4_with(a, &r, false, true, counters);
     return finish_closest((const bvh4 *)a, &found, &r, hit);
 }
 
 static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
 {
-    return traverse4((const bvh4 *)a, &r, true, true, counters).lane >= 0;
+    return traverse4_with(a, &r, true, true, counters).lane >= 0;
 }
 #endif
 
@@ -505,7 +608,7 @@ static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
  * node has arrived. Each ray does exactly what it would alone, in the same
  * order: the same hits, bit for bit. */
 static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
-                                  bool stop_at_first, bool sse, ray_counters *counters)
+                                  bool stop_at_first, bool sse, bool watertight, ray_counters *counters)
 {
     bvh4_traversal lanes[BVH4_STREAM_LANES];
     int ray_of[BVH4_STREAM_LANES]; /* the ray each lane walks, -1: none left */
@@ -547,7 +650,7 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
             if (ray_of[k] < 0)
                 continue;
             bvh4_traversal *w = &lanes[k];
-            if (traversal_step(b, w, stop_at_first, sse)) {
+            if (traversal_step(b, w, stop_at_first, sse, watertight)) {
                 prefetch_child(b, w->current);
                 continue;
             }
@@ -577,21 +680,30 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
     }
 }
 
-/* The kernel chosen once per stream, so stream4() is compiled with it fixed. */
+/* The kernel and the triangle test chosen once per stream, so stream4() is
+ * compiled with them fixed. */
 static void stream4_with_kernel(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
                                 bool stop_at_first, ray_counters *counters)
 {
     const bvh4 *b = (const bvh4 *)a;
+    bool watertight = a->triangle_test == TRIANGLE_TEST_WATERTIGHT;
 #if BVH4_HAVE_SSE
     if (b->kernel == BVH4_KERNEL_SSE) {
-        if (stop_at_first)
-            stream4(b, rays, count, hits, hit_found, true, true, counters);
-        else
-            stream4(b, rays, count, hits, hit_found, false, true, counters);
+        if (stop_at_first) {
+            if (watertight)
+                stream4(b, rays, count, hits, hit_found, true, true, true, counters);
+            else
+                stream4(b, rays, count, hits, hit_found, true, true, false, counters);
+        } else {
+            if (watertight)
+                stream4(b, rays, count, hits, hit_found, false, true, true, counters);
+            else
+                stream4(b, rays, count, hits, hit_found, false, true, false, counters);
+        }
         return;
     }
 #endif
-    stream4(b, rays, count, hits, hit_found, stop_at_first, false, counters);
+    stream4(b, rays, count, hits, hit_found, stop_at_first, false, watertight, counters);
 }
 
 void bvh4_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
@@ -613,9 +725,9 @@ static void bvh4_destroy(accel *a)
     free(b);
 }
 
-static const accel_ops bvh4_ops_scalar = {closest_hit_scalar, any_hit_scalar, bvh4_destroy};
+static const accel_ops bvh4_ops_scalar = {closest_hit_scalar, any_hit_scalar, bvh4_destroy, bvh4_use_triangle_test};
 #if BVH4_HAVE_SSE
-static const accel_ops bvh4_ops_sse = {closest_hit_sse, any_hit_sse, bvh4_destroy};
+static const accel_ops bvh4_ops_sse = {closest_hit_sse, any_hit_sse, bvh4_destroy, bvh4_use_triangle_test};
 #endif
 
 const accel_ops *bvh4_default_ops(void)

@@ -14,9 +14,13 @@
  * where the processor has it (asked at run time, so one binary runs
  * everywhere; compiled once more for AVX-512's 32 registers, where it has
  * those), SSE (each block as two halves), and a plain C loop. Each
- * lane does exactly the arithmetic of triangle_intersect_barycentric(), so
- * every t is the scalar test's, bit for bit; of equal t the lower triangle
- * index wins, as in chapter 03's brute force.
+ * lane does exactly the arithmetic of chapter 01's watertight test
+ * (watertight_intersect()), so every t is the scalar test's, bit for bit;
+ * of equal t the lower triangle index wins, as in chapter 03's brute force.
+ * On request (accel_use_triangle_test) the blocks hold what
+ * Moller-Trumbore reads, and every kernel runs it instead, lane for lane
+ * triangle_intersect_barycentric(): the benchmark's column beside the
+ * watertight one, and the leak test's twin.
  *
  * Usage:
  *   accel *a = flat_build(&set);
@@ -35,14 +39,27 @@
 
 #include "03-aabb-slabs/accel.h"
 
-/* Eight triangles: P0, E1 = P1 - P0 and E2 = P2 - P0 by coordinate, then
- * by lane, and which triangle each lane is (-1: an empty lane, all zeros,
- * whose determinant 0 never hits). 320 bytes. */
+/* Eight triangles by coordinate, then by lane, and which triangle each
+ * lane is (-1: an empty lane). The lanes hold what the triangle
+ * test reads, as bvh4_packet's do (bvh4.h, bvh4_lane_coordinates()): the
+ * corners P0, P1, P2 (empty and degenerate lanes NaN, which no ray hits),
+ * or P0, E1 = P1 - P0 and E2 = P2 - P0 (empty lanes all zeros, whose
+ * determinant 0 never hits). 416 bytes. */
 enum { FLAT_LANES = 8 };
 
 typedef struct {
     _Alignas(32) float p0[3][FLAT_LANES];
-    float e1[3][FLAT_LANES], e2[3][FLAT_LANES];
+    union {
+        struct {
+            float p1[3][FLAT_LANES], p2[3][FLAT_LANES]; /* the watertight test's */
+        };
+        struct {
+            float e1[3][FLAT_LANES], e2[3][FLAT_LANES]; /* Moller-Trumbore's */
+        };
+    };
+    /* the watertight test's N = (P1 - P0) x (P2 - P0), which its t needs
+     * (shapes.h, watertight_plane_t), made once with its operations */
+    float n[3][FLAT_LANES];
     int32_t index[FLAT_LANES];
 } flat_block;
 
@@ -62,6 +79,14 @@ typedef struct {
     accel base;
     flat_block *blocks;
     int block_count;
+    /* Triangle i's corners once more, one after the other, each followed
+     * by a coordinate of the normal N = (P1 - P0) x (P2 - P0): p0.x, p0.y,
+     * p0.z, N.x, p1.x, p1.y, p1.z, N.y, p2.x, p2.y, p2.z, N.z (NaN for a
+     * degenerate triangle, as in the blocks), 16-byte aligned. The
+     * eight-ray packets' watertight test reads a corner's three
+     * coordinates with one load (flat.c, FLAT_CORNER8), and N, which the
+     * scalar test computes for t, made once here with its operations. */
+    float (*corners)[12];
     flat_group *groups; /* in triangle order, covering every triangle once */
     int group_count;
     flat_kernel kernel;

@@ -404,7 +404,18 @@ static void walls_destroy(accel *a)
     free(w);
 }
 
-static const accel_ops walls_ops = {walls_closest_hit, walls_any_hit, walls_destroy};
+/* Both structures inside trace with the test asked for. */
+static bool walls_use_triangle_test(accel *a, triangle_test test)
+{
+    walls_accel *w = (walls_accel *)a;
+    bool ok = accel_use_triangle_test(w->all, test);
+    if (w->occluders != NULL)
+        ok = accel_use_triangle_test(w->occluders, test) && ok;
+    a->triangle_test = test;
+    return ok;
+}
+
+static const accel_ops walls_ops = {walls_closest_hit, walls_any_hit, walls_destroy, walls_use_triangle_test};
 
 bool walls_is(const accel *a) { return a != NULL && a->ops == &walls_ops; }
 

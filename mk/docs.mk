@@ -7,7 +7,7 @@
 # the build if any of them does not exist. `make test-docs` opens every page
 # in headless Chromium and checks images, links and math.
 
-.PHONY: docs docs-deps test-docs
+.PHONY: docs docs-deps test-docs figures
 
 DOCS := $(BUILD)/docs
 DOCS_TEST := $(BUILD)/docs-test
@@ -15,9 +15,10 @@ DOC_NOTES := scene-format hard-cases
 DOC_PAGES := $(patsubst %,$(DOCS)/%.html,$(CHAPTERS)) $(DOCS)/index.html $(DOCS)/coverage.html \
   $(patsubst %,$(DOCS)/%.html,$(DOC_NOTES))
 DOC_FIGURES := $(patsubst %,$(BUILD)/%,$(shell sed -n 's|^\(out/[^ ]*\.png\).*|\1|p' docs/figures.txt))
-DOC_PLOTS_STAMP := $(BUILD)/plots/.made
+# one stamp per mode: make docs FULL=1 after make docs redraws from full data
+DOC_PLOTS_STAMP := $(BUILD)/plots/.made-$(PLOT_MODE)
 DOC_SOURCES := $(wildcard common/*.[ch] chapters/*/*.[ch] tests/*.c)
-DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.txt $(DOC_SOURCES)
+DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.txt $(DOC_SOURCES) $(wildcard docs/diagrams/*.svg)
 DOC_ROOT = $(shell realpath -m --relative-to=$(DOCS) .)
 DOC_PANDOC = pandoc --fail-if-warnings --mathml --standalone --template docs/template.html \
   --lua-filter docs/weave.lua -M chapters="$(CHAPTERS)" -M build=$(BUILD) -M docs=$(DOCS) \
@@ -31,6 +32,34 @@ CHROMIUM = chromium --headless --no-sandbox --disable-gpu --hide-scrollbars \
 
 docs: $(DOC_PAGES)
 	@echo "The book is in $(DOCS)/: open $(DOCS)/index.html"
+
+# make figures: the committed copies in docs/img/ of every figure a page
+# shows (the READMEs link them, so that they read with their pictures on any
+# Git host, without a build): each made again from the build's own (the
+# program's picture, or the plot, from the data `make plots` has: quick, or
+# FULL=1), renders shrunk to at most FIGURE_WIDTH pixels wide, plots to PLOT_WIDTH.
+# docs/img/SOURCES says where each copy came from and how its data was made.
+FIGURE_WIDTH ?= 320
+PLOT_WIDTH ?= 800
+COMMITTED_FIGURES := $(sort $(patsubst %,docs/img/%,$(notdir $(shell grep -ho 'img/[A-Za-z0-9_]*\.png' \
+  chapters/*/README.md docs/index.md README.md))))
+figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
+	@mkdir -p docs/img
+	@printf '# The committed copies of the figures (make figures): file, source, how its data was made.\n' \
+	  > docs/img/SOURCES.tmp
+	@for f in $(notdir $(COMMITTED_FIGURES)); do \
+	  if grep -q "^out/$$f " docs/figures.txt; then \
+	    src=out/$$f; width=$(FIGURE_WIDTH); run="rendered (at most $(FIGURE_WIDTH) px wide here)"; \
+	  else \
+	    src=plots/$$f; width=$(PLOT_WIDTH); n=$$(echo $$f | sed -n 's/^ch\([0-9][0-9]\)_.*/\1/p'); \
+	    rec=accel; [ -z "$$n" ] || rec=ch$$n; \
+	    run="$$(cut -f1 $(BUILD)/data/$$rec.run 2>/dev/null || echo full) data"; \
+	  fi; \
+	  $(BUILD)/bin/png_shrink $(BUILD)/$$src docs/img/$$f.tmp $$width && mv docs/img/$$f.tmp docs/img/$$f || exit 1; \
+	  printf '%s\tbuild/%s\t%s\n' $$f $$src "$$run" >> docs/img/SOURCES.tmp; \
+	done
+	@mv docs/img/SOURCES.tmp docs/img/SOURCES
+	@du -ch docs/img/*.png | tail -1 | sed 's|$$| in docs/img/ (commit them)|'
 
 # Each figure by the command docs/figures.txt gives it (build/ there means $(BUILD)).
 $(DOC_FIGURES): $(BUILD)/%.png: docs/figures.txt $(PROGRAMS) $(DOC_PROGRAMS)

@@ -35,7 +35,12 @@ Metadata it reads (pandoc -M): page (chapter|index|coverage), chapter
 build (the build directory, from the repository's root), docs (the output
 directory, likewise), root (the repository's root, seen from the output
 directory), figures, lectures (the two files named above), plots (the
-gnuplot scripts: a chapter must show each of its plots).
+gnuplot scripts: a chapter must show each of its plots), diagrams (the
+numbers of the chapters whose slides draw their geometry: each must show a
+diagram, docs/diagrams/*.svg).
+
+Every page is also refused for a date (YYYY-MM-DD) or a path to ../shared:
+the text is the lecture, readable from the repository alone.
 ]]
 
 local stringify = pandoc.utils.stringify
@@ -371,6 +376,7 @@ local function weave_image(img)
       fail(where(src), "no diagram " .. path)
     end
     img.src = "img/" .. diagram
+    img.classes:insert("woven")
     return { pandoc.Str("Diagram: "), made_link({ pandoc.Code(path) }, source_link(path)) }
   end
   -- a committed copy of a figure (docs/img/, made by make figures): the
@@ -404,6 +410,7 @@ local function weave_image(img)
     fail(where(src), "the image " .. actual .. " has not been made (run its command, or make docs)")
   end
   img.src = "img/" .. name
+  img.classes:insert("woven")
   return cmd
 end
 
@@ -757,6 +764,38 @@ local function check_sections(doc, chapter)
   end
 end
 
+-- The text is the lecture: no dates (a text that says when it was written
+-- is a diary) and no path outside the repository (../shared).
+local function check_timeless()
+  for i, line in ipairs(source_lines) do
+    local date = line:match("%d%d%d%d%-%d%d%-%d%d")
+    if date then fail(source_file .. ":" .. i, "a date (" .. date .. "): the text is the lecture, not its history") end
+    if line:find("../shared", 1, true) then
+      fail(source_file .. ":" .. i, "../shared is outside the repository: a reader of the book does not have it")
+    end
+  end
+end
+
+-- A chapter whose slides draw its geometry (docs/lectures.md's chapters in
+-- M.diagrams, by number) shows at least one diagram, docs/diagrams/*.svg.
+local function check_diagram(doc, chapter)
+  local number = chapter:sub(1, 2)
+  local wanted = false
+  for _, n in ipairs(split_words(M.diagrams or "")) do
+    if n == number then wanted = true end
+  end
+  if not wanted then return end
+  local found = false
+  pandoc.walk_block(pandoc.Div(doc.blocks), {
+    Image = function(img)
+      if from_root(img.src):match("^docs/diagrams/.+%.svg$") then found = true end
+    end,
+  })
+  if not found then
+    fail(source_file, "the slides draw this chapter's geometry: show a diagram of it (docs/diagrams/*.svg)")
+  end
+end
+
 local function check_plots_shown(chapter)
   local number = chapter:sub(1, 2)
   for _, f in ipairs(split_words(M.plots or "")) do
@@ -799,6 +838,8 @@ function Pandoc(doc)
   local blocks = {}
   local head_done = false
   if chapter then check_sections(doc, chapter) end
+  if chapter then check_diagram(doc, chapter) end
+  check_timeless()
   local toc = chapter and contents(doc)
   for i, b in ipairs(doc.blocks) do
     table.insert(blocks, b)
@@ -830,7 +871,7 @@ function Pandoc(doc)
   -- images outside a paragraph of their own (in a table): copied, no caption
   div = pandoc.walk_block(div, {
     Image = function(img)
-      if not img.src:match("^img/") then weave_image(img) return img end
+      if not img.classes:includes("woven") then weave_image(img) return img end
       return nil
     end,
   })

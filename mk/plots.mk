@@ -43,7 +43,7 @@ accel-data: $(BUILD)/bin/bench_accel $(if $(FULL),$(if $(ACCEL_FULL_DONE),,bench
 # $(call data_run,NN-name): the chapter's --data run, its log and its record.
 # A chapter without quick flags (07) always makes its full data.
 data_mode = $(if $(PLOT_QUICK_$(1)),$(PLOT_MODE),full)
-data_run = echo "$(call data_mode,$(2)): build/bin/$(1) --data build/data $(call plot_flags,$(2))" && \
+data_run = echo "$(call data_mode,$(2)): $(strip build/bin/$(1) --data build/data $(call plot_flags,$(2)))" && \
   $(BUILD)/bin/$(1) --quiet --data $(BUILD)/data $(call plot_flags,$(2)) --out $(BUILD)/data/ch$(2).exr \
     > $(BUILD)/data/ch$(2).log && \
   printf '%s\t%s\n' $(call data_mode,$(2)) "$(strip build/bin/$(1) --data build/data $(call plot_flags,$(2)))" \

@@ -377,7 +377,8 @@ local function weave_image(img)
     end
     img.src = "img/" .. diagram
     img.classes:insert("woven")
-    return { pandoc.Str("Diagram: "), made_link({ pandoc.Code(path) }, source_link(path)) }
+    -- the caption reads "made by hand: docs/diagrams/X.svg" (book.css adds "made by")
+    return { pandoc.Str("hand: "), made_link({ pandoc.Code(path) }, source_link(path)) }
   end
   -- a committed copy of a figure (docs/img/, made by make figures): the
   -- page shows the build's own, with its command

@@ -14,8 +14,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "stb_image.h"
-#include "stb_image_write.h"
+#include <stb/stb_image.h>
+#include <stb/stb_image_write.h>
 
 static double srgb_to_linear(double c)
 {

@@ -8,10 +8,15 @@ What it does to a page:
     the source now, with the comment just above it: the page cannot show
     code the source no longer has. A name that is not found stops the build
     with the README's file and line.
-  * Images. A README shows ../../build/out/X.png or ../../build/plots/X.png.
-    The image is copied next to the page, and under it goes the command that
-    made it (docs/figures.txt, or the plot's gnuplot script). An image that
-    is missing, or has no command, stops the build.
+  * Images. A README shows ../../docs/img/X.png, the committed copy of a
+    figure the build makes (`make figures` refreshes them): build/out/X.png
+    when docs/figures.txt names out/X.png, else build/plots/X.png from
+    plots/X.gp. The build's own image is copied next to the page, and under
+    it goes the command that made it (docs/figures.txt, or the plot's
+    gnuplot script and the --data run that build/data/NAME.run records,
+    quick or full). A hand-drawn diagram, docs/diagrams/X.svg, is copied as
+    it is and named under it. An image that is missing (in the repository
+    or the build), or has no command, stops the build.
   * Links. A link to another chapter's README.md goes to that chapter's page;
     a link to a source file goes to the file in the repository; an #anchor
     must name a heading of the page.
@@ -30,7 +35,12 @@ Metadata it reads (pandoc -M): page (chapter|index|coverage), chapter
 build (the build directory, from the repository's root), docs (the output
 directory, likewise), root (the repository's root, seen from the output
 directory), figures, lectures (the two files named above), plots (the
-gnuplot scripts: a chapter must show each of its plots).
+gnuplot scripts: a chapter must show each of its plots), diagrams (the
+numbers of the chapters whose slides draw their geometry: each must show a
+diagram, docs/diagrams/*.svg).
+
+Every page is also refused for a date (YYYY-MM-DD) or a path to ../shared:
+the text is the lecture, readable from the repository alone.
 ]]
 
 local stringify = pandoc.utils.stringify
@@ -312,15 +322,28 @@ local function figure_command(rel)
     for _, c in ipairs(split_words(M.chapters or "")) do
       if number and c:sub(1, 2) == number then program = c end
     end
+    -- the run that wrote the data, as make plots recorded it: "quick" or
+    -- "full", a tab, the command (build/data/chNN.run, accel.run)
+    local record = read_file(M.build .. "/data/" .. (number and ("ch" .. number) or "accel") .. ".run") or ""
+    local mode, run = record:match("^(%a+)\t([^\n]+)")
+    if not run and program then mode, run = "full", "build/bin/" .. program .. " --data build/data" end
+    if not run and plot:match("^accel_") then mode, run = "full", "make bench" end
     local inl = {}
-    if program then
-      table.insert(inl, pandoc.Code("build/bin/" .. program .. " --data build/data"))
+    if run then
+      table.insert(inl, pandoc.Strong({ pandoc.Str(mode == "quick" and "Quick data" or "Full data") }))
+      table.insert(inl, pandoc.Str(": "))
+      table.insert(inl, pandoc.Code(run))
       table.insert(inl, pandoc.Str(", then "))
     end
     table.insert(inl, pandoc.Code("gnuplot -e \"data_dir='build/data'; plot_dir='build/plots'\" plots/"
                                   .. plot .. ".gp"))
     table.insert(inl, pandoc.Str(" (both part of "))
     table.insert(inl, pandoc.Code("make plots"))
+    if mode == "quick" then
+      table.insert(inl, pandoc.Str("; quick runs, rough curves: "))
+      table.insert(inl, pandoc.Code("make plots FULL=1"))
+      table.insert(inl, pandoc.Str(" for the full size"))
+    end
     table.insert(inl, pandoc.Str(")"))
     return inl
   end
@@ -328,6 +351,14 @@ local function figure_command(rel)
 end
 
 local shown_images = {}
+
+-- Where the build makes the figure docs/img/NAME: out/NAME (a program's
+-- picture, figures.txt) or plots/NAME (a gnuplot script's), or nil.
+local function figure_rel(name)
+  if load_figures()["out/" .. name] then return "out/" .. name end
+  if file_exists("plots/" .. name:gsub("%.png$", ".gp")) then return "plots/" .. name end
+  return nil
+end
 
 -- Copies the image into the output directory and points the page at the copy.
 -- Returns the command inlines for the caption.
@@ -338,9 +369,35 @@ local function weave_image(img)
     return nil
   end
   local path = from_root(src)
+  -- a diagram drawn by hand: copied as it is
+  local diagram = path:match("^docs/diagrams/([^/]+%.svg)$")
+  if diagram then
+    if not copy_file(path, M.docs .. "/img/" .. diagram) then
+      fail(where(src), "no diagram " .. path)
+    end
+    img.src = "img/" .. diagram
+    img.classes:insert("woven")
+    -- the caption reads "made by hand: docs/diagrams/X.svg" (book.css adds "made by")
+    return { pandoc.Str("hand: "), made_link({ pandoc.Code(path) }, source_link(path)) }
+  end
+  -- a committed copy of a figure (docs/img/, made by make figures): the
+  -- page shows the build's own, with its command
   local rel = path:match("^build/(.+)$")
+  local committed = path:match("^docs/img/([^/]+%.png)$")
+  if committed then
+    if not file_exists(path) then
+      fail(where(src), path .. " is not in the repository (make figures copies it there)")
+    end
+    rel = figure_rel(committed)
+    if not rel then
+      fail(where(src), "no command makes " .. path .. ": add out/" .. committed .. " to " .. M.figures
+                       .. " or write plots/" .. committed:gsub("%.png$", ".gp"))
+      return nil
+    end
+  end
   if not rel then
-    fail(where(src), "images come from the build (build/out or build/plots), not " .. path)
+    fail(where(src), "images are figures the build makes (docs/img/, a copy of build/out or build/plots) "
+                     .. "or diagrams (docs/diagrams/*.svg), not " .. path)
     return nil
   end
   local actual = M.build .. "/" .. rel
@@ -354,6 +411,7 @@ local function weave_image(img)
     fail(where(src), "the image " .. actual .. " has not been made (run its command, or make docs)")
   end
   img.src = "img/" .. name
+  img.classes:insert("woven")
   return cmd
 end
 
@@ -640,7 +698,8 @@ local function has_image(doc, rel)
   local found = false
   pandoc.walk_block(pandoc.Div(doc.blocks), {
     Image = function(img)
-      if from_root(img.src) == "build/" .. rel then found = true end
+      local path = from_root(img.src)
+      if path == "build/" .. rel or path == "docs/img/" .. rel:gsub("^%a+/", "") then found = true end
     end,
   })
   return found
@@ -668,7 +727,7 @@ local function chapter_head(doc, chapter)
   local number = chapter:sub(1, 2)
   if not has_image(doc, "out/ch" .. number .. ".png") then
     table.insert(blocks, pandoc.Para({ pandoc.Str("The picture this chapter's program makes:") }))
-    local img = pandoc.Image({ pandoc.Str("chapter " .. number) }, "../../build/out/ch" .. number .. ".png")
+    local img = pandoc.Image({ pandoc.Str("chapter " .. number) }, "../../docs/img/ch" .. number .. ".png")
     table.insert(blocks, pandoc.Para({ img }))
   end
   return pandoc.Div(blocks, pandoc.Attr("", { "head" }))
@@ -703,6 +762,38 @@ local function check_sections(doc, chapter)
   if not exercises then fail(source_file, "a chapter ends with `## Exercises`: there is none") end
   if last and not last:match("^exercises") then
     fail(source_file, "a chapter ends with `## Exercises`, but its last section is `" .. last .. "`")
+  end
+end
+
+-- The text is the lecture: no dates (a text that says when it was written
+-- is a diary) and no path outside the repository (../shared).
+local function check_timeless()
+  for i, line in ipairs(source_lines) do
+    local date = line:match("%d%d%d%d%-%d%d%-%d%d")
+    if date then fail(source_file .. ":" .. i, "a date (" .. date .. "): the text is the lecture, not its history") end
+    if line:find("../shared", 1, true) then
+      fail(source_file .. ":" .. i, "../shared is outside the repository: a reader of the book does not have it")
+    end
+  end
+end
+
+-- A chapter whose slides draw its geometry (docs/lectures.md's chapters in
+-- M.diagrams, by number) shows at least one diagram, docs/diagrams/*.svg.
+local function check_diagram(doc, chapter)
+  local number = chapter:sub(1, 2)
+  local wanted = false
+  for _, n in ipairs(split_words(M.diagrams or "")) do
+    if n == number then wanted = true end
+  end
+  if not wanted then return end
+  local found = false
+  pandoc.walk_block(pandoc.Div(doc.blocks), {
+    Image = function(img)
+      if from_root(img.src):match("^docs/diagrams/.+%.svg$") then found = true end
+    end,
+  })
+  if not found then
+    fail(source_file, "the slides draw this chapter's geometry: show a diagram of it (docs/diagrams/*.svg)")
   end
 end
 
@@ -748,6 +839,8 @@ function Pandoc(doc)
   local blocks = {}
   local head_done = false
   if chapter then check_sections(doc, chapter) end
+  if chapter then check_diagram(doc, chapter) end
+  check_timeless()
   local toc = chapter and contents(doc)
   for i, b in ipairs(doc.blocks) do
     table.insert(blocks, b)
@@ -779,7 +872,7 @@ function Pandoc(doc)
   -- images outside a paragraph of their own (in a table): copied, no caption
   div = pandoc.walk_block(div, {
     Image = function(img)
-      if not img.src:match("^img/") then weave_image(img) return img end
+      if not img.classes:includes("woven") then weave_image(img) return img end
       return nil
     end,
   })

@@ -47,6 +47,8 @@ else
 endif
 	$(BUILD)/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS) \
 	  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv $(if $(EMBREE_HARNESS),--embree $(BUILD)/data/embree.txt)
+	@printf 'full\t%s\n' "make bench (build/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS))" \
+	  > $(BUILD)/data/accel.run
 	$(BUILD)/bin/13-production --bench --width 256 --spp 16 --bench-csv $(BUILD)/data/ch13_speed.csv
 ifneq ($(EMBREE_HEADER),)
 	$(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data

@@ -5,9 +5,12 @@
 # MathML, and there are no scripts. docs/coverage.md maps every concept of
 # lectures 13-16 to its file, function, test and figure; the filter fails
 # the build if any of them does not exist. `make test-docs` opens every page
-# in headless Chromium and checks images, links and math.
+# in headless Chromium and checks images, links and math, that each chapter
+# prints on at most DOC_MAX_PRINTED pages, and that every image a README
+# shows is a file of the repository; each check first refuses its bad
+# input in tests/docs/.
 
-.PHONY: docs docs-deps test-docs
+.PHONY: docs docs-deps test-docs figures
 
 DOCS := $(BUILD)/docs
 DOCS_TEST := $(BUILD)/docs-test
@@ -15,13 +18,20 @@ DOC_NOTES := scene-format hard-cases
 DOC_PAGES := $(patsubst %,$(DOCS)/%.html,$(CHAPTERS)) $(DOCS)/index.html $(DOCS)/coverage.html \
   $(patsubst %,$(DOCS)/%.html,$(DOC_NOTES))
 DOC_FIGURES := $(patsubst %,$(BUILD)/%,$(shell sed -n 's|^\(out/[^ ]*\.png\).*|\1|p' docs/figures.txt))
-DOC_PLOTS_STAMP := $(BUILD)/plots/.made
+# one stamp per mode: make docs FULL=1 after make docs redraws from full data
+DOC_PLOTS_STAMP := $(BUILD)/plots/.made-$(PLOT_MODE)
 DOC_SOURCES := $(wildcard common/*.[ch] chapters/*/*.[ch] tests/*.c)
-DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.txt $(DOC_SOURCES)
+DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.txt $(DOC_SOURCES) $(wildcard docs/diagrams/*.svg)
+# The chapters whose slides draw their geometry: each page shows at least one
+# diagram of it (docs/diagrams/*.svg), or the weave stops.
+# A chapter page prints on at most this many pages of A4 (make test-docs).
+DOC_MAX_PRINTED := 20
+DIAGRAM_CHAPTERS := 01 02 03 04 05 06 07 09
 DOC_ROOT = $(shell realpath -m --relative-to=$(DOCS) .)
 DOC_PANDOC = pandoc --fail-if-warnings --mathml --standalone --template docs/template.html \
   --lua-filter docs/weave.lua -M chapters="$(CHAPTERS)" -M build=$(BUILD) -M docs=$(DOCS) \
-  -M root=$(DOC_ROOT) -M figures=docs/figures.txt -M lectures=docs/lectures.md -M plots="$(PLOT_SCRIPTS)"
+  -M root=$(DOC_ROOT) -M figures=docs/figures.txt -M lectures=docs/lectures.md -M plots="$(PLOT_SCRIPTS)" \
+  -M diagrams="$(DIAGRAM_CHAPTERS)"
 # $(call docs_check,DIR,PAGES): tests/docs_check.html's report on DIR's pages (comma-separated).
 docs_check = $(CHROMIUM) --allow-file-access-from-files --virtual-time-budget=60000 --dump-dom \
   "file://$(abspath tests/docs_check.html)?dir=file://$(1)/&pages=$(2)" 2>> $(DOCS_TEST)/chromium.log \
@@ -31,6 +41,34 @@ CHROMIUM = chromium --headless --no-sandbox --disable-gpu --hide-scrollbars \
 
 docs: $(DOC_PAGES)
 	@echo "The book is in $(DOCS)/: open $(DOCS)/index.html"
+
+# make figures: the committed copies in docs/img/ of every figure a page
+# shows (the READMEs link them, so that they read with their pictures on any
+# Git host, without a build): each made again from the build's own (the
+# program's picture, or the plot, from the data `make plots` has: quick, or
+# FULL=1), renders shrunk to at most FIGURE_WIDTH pixels wide, plots to PLOT_WIDTH.
+# docs/img/SOURCES says where each copy came from and how its data was made.
+FIGURE_WIDTH ?= 320
+PLOT_WIDTH ?= 800
+COMMITTED_FIGURES := $(sort $(patsubst %,docs/img/%,$(notdir $(shell grep -ho 'img/[A-Za-z0-9_]*\.png' \
+  chapters/*/README.md docs/index.md README.md))))
+figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
+	@mkdir -p docs/img
+	@printf '# The committed copies of the figures (make figures): file, source, how its data was made.\n' \
+	  > docs/img/SOURCES.tmp
+	@for f in $(notdir $(COMMITTED_FIGURES)); do \
+	  if grep -q "^out/$$f " docs/figures.txt; then \
+	    src=out/$$f; width=$(FIGURE_WIDTH); run="rendered (at most $(FIGURE_WIDTH) px wide here)"; \
+	  else \
+	    src=plots/$$f; width=$(PLOT_WIDTH); n=$$(echo $$f | sed -n 's/^ch\([0-9][0-9]\)_.*/\1/p'); \
+	    rec=accel; [ -z "$$n" ] || rec=ch$$n; \
+	    run="$$(cut -f1 $(BUILD)/data/$$rec.run 2>/dev/null || echo full) data"; \
+	  fi; \
+	  $(BUILD)/bin/png_shrink $(BUILD)/$$src docs/img/$$f.tmp $$width && mv docs/img/$$f.tmp docs/img/$$f || exit 1; \
+	  printf '%s\tbuild/%s\t%s\n' $$f $$src "$$run" >> docs/img/SOURCES.tmp; \
+	done
+	@mv docs/img/SOURCES.tmp docs/img/SOURCES
+	@du -ch docs/img/*.png | tail -1 | sed 's|$$| in docs/img/ (commit them)|'
 
 # Each figure by the command docs/figures.txt gives it (build/ there means $(BUILD)).
 $(DOC_FIGURES): $(BUILD)/%.png: docs/figures.txt $(PROGRAMS) $(DOC_PROGRAMS)
@@ -70,7 +108,8 @@ test-docs: docs | docs-deps
 	@mkdir -p $(DOCS_TEST)
 	@for bad in tests/docs/bad_*.md; do \
 	  want=$$(sed -n 's/^<!-- expect: \(.*\) -->$$/\1/p' $$bad); \
-	  if $(DOC_PANDOC) -f gfm -M page=$$(sed -n 's/^<!-- page: \(.*\) -->$$/\1/p' $$bad) -M chapter= \
+	  if $(DOC_PANDOC) -f gfm -M page=$$(sed -n 's/^<!-- page: \(.*\) -->$$/\1/p' $$bad) \
+	       -M chapter=$$(sed -n 's/^<!-- chapter: \(.*\) -->$$/\1/p' $$bad) \
 	       $$bad -o $(DOCS_TEST)/bad.html 2> $(DOCS_TEST)/bad.log; then \
 	    echo "FAIL: $$bad was accepted"; exit 1; fi; \
 	  grep -qF "$$want" $(DOCS_TEST)/bad.log || { cat $(DOCS_TEST)/bad.log; echo "FAIL: $$bad: no '$$want'"; exit 1; }; \
@@ -80,6 +119,19 @@ test-docs: docs | docs-deps
 	grep -q '^RESULT: FAIL (1 pages, 3 problems)' $(DOCS_TEST)/bad_page.txt \
 	  || { cat $(DOCS_TEST)/bad_page.txt; echo "FAIL: the browser check missed a fault of tests/docs/bad_page.html"; exit 1; }; \
 	echo "ok: the browser check finds the three faults of tests/docs/bad_page.html"
+	@! tests/check_images.sh tests/docs/bad_missing_image.md > $(DOCS_TEST)/bad_images.txt \
+	  || { echo "FAIL: tests/check_images.sh accepted tests/docs/bad_missing_image.md"; exit 1; }; \
+	grep -q 'no_such_figure.png does not exist' $(DOCS_TEST)/bad_images.txt || { cat $(DOCS_TEST)/bad_images.txt; exit 1; }; \
+	echo "ok: tests/docs/bad_missing_image.md is refused: its image is not in the repository"
+	@tests/check_images.sh README.md docs/*.md chapters/*/README.md \
+	  && echo "ok: every image the READMEs and pages show is a file of the repository"
+	@! CHROMIUM="$(CHROMIUM)" tests/docs_print_pages.sh $(DOC_MAX_PRINTED) tests/docs/bad_long_page.html \
+	  > $(DOCS_TEST)/bad_print.txt || { echo "FAIL: tests/docs/bad_long_page.html passed the print check"; exit 1; }; \
+	grep -q '^FAIL.*more than $(DOC_MAX_PRINTED)' $(DOCS_TEST)/bad_print.txt || { cat $(DOCS_TEST)/bad_print.txt; exit 1; }; \
+	echo "ok: $$(cat $(DOCS_TEST)/bad_print.txt | sed 's/^FAIL //')"
+	@CHROMIUM="$(CHROMIUM)" tests/docs_print_pages.sh $(DOC_MAX_PRINTED) $(patsubst %,$(DOCS)/%.html,$(CHAPTERS)) \
+	  | tee $(DOCS_TEST)/print.txt | tr '\n' ' ' | sed 's/ $$/\n/'; \
+	! grep -q '^FAIL' $(DOCS_TEST)/print.txt
 	@pages=$$(cd $(DOCS) && ls *.html | tr '\n' ',' | sed 's/,$$//'); \
 	$(call docs_check,$(abspath $(DOCS)),$$pages) > $(DOCS_TEST)/report.txt; \
 	cat $(DOCS_TEST)/report.txt; grep -q '^RESULT: PASS' $(DOCS_TEST)/report.txt

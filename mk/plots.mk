@@ -1,24 +1,57 @@
 # make plots: every figure drawn by a gnuplot script in plots/ from CSV that a
 # program wrote under build/data/: plots/chNN_*.gp from chapter NN's program
 # run with --data, plots/accel_*.gp from the benchmark.
+#
+# By default the experiments are quick: small images, few samples, short
+# references (about half a CPU-minute in all), so that `make docs` builds the
+# book in minutes; their curves are rough. `make plots FULL=1` runs them at
+# full size (each chapter's defaults: about an hour on two cores) and the
+# accelerator plots from `make bench`. Each run leaves its record,
+# build/data/NAME.run ("quick" or "full", then the command), which the book
+# prints under each plot. The --data runs write their images under
+# build/data/, never over the build/out/ pictures that `make chNN` made.
 
 .PHONY: plots plot-data
 
 PLOT_SCRIPTS := $(sort $(wildcard plots/*.gp))
 DATA_CHAPTERS := $(foreach c,$(CHAPTERS),$(if $(wildcard plots/ch$(call chapter_number,$(c))_*.gp),$(c)))
 
-# The accelerator plots need the benchmark's CSV. When `make bench` has not
-# been run, a quick one (up to 100k triangles, one repetition) makes it.
-$(BUILD)/data/accel.csv $(BUILD)/data/stadium.csv &:
-	@echo "no $@ yet: a quick benchmark (1k-100k triangles, 1 repetition); make bench runs all sizes"
-	@$(MAKE) --no-print-directory bench BENCH_SIZES="1024 10240 102400" BENCH_REPS=1
+# Each chapter's quick flags (chapter 07's tables take a second as they are).
+PLOT_QUICK_08 := --quick
+PLOT_QUICK_09 := --experiment-size 32 --reference-spp 256 --experiment-spp 32
+PLOT_QUICK_10 := --quick
+PLOT_QUICK_11 := --experiment-size 16 --reference-spp 512 --experiment-seconds 0.5
+PLOT_QUICK_12 := --quick
+PLOT_MODE := $(if $(FULL),full,quick)
+plot_flags = $(if $(FULL),,$(PLOT_QUICK_$(1)))
 
-plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),$(BUILD)/data/accel.csv $(BUILD)/data/stadium.csv)
-	@mkdir -p $(BUILD)/data $(BUILD)/out
-	@for c in $(DATA_CHAPTERS); do \
-	  n=$${c%%-*}; echo "$(BUILD)/bin/$$c --data $(BUILD)/data"; \
-	  $(BUILD)/bin/$$c --quiet --data $(BUILD)/data --out $(BUILD)/out/ch$$n.exr || exit 1; \
-	done
+# The accelerator plots need the benchmark's CSV. `make bench` writes the
+# full one (and its record); without it, a quick benchmark (1k and 10k
+# triangles, one repetition, 2048 rays per set) makes it. FULL=1 runs
+# `make bench` unless its full data is there.
+BENCH_QUICK := $(BUILD)/bin/bench_accel --sizes 1024,10240 --reps 1 --max-rays 2048 \
+  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv
+ACCEL_FULL_DONE := $(shell grep -qs '^full' $(BUILD)/data/accel.run && echo yes)
+accel-data: $(BUILD)/bin/bench_accel $(if $(FULL),$(if $(ACCEL_FULL_DONE),,bench))
+	@mkdir -p $(BUILD)/data
+	@if [ -z "$(FULL)" ] && ! { [ -f $(BUILD)/data/accel.csv ] && [ -f $(BUILD)/data/stadium.csv ]; }; then \
+	  echo "quick: $(subst $(BUILD)/,build/,$(BENCH_QUICK))"; $(BENCH_QUICK) > $(BUILD)/data/accel.log || exit 1; \
+	  printf 'quick\t%s\n' "$(subst $(BUILD)/,build/,$(BENCH_QUICK))" > $(BUILD)/data/accel.run; \
+	fi
+.PHONY: accel-data
+
+# $(call data_run,NN-name): the chapter's --data run, its log and its record.
+# A chapter without quick flags (07) always makes its full data.
+data_mode = $(if $(PLOT_QUICK_$(1)),$(PLOT_MODE),full)
+data_run = echo "$(call data_mode,$(2)): $(strip build/bin/$(1) --data build/data $(call plot_flags,$(2)))" && \
+  $(BUILD)/bin/$(1) --quiet --data $(BUILD)/data $(call plot_flags,$(2)) --out $(BUILD)/data/ch$(2).exr \
+    > $(BUILD)/data/ch$(2).log && \
+  printf '%s\t%s\n' $(call data_mode,$(2)) "$(strip build/bin/$(1) --data build/data $(call plot_flags,$(2)))" \
+    > $(BUILD)/data/ch$(2).run
+
+plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data)
+	@mkdir -p $(BUILD)/data
+	@$(foreach c,$(DATA_CHAPTERS),$(call data_run,$(c),$(call chapter_number,$(c))) && ) true
 
 plots: plot-data
 	@mkdir -p $(BUILD)/plots
@@ -26,4 +59,4 @@ plots: plot-data
 	  echo "gnuplot $$s"; \
 	  gnuplot -e "data_dir='$(BUILD)/data'; plot_dir='$(BUILD)/plots'" $$s || exit 1; \
 	done
-	@echo "Plots are in $(BUILD)/plots/ (PNG and SVG)."
+	@echo "Plots are in $(BUILD)/plots/ (PNG and SVG), from $(PLOT_MODE) data (make plots FULL=1: full size)."

@@ -327,7 +327,7 @@ static const embree_figures *embree_find(const embree_figures *e, int n, int tri
  * the control. Rays are aimed at random triangles (accel_aimed_rays), so
  * almost all of them go to the teapot. The grid is run at several cell
  * densities C: a finer grid helps only slowly, and costs memory. */
-static void stadium_study(const char *path, int reps)
+static void stadium_study(const char *path, int reps, int max_rays)
 {
     /* Put in place only when complete (atomic_file.h). */
     char err[1024];
@@ -354,7 +354,8 @@ static void stadium_study(const char *path, int reps)
             mesh_teapot_in_stadium(&m, 6, 200.0f);
         triangle_set set;
         triangle_set_from_mesh(&set, &m);
-        ray_set rays = {RAYS, accel_aimed_rays(&set, RAYS, 2026)};
+        int ray_count = RAYS < max_rays ? RAYS : max_rays;
+        ray_set rays = {ray_count, accel_aimed_rays(&set, ray_count, 2026)};
         /* the grid at every density, then the hierarchies at their defaults */
         for (int k = 0; k < DENSITIES + STRUCTURE_COUNT; k++) {
             accel *a;
@@ -403,7 +404,7 @@ static void usage(void)
 {
     printf("usage: bench_accel [--sizes 1024,10240,102400,1048576] [--only NAME,...] [--reps N]\n"
            "                   [--threads N] [--out FILE.csv] [--embree FILE] [--stadium FILE.csv]\n"
-           "                   [--compare-only] [--tests-csv FILE.csv]\n\n"
+           "                   [--compare-only] [--tests-csv FILE.csv] [--max-rays N]\n\n"
            "Times every acceleration structure on the tori field of ../shared/anchors/embree_bench.c,\n"
            "with the harness's coherent and incoherent ray sets: build ms, bytes per triangle, and\n"
            "Mrays/s for closest hit and any hit, on one thread and on all; --out also writes them as\n"
@@ -414,6 +415,8 @@ static void usage(void)
            "After each size's table, every structure is timed again with the watertight triangle test and\n"
            "with Moller-Trumbore, alternately, on one thread (--compare-only: that table alone; --tests-csv\n"
            "writes it as CSV).\n"
+           "--max-rays N traces at most N rays of each set (a strided subset, as brute force gets):\n"
+           "a rough run in seconds, which make plots uses when make bench has not run.\n"
            "structures: brute flat grid kdtree bvh-median bvh-sah bvh4-sah bvh4-stream (flat: brute\n"
            "force, 8 triangles per AVX instruction; bvh4-stream: bvh4-sah's tree, rays traced 16 at a\n"
            "time, taking turns: bvh4_closest_hit_stream)\n");
@@ -422,7 +425,7 @@ static void usage(void)
 int main(int argc, char **argv)
 {
     long sizes[8] = {1024, 10240, 102400, 1048576};
-    int size_count = 4, reps = 3, threads = 1;
+    int size_count = 4, reps = 3, threads = 1, max_rays = 1 << 30;
     const char *out_path = NULL, *embree_path = NULL, *only = NULL, *stadium_path = NULL, *tests_path = NULL;
     bool compare_only = false;
 #ifdef _OPENMP
@@ -445,6 +448,9 @@ int main(int argc, char **argv)
             i++;
         } else if (strcmp(argv[i], "--reps") == 0 && value && atoi(value) > 0) {
             reps = atoi(value);
+            i++;
+        } else if (strcmp(argv[i], "--max-rays") == 0 && value && atoi(value) > 0) {
+            max_rays = atoi(value);
             i++;
         } else if (strcmp(argv[i], "--threads") == 0 && value && atoi(value) > 0) {
             threads = atoi(value);
@@ -544,7 +550,10 @@ int main(int argc, char **argv)
             qsort(build_times, (size_t)build_reps, sizeof(double), compare_doubles);
             double build_ms = 1e3 * build_times[build_reps / 2];
 
-            ray_set coh = ray_subset(&coherent, st->max_rays), inc = ray_subset(&incoherent, st->max_rays);
+            /* every structure on the whole set (up to --max-rays) but brute force */
+            int ray_count = st->max_rays < max_rays ? st->max_rays : max_rays;
+            bool whole = ray_count >= coherent.count || ray_count == max_rays;
+            ray_set coh = ray_subset(&coherent, ray_count), inc = ray_subset(&incoherent, ray_count);
             bool stream = st->stream;
             comparisons[k] = compare_triangle_tests(a, &coh, &inc, reps, stream);
             compared[k] = true;
@@ -574,7 +583,7 @@ int main(int argc, char **argv)
             printf("%-10s %9d %9.2f %7.1f | %11.3f %11.3f | %11.3f %11.3f | %7.3f %7.3f | %.1f boxes, %.1f tris\n",
                    st->name, set.count, build_ms, bytes_per_triangle, mrays_cc, mrays_ca, mrays_ic, mrays_ia,
                    mrays_cc_all, mrays_ic_all, boxes, tris);
-            if (e != NULL && st->max_rays >= coherent.count)
+            if (e != NULL && ray_count >= coherent.count)
                 /* Ratios to Embree, and a check that both did the same work:
                  * the sums of closest-hit t agree to a few parts per million
                  * (Embree's watertight triangle test and ours differ only at
@@ -590,7 +599,7 @@ int main(int argc, char **argv)
                     set.count, build_ms, bytes_per_triangle, a->stats.nodes, a->stats.leaves, a->stats.max_depth,
                     threads, mrays_cc, mrays_ca, mrays_ic, mrays_ia, mrays_cc_all, mrays_ic_all, boxes, tris, cc.hits,
                     ic.hits);
-            if (st->max_rays >= coherent.count) {
+            if (whole) {
                 closest_mrays[k][0] = mrays_cc;
                 closest_mrays[k][1] = mrays_ic;
             }
@@ -648,6 +657,6 @@ int main(int argc, char **argv)
         printf("wrote %s\n", tests_path);
     }
     if (stadium_path != NULL)
-        stadium_study(stadium_path, reps);
+        stadium_study(stadium_path, reps, max_rays);
     return 0;
 }

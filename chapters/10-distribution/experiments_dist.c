@@ -12,9 +12,20 @@
 #include "atomic_file.h"
 #include "render.h"
 
-enum { EXPERIMENT_SIZE = 64, REFERENCE_SPP = 16384, EXPERIMENT_DEPTH = 4 };
-/* Each setting doubles its samples per pixel until a render takes this long. */
-static const double CPU_SECONDS_PER_SETTING = 3.0;
+enum { EXPERIMENT_DEPTH = 4 };
+
+/* The size of the run: the image's side, the reference's samples per
+ * pixel, and how far each setting doubles its samples (until a render
+ * takes seconds_per_setting of CPU, or reaches max_spp). */
+typedef struct {
+    int size, reference_spp;
+    double seconds_per_setting;
+    int max_spp;
+} dist_scale;
+
+static const dist_scale FULL_RUN = {64, 16384, 3.0, 1024};
+/* --quick: the same curves, rough, in a few seconds (the book's default). */
+static const dist_scale QUICK_RUN = {32, 1024, 0.25, 64};
 
 static double render_timed(const distribution_tracer *dt, const camera *cam, int spp, uint64_t seed, int threads,
                            image *out, ray_counters *counters)
@@ -54,11 +65,12 @@ static bool open_tables(atomic_file *noise, atomic_file *counts, const char *dir
 }
 
 /* N_light = N_glossy = N for N = 1, 2, 4, 8, each at doubling samples per
- * pixel until a render takes CPU_SECONDS_PER_SETTING: RMSE against the
+ * pixel until a render takes scale->seconds_per_setting: RMSE against the
  * reference, and rays per camera ray. */
-static void measure_noise(distribution_tracer *dt, const camera *cam, const image *reference, int threads, FILE *csv)
+static void measure_noise(distribution_tracer *dt, const camera *cam, const image *reference, int threads,
+                          const dist_scale *scale, FILE *csv)
 {
-    image img = image_make(EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    image img = image_make(cam->width, cam->height);
     ray_counters counters;
     printf("%4s %6s %10s %10s %14s\n", "N", "spp", "CPU s", "RMSE", "rays/cam ray");
     const int settings[4] = {1, 2, 4, 8};
@@ -73,7 +85,7 @@ static void measure_noise(distribution_tracer *dt, const camera *cam, const imag
             fprintf(csv, "%d,%d,%.6f,%.6g,%.4f,%.4f,%.4f\n", settings[k], spp, seconds, rmse, per_camera,
                     (double)counters.shadow_rays / cam_rays, (double)counters.indirect_rays / cam_rays);
             printf("%4d %6d %10.3f %10.4g %14.2f\n", settings[k], spp, seconds, rmse, per_camera);
-            if (seconds > CPU_SECONDS_PER_SETTING || spp >= 1024)
+            if (seconds > scale->seconds_per_setting || spp >= scale->max_spp)
                 break;
         }
     }
@@ -85,7 +97,7 @@ static void measure_noise(distribution_tracer *dt, const camera *cam, const imag
  * glossy) sum N^d. */
 static void measure_ray_counts(distribution_tracer *dt, const camera *cam, int threads, FILE *csv)
 {
-    image img = image_make(EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    image img = image_make(cam->width, cam->height);
     ray_counters counters;
     printf("\n%9s %6s %14s %14s %12s\n", "N_glossy", "depth", "rays/cam ray", "glossy/cam", "worst case");
     dt->light_samples = 1;
@@ -107,21 +119,24 @@ static void measure_ray_counts(distribution_tracer *dt, const camera *cam, int t
     image_free(&img);
 }
 
-bool experiment_rays_per_bounce(const motion_scene *ms, int threads, const char *dir, char *err, size_t err_size)
+bool experiment_rays_per_bounce(const motion_scene *ms, int threads, bool quick, const char *dir, char *err,
+                                size_t err_size)
 {
+    const dist_scale *scale = quick ? &QUICK_RUN : &FULL_RUN;
+    const int size = scale->size;
     atomic_file noise, counts;
     if (!open_tables(&noise, &counts, dir, err, err_size))
         return false;
-    camera cam = pt_scene_camera(&ms->base, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    camera cam = pt_scene_camera(&ms->base, size, size);
     distribution_tracer dt = distribution_tracer_defaults(ms, &cam);
     dt.max_depth = EXPERIMENT_DEPTH;
-    image reference = image_make(EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    image reference = image_make(size, size);
     ray_counters counters;
-    printf("reference: %dx%d, N = 1, %d spp ...\n", EXPERIMENT_SIZE, EXPERIMENT_SIZE, REFERENCE_SPP);
+    printf("reference: %dx%d, N = 1, %d spp%s ...\n", size, size, scale->reference_spp, quick ? " (--quick)" : "");
     fflush(stdout);
-    double reference_seconds = render_timed(&dt, &cam, REFERENCE_SPP, 999, threads, &reference, &counters);
+    double reference_seconds = render_timed(&dt, &cam, scale->reference_spp, 999, threads, &reference, &counters);
     printf("reference: %.1f CPU s\n", reference_seconds);
-    measure_noise(&dt, &cam, &reference, threads, noise.stream);
+    measure_noise(&dt, &cam, &reference, threads, scale, noise.stream);
     image_free(&reference);
     measure_ray_counts(&dt, &cam, threads, counts.stream);
     /* Both tables or neither. */

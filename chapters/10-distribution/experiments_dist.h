@@ -8,6 +8,8 @@
  * tree) or on more samples per pixel with one ray per bounce (the path
  * tracer's choice)? Writes DIR/ch10_noise.csv and DIR/ch10_ray_counts.csv
  * (rays per camera ray for N_glossy and depth) and prints both as tables.
+ * `quick`: a 32 x 32 image, a 1024-spp reference and short settings, so the
+ * curves come in seconds (rough); otherwise 64 x 64 and 16384 spp.
  */
 #ifndef EXPERIMENTS_DIST_H
 #define EXPERIMENTS_DIST_H
@@ -17,6 +19,7 @@
 
 #include "10-distribution/motion_scene.h"
 
-bool experiment_rays_per_bounce(const motion_scene *ms, int threads, const char *dir, char *err, size_t err_size);
+bool experiment_rays_per_bounce(const motion_scene *ms, int threads, bool quick, const char *dir, char *err,
+                                size_t err_size);
 
 #endif

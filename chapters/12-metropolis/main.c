@@ -46,7 +46,7 @@ typedef struct {
     const char *data;
     float p_large;
     int bootstrap, chains, max_depth;
-    bool path_trace;
+    bool path_trace, quick;
 } mlt_flags;
 
 /* --scene FILE or the built-in scene. Returns 0, or the exit status after
@@ -74,10 +74,10 @@ static int load_scene(pt_scene *sc, cli_options *opts, const char *program, cons
 }
 
 /* --data: equal time against path tracing, start-up bias, which method. */
-static int run_experiments(const char *dir, int threads, const char *program)
+static int run_experiments(const char *dir, int threads, bool quick, const char *program)
 {
     char err[1024];
-    if (!mlt_experiments_run(dir, threads, err, sizeof err)) {
+    if (!mlt_experiments_run(dir, threads, quick, err, sizeof err)) {
         fprintf(stderr, "%s: %s\n", program, err);
         return 1;
     }
@@ -160,7 +160,7 @@ static int render(cli_options *opts, const char *program, const mlt_flags *f, co
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch12.exr", 256, 256, 64);
-    mlt_flags f = {builtin_choice(), {START_NAMES, NULL, MLT_START_BOOTSTRAP}, NULL, 0.3f, 100000, 256, 64, false};
+    mlt_flags f = {builtin_choice(), {START_NAMES, NULL, MLT_START_BOOTSTRAP}, NULL, 0.3f, 100000, 256, 64, false, false};
     const cli_flag extras[] = {
         {"--p-large", CLI_FLOAT, &f.p_large, "P", "probability of a large step (all new numbers; default 0.3)", 0.0,
          1.0},
@@ -178,6 +178,8 @@ int main(int argc, char **argv)
          "run the experiments (equal-time error of MLT and path tracing; start-up bias; which method for which "
          "scene: path tracing, BDPT and MLT on three scenes) and write CSV into DIR", 0,
          0},
+        {"--quick", CLI_BOOL, &f.quick, NULL,
+         "with --data: every table in seconds, rough (32 x 32, short runs, small references)", 0, 0},
     };
     cli_spec spec = {"12-metropolis",
                      "Metropolis light transport (Kelemen et al. 2002; GAMES101 lecture 16's closing slides):\n"
@@ -200,7 +202,7 @@ int main(int argc, char **argv)
         return status;
     if (f.data != NULL) {
         pt_scene_free(&sc);
-        return run_experiments(f.data, opts.threads, spec.program);
+        return run_experiments(f.data, opts.threads, f.quick, spec.program);
     }
     status = render(&opts, spec.program, &f, &sc);
     pt_scene_free(&sc);

@@ -20,12 +20,26 @@
  * (at most 1/64 of the film) move a path by under a pixel, so a chain
  * lingers in one pixel for tens of steps and its correlated samples cost
  * Metropolis its advantage (measured: README, "Hard cases"). */
-enum { EXPERIMENT_SIZE = 128, PT_MAX_SPP = 128, MLT_MAX_MPP = 64, STARTUP_MAX_MPP = 16, STARTUP_REPLICAS = 3, STARTUP_CHAINS = 1024 };
+enum { STARTUP_CHAINS = 1024 };
 /* MLT's chains: enough to keep two threads busy, few enough that each is
  * long (its start matters little). */
 enum { EXPERIMENT_CHAINS = 64 };
-/* The path-traced references: the Cornell box converges fast, the lamp slowly. */
-enum { CORNELL_REFERENCE_SPP = 1024, LAMP_REFERENCE_SPP = 4096 };
+
+/* The size of a run: the image's side; the largest samples per pixel of
+ * path tracing and mutations per pixel of MLT in the equal-time runs and
+ * the start-up bias, and its replicas; the path-traced references (the
+ * Cornell box converges fast, the lamp slowly); and what divides the
+ * "which method" runs and their references. */
+typedef struct {
+    int size, pt_max_spp, mlt_max_mpp, startup_max_mpp, startup_replicas;
+    int cornell_reference_spp, lamp_reference_spp;
+    int methods_divisor;
+} mlt_scale;
+
+static const mlt_scale FULL_RUN = {128, 128, 64, 16, 3, 1024, 4096, 1};
+/* --quick: every table in seconds, rough: 32 x 32 (where MLT's correlated
+ * samples cost it its advantage, see above), short runs, small references. */
+static const mlt_scale QUICK_RUN = {32, 32, 16, 4, 1, 256, 512, 8};
 
 /* The bootstrap grows with the run: b's relative error scales every pixel
  * alike, so a bootstrap much smaller than the chains would put a floor
@@ -75,17 +89,18 @@ static bool finish_table(atomic_file *table, bool ok, estimate_image *reference,
 static const double TARGETS[] = {1.0, 0.3, 0.1, 0.03};
 enum { TARGET_COUNT = sizeof TARGETS / sizeof TARGETS[0], MAX_POINTS = 16 };
 
-static bool equal_time(const experiment_scene *es, const char *dir, int threads, char *err, size_t err_size)
+static bool equal_time(const experiment_scene *es, const mlt_scale *scale, const char *dir, int threads, char *err,
+                       size_t err_size)
 {
     pt_scene sc;
     es->build(&sc);
     path_tracer pt = path_tracer_defaults(&sc);
     pt.integrator = PT_MIS;
     pt.russian_roulette = RR_THROUGHPUT;
-    camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    camera cam = pt_scene_camera(&sc, scale->size, scale->size);
     char reference_path[4096], file[256];
-    snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_%s_%d.exr", dir, es->name, EXPERIMENT_SIZE);
-    printf("\n== scene %s (%dx%d)\n", es->name, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_%s_%d.exr", dir, es->name, scale->size);
+    printf("\n== scene %s (%dx%d)\n", es->name, scale->size, scale->size);
     snprintf(file, sizeof file, "ch12_equal_time_%s.csv", es->name);
     atomic_file table;
     if (!open_table(&table, dir, file, "method,label,samples_per_pixel,wall_seconds,cpu_seconds,rmse,relmse,acceptance",
@@ -105,7 +120,7 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
     bool ok = true;
     for (int method = 0; method < 2 && ok; method++) {
         /* up to about the same CPU time: a mutation costs about twice a path */
-        for (int spp = 1; spp <= (method == 0 ? PT_MAX_SPP : MLT_MAX_MPP); spp *= 2) {
+        for (int spp = 1; spp <= (method == 0 ? scale->pt_max_spp : scale->mlt_max_mpp); spp *= 2) {
             image img = image_make(cam.width, cam.height);
             double cpu_start = experiment_cpu_seconds(), wall = 0.0, acceptance = 0.0;
             if (method == 0) {
@@ -170,17 +185,17 @@ static bool equal_time(const experiment_scene *es, const char *dir, int threads,
 /* Short runs of many chains, each started at a bootstrap path picked in
  * proportion to f, or all at one fixed path: the error of the fixed start
  * is the start-up bias, largest when the chains are shortest. */
-static bool startup_bias(const char *dir, int threads, char *err, size_t err_size)
+static bool startup_bias(const mlt_scale *scale, const char *dir, int threads, char *err, size_t err_size)
 {
     pt_scene sc;
     pt_scene_build_cornell_box(&sc);
     path_tracer pt = path_tracer_defaults(&sc);
     pt.integrator = PT_MIS;
     pt.russian_roulette = RR_THROUGHPUT;
-    camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    camera cam = pt_scene_camera(&sc, scale->size, scale->size);
     char reference_path[4096];
-    snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_cornell_%d.exr", dir, EXPERIMENT_SIZE);
-    printf("\n== start-up bias (Cornell box, %d chains, mean of %d runs)\n", STARTUP_CHAINS, STARTUP_REPLICAS);
+    snprintf(reference_path, sizeof reference_path, "%s/ch12_reference_cornell_%d.exr", dir, scale->size);
+    printf("\n== start-up bias (Cornell box, %d chains, mean of %d runs)\n", STARTUP_CHAINS, scale->startup_replicas);
     atomic_file table;
     if (!open_table(&table, dir, "ch12_startup_bias.csv",
                     "start,label,mutations_per_pixel,mutations_per_chain,cpu_seconds,relmse", err, err_size)) {
@@ -189,7 +204,7 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     }
     FILE *csv = table.stream;
     estimate_image reference = {0};
-    if (!experiment_reference(&pt, &cam, CORNELL_REFERENCE_SPP, threads, reference_path, &reference, err, err_size))
+    if (!experiment_reference(&pt, &cam, scale->cornell_reference_spp, threads, reference_path, &reference, err, err_size))
         return finish_table(&table, false, &reference, &sc, err, err_size);
     static const char *const labels[2] = {"bootstrap start", "fixed start"};
     printf("  %-18s %-18s %-14s %s\n", "mutations/pixel", "mutations/chain", "bootstrap", "fixed start");
@@ -199,10 +214,10 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
     /* one start after the other, so each is a contiguous line in the CSV */
     for (int start = 0; start < 2 && ok; start++) {
         points = 0;
-        for (int mpp = 1; mpp <= STARTUP_MAX_MPP && ok; mpp *= 2) {
+        for (int mpp = 1; mpp <= scale->startup_max_mpp && ok; mpp *= 2) {
             long long per_chain = (long long)mpp * cam.width * cam.height / STARTUP_CHAINS;
             double cpu_total = 0.0, relmse_total = 0.0;
-            for (int replica = 0; replica < STARTUP_REPLICAS; replica++) {
+            for (int replica = 0; replica < scale->startup_replicas; replica++) {
                 mlt_options o = mlt_defaults(&pt, &cam);
                 o.mutations_per_pixel = mpp;
                 o.chains = STARTUP_CHAINS;
@@ -223,9 +238,9 @@ static bool startup_bias(const char *dir, int threads, char *err, size_t err_siz
                 relmse_total += relmse;
                 image_free(&img);
             }
-            mean_relmse[start][points++] = relmse_total / STARTUP_REPLICAS;
+            mean_relmse[start][points++] = relmse_total / scale->startup_replicas;
             fprintf(csv, "%d,%s,%d,%lld,%.6f,%.8g\n", start, labels[start], mpp, per_chain,
-                    cpu_total / STARTUP_REPLICAS, relmse_total / STARTUP_REPLICAS);
+                    cpu_total / scale->startup_replicas, relmse_total / scale->startup_replicas);
         }
     }
     for (int k = 0, mpp = 1; ok && k < points; k++, mpp *= 2)
@@ -302,7 +317,7 @@ typedef struct {
     double target_relmse;
 } methods_scene;
 
-static bool methods_reference(const methods_scene *ms, const pt_scene *sc, const camera *cam, int threads,
+static bool methods_reference(const methods_scene *ms, int samples, const pt_scene *sc, const camera *cam, int threads,
                               const char *dir, estimate_image *out, char *err, size_t err_size)
 {
     char path[4096];
@@ -310,7 +325,7 @@ static bool methods_reference(const methods_scene *ms, const pt_scene *sc, const
     if (experiment_reference_load(path, cam->width, cam->height, out, err, err_size))
         return true;
     printf("reference: rendering %dx%d by %s, %d runs of %d samples per pixel ...\n", cam->width, cam->height,
-           mlt_method_names[ms->reference_method], REFERENCE_REPLICAS, ms->reference_samples);
+           mlt_method_names[ms->reference_method], REFERENCE_REPLICAS, samples);
     fflush(stdout);
     size_t n = (size_t)cam->width * (size_t)cam->height * 3;
     double *sum = calloc(n, sizeof *sum), *sum2 = calloc(n, sizeof *sum2);
@@ -318,7 +333,7 @@ static bool methods_reference(const methods_scene *ms, const pt_scene *sc, const
     double start = experiment_cpu_seconds();
     for (int k = 0; k < REFERENCE_REPLICAS && ok; k++) {
         image img;
-        ok = mlt_method_render(ms->reference_method, sc, cam, ms->reference_samples, 0x5eed00ULL + (uint64_t)k,
+        ok = mlt_method_render(ms->reference_method, sc, cam, samples, 0x5eed00ULL + (uint64_t)k,
                                threads, &img);
         for (size_t i = 0; ok && i < n; i++) {
             sum[i] += img.rgb[i];
@@ -335,7 +350,7 @@ static bool methods_reference(const methods_scene *ms, const pt_scene *sc, const
     }
     out->mean = image_make(cam->width, cam->height);
     out->standard_error = image_make(cam->width, cam->height);
-    out->spp = (long)REFERENCE_REPLICAS * ms->reference_samples;
+    out->spp = (long)REFERENCE_REPLICAS * samples;
     out->seconds = experiment_cpu_seconds() - start;
     memset(&out->counters, 0, sizeof out->counters);
     for (size_t i = 0; i < n; i++) {
@@ -357,8 +372,8 @@ typedef struct {
     int count;
 } method_curve;
 
-static bool methods_scene_run(const methods_scene *ms, const char *dir, int threads, FILE *time_table, char *err,
-                              size_t err_size)
+static bool methods_scene_run(const methods_scene *ms, const mlt_scale *scale, const char *dir, int threads,
+                              FILE *time_table, char *err, size_t err_size)
 {
     pt_scene sc;
     ms->build(&sc);
@@ -370,9 +385,9 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
         pt_scene_free(&sc);
         return false;
     }
-    camera cam = pt_scene_camera(&sc, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    camera cam = pt_scene_camera(&sc, scale->size, scale->size);
     char file[256];
-    printf("\n== which method: %s (%dx%d)\n", ms->title, EXPERIMENT_SIZE, EXPERIMENT_SIZE);
+    printf("\n== which method: %s (%dx%d)\n", ms->title, scale->size, scale->size);
     snprintf(file, sizeof file, "ch12_methods_%s.csv", ms->name);
     atomic_file table;
     if (!open_table(&table, dir, file, "method,label,samples,cpu_seconds,relmse,rmse", err, err_size)) {
@@ -381,7 +396,8 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
     }
     FILE *csv = table.stream;
     estimate_image reference = {0};
-    if (!methods_reference(ms, &sc, &cam, threads, dir, &reference, err, err_size))
+    if (!methods_reference(ms, ms->reference_samples / scale->methods_divisor, &sc, &cam, threads, dir, &reference, err,
+                           err_size))
         return finish_table(&table, false, &reference, &sc, err, err_size);
     method_curve curves[MLT_METHOD_COUNT];
     double smallest = INFINITY;
@@ -390,7 +406,7 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
     for (int m = 0; m < MLT_METHOD_COUNT && ok; m++) {
         method_curve *c = &curves[m];
         c->count = 0;
-        for (int n = 1; n <= METHOD_MAX_SAMPLES[m]; n *= 2) {
+        for (int n = 1; n <= METHOD_MAX_SAMPLES[m] / scale->methods_divisor; n *= 2) {
             image img;
             double start = experiment_cpu_seconds();
             if (!mlt_method_render((mlt_method)m, &sc, &cam, n, 0x3e7ULL + (uint64_t)n, threads, &img)) {
@@ -442,7 +458,7 @@ static bool methods_scene_run(const methods_scene *ms, const char *dir, int thre
 
 /* The three unbiased methods on the three scenes, each against one
  * reference: DIR/ch12_methods_NAME.csv and ch12_methods_time_to_error.csv. */
-static bool methods_compare(const char *dir, int threads, char *err, size_t err_size)
+static bool methods_compare(const mlt_scale *scale, const char *dir, int threads, char *err, size_t err_size)
 {
     /* name, title, scene, the method and samples per replica of its
      * reference, the target relMSE of the time-to-error table */
@@ -460,7 +476,7 @@ static bool methods_compare(const char *dir, int threads, char *err, size_t err_
         return false;
     double start = experiment_cpu_seconds(), wall_start = timer_seconds();
     for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
-        if (!methods_scene_run(&scenes[i], dir, threads, table.stream, err, err_size)) {
+        if (!methods_scene_run(&scenes[i], scale, dir, threads, table.stream, err, err_size)) {
             atomic_file_abandon(&table);
             return false;
         }
@@ -469,14 +485,15 @@ static bool methods_compare(const char *dir, int threads, char *err, size_t err_
     return atomic_file_commit(&table, err, err_size);
 }
 
-bool mlt_experiments_run(const char *dir, int threads, char *err, size_t err_size)
+bool mlt_experiments_run(const char *dir, int threads, bool quick, char *err, size_t err_size)
 {
+    const mlt_scale *scale = quick ? &QUICK_RUN : &FULL_RUN;
     const experiment_scene scenes[] = {
-        {"cornell", pt_scene_build_cornell_box, CORNELL_REFERENCE_SPP},
-        {"lamp", mlt_scene_build_lamp, LAMP_REFERENCE_SPP},
+        {"cornell", pt_scene_build_cornell_box, scale->cornell_reference_spp},
+        {"lamp", mlt_scene_build_lamp, scale->lamp_reference_spp},
     };
     for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++)
-        if (!equal_time(&scenes[i], dir, threads, err, err_size))
+        if (!equal_time(&scenes[i], scale, dir, threads, err, err_size))
             return false;
-    return startup_bias(dir, threads, err, err_size) && methods_compare(dir, threads, err, err_size);
+    return startup_bias(scale, dir, threads, err, err_size) && methods_compare(scale, dir, threads, err, err_size);
 }

@@ -1,6 +1,6 @@
 /* mlt_experiments.h -- what Metropolis costs and gains, measured.
  *
- *   mlt_experiments_run(dir, threads)  for the Cornell box and the lamp
+ *   mlt_experiments_run(dir, threads, quick)  for the Cornell box and the lamp
  *       scene: a cached path-traced reference, then relMSE against it for
  *       chapter 09's path tracer (MIS) and for MLT at doubling sample
  *       counts, with CPU seconds (DIR/ch12_equal_time_NAME.csv); and on the
@@ -11,7 +11,9 @@
  *       on the Cornell box, chapter 11's ceiling lamp and the lamp in a
  *       housing, relMSE against CPU seconds (DIR/ch12_methods_NAME.csv)
  *       and the CPU seconds each needs to reach a target relMSE
- *       (DIR/ch12_methods_time_to_error.csv).
+ *       (DIR/ch12_methods_time_to_error.csv). 128 x 128 images; `quick`:
+ *       32 x 32, shorter runs and smaller references, every table in
+ *       seconds (rough: the book's default figures).
  */
 #ifndef MLT_EXPERIMENTS_H
 #define MLT_EXPERIMENTS_H
@@ -36,6 +38,6 @@ extern const char *const mlt_method_names[MLT_METHOD_COUNT];
 bool mlt_method_render(mlt_method method, const pt_scene *sc, const camera *cam, int samples, uint64_t seed,
                        int threads, image *out);
 
-bool mlt_experiments_run(const char *dir, int threads, char *err, size_t err_size);
+bool mlt_experiments_run(const char *dir, int threads, bool quick, char *err, size_t err_size);
 
 #endif

@@ -167,13 +167,15 @@ void watertight_edges_in_double(float ax, float ay, float bx, float by, float cx
  * corners instead. Why not pbrt's: the shear mixes the three coordinates
  * of every corner, so that t's error is a few ulps of the corners'
  * distances from the origin, whatever the ray's own offset from the
- * plane. A ray spawned from the Cornell box's floor (y = 0) starts 2^-16
- * above it (ray.h's fixed offset near 0) while the floor's corners are 550
- * away, a quarter of their ulp: pbrt's t found the floor again at
- * t = +3e-8 (5 of 20,000 shadow rays, test_walls_skipped_only_where_they_
- * cannot_block). Here P0 - O along an axis-aligned normal is exact, and in
- * general t is as accurate as Moller-Trumbore's, for which ray.h's offsets
- * were made and tested. pbrt guards its t with an error bound instead
+ * plane. With the offsets ray.h had then (a fixed 2^-16 near 0), a ray
+ * spawned from the Cornell box's floor (y = 0) started 2^-16 above it while
+ * the floor's corners are 550 away, a quarter of their ulp: pbrt's t found
+ * the floor again at t = +3e-8 (5 of 20,000 shadow rays, test_walls_
+ * skipped_only_where_they_cannot_block). ray.h's offsets now also cover the
+ * intersection tests' own arithmetic (a multiple of the primitive's size),
+ * measured with both tests; the plane's t is kept for being the more
+ * accurate: P0 - O along an axis-aligned normal is exact, and in general t
+ * is as accurate as Moller-Trumbore's. pbrt guards its t with an error bound instead
  * (refusing t below it), which refuses every hit on a sliver one float
  * step thick (test_sliver_one_float_step_thick_is_still_hit). Only rays
  * that passed the edge test get here. Written out (not vec3_cross and

@@ -127,6 +127,55 @@ int production_speed_scene(pt_scene *sc, const char *label, int size, int spp, i
     return n_cases;
 }
 
+/* ---- the triangle test ----------------------------------------------------------------
+ * What the watertight triangle test costs the renderers, against the
+ * lecture's Moller-Trumbore on the same structure (accel_use_triangle_test):
+ * the lecture rung with the walls one path at a time, and eight paths at a
+ * time, on 1 thread, the two tests taking turns repeat after repeat (each
+ * first in every other repeat), the best of `repeats` of each. */
+typedef struct {
+    const char *label;
+    bool wide;
+    double wall[2], cpu[2]; /* seconds per million camera samples: watertight, Moller-Trumbore */
+} triangle_test_row;
+
+static void production_speed_triangle_tests(pt_scene *sc, int size, int spp, int repeats, triangle_test_row rows[2])
+{
+    camera cam = pt_scene_camera(sc, size, size);
+    double million_samples = (double)size * (double)size * (double)spp * 1e-6;
+    pt_scene_use_accel(sc, production_scene_accel, sc);
+    path_tracer pt = path_tracer_defaults(sc);
+    pt.max_depth = SPEED_MAX_DEPTH;
+    printf("\nthe watertight triangle test against Moller-Trumbore, the same structure, 1 thread, taking turns, "
+           "best of %d\n", repeats);
+    printf("%-44s %12s %12s %12s %12s %8s\n", "case", "wt s/M wall", "wt s/M CPU", "mt s/M wall", "mt s/M CPU",
+           "cost");
+    for (int k = 0; k < 2; k++) {
+        triangle_test_row *row = &rows[k];
+        row->wide = k == 1 && path_tracer_wide_supported(&pt, NULL, 0);
+        row->label = k == 0 ? "lecture, P_RR 0.8, + walls" : row->wide ? "lecture, P_RR 0.8, 8 paths at a time"
+                                                                      : "lecture, P_RR 0.8, 8 paths: not here";
+        for (int test = 0; test < 2; test++)
+            row->wall[test] = row->cpu[test] = INFINITY;
+        for (int r = 0; r < repeats; r++)
+            for (int turn = 0; turn < 2; turn++) {
+                int test = r % 2 ? 1 - turn : turn;
+                accel_use_triangle_test(sc->bvh, (triangle_test)test);
+                double cpu_start = experiment_cpu_seconds();
+                estimate_image e;
+                if (!row->wide || !render_estimate_wide(&pt, &cam, spp, 1, 1, &e))
+                    e = render_estimate(&pt, &cam, spp, 1, 1);
+                row->cpu[test] = fmin(row->cpu[test], (experiment_cpu_seconds() - cpu_start) / million_samples);
+                row->wall[test] = fmin(row->wall[test], e.seconds / million_samples);
+                estimate_image_free(&e);
+            }
+        printf("%-44s %12.3f %12.3f %12.3f %12.3f %+7.1f%%\n", row->label, row->wall[0], row->cpu[0], row->wall[1],
+               row->cpu[1], 100.0 * (row->cpu[0] / row->cpu[1] - 1.0));
+        fflush(stdout);
+    }
+    accel_use_triangle_test(sc->bvh, TRIANGLE_TEST_WATERTIGHT);
+}
+
 bool production_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size)
 {
     pt_scene sc;
@@ -143,12 +192,19 @@ bool production_speed(int size, int spp, int repeats, const char *csv_path, char
     }
     production_speed_row rows[PRODUCTION_SPEED_CASES];
     int n = production_speed_scene(&sc, "Cornell box", size, spp, repeats, production_scene_accel, &sc, rows);
+    triangle_test_row tests[2];
+    production_speed_triangle_tests(&sc, size, spp, repeats, tests);
     if (csv != NULL) {
         fprintf(csv, "case,threads,wall_s_per_msample,cpu_s_per_msample,rays_per_sample,scaling\n");
         for (int k = 0; k < n; k++)
             for (int t = 0; t < 2; t++)
                 fprintf(csv, "\"%s\",%d,%.4f,%.4f,%.3f,%.3f\n", rows[k].label, t + 1, rows[k].wall[t], rows[k].cpu[t],
                         rows[k].rays_per_sample, rows[k].scaling[t]);
+        /* the triangle tests' rows: 1 thread, no ray count or scaling */
+        for (int k = 0; k < 2; k++)
+            for (int test = 0; test < 2; test++)
+                fprintf(csv, "\"%s, %s\",1,%.4f,%.4f,,\n", tests[k].label, triangle_test_name((triangle_test)test),
+                        tests[k].wall[test], tests[k].cpu[test]);
     }
     pt_scene_free(&sc);
     return csv == NULL || experiment_csv_close(csv, csv_path, err, err_size);

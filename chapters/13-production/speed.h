@@ -35,7 +35,10 @@ typedef struct {
 int production_speed_scene(pt_scene *sc, const char *label, int size, int spp, int repeats,
                            pt_accel_builder production, const void *context, production_speed_row *rows);
 
-/* The table on the Cornell box, printed and written to csv_path (if not NULL). */
+/* The table on the Cornell box, printed and written to csv_path (if not
+ * NULL), then the watertight triangle test's cost to the renderer: the
+ * lecture rung with the walls, one path and eight paths at a time, on the
+ * watertight test and on Moller-Trumbore, taking turns. */
 bool production_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size);
 
 #endif

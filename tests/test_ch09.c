@@ -1580,6 +1580,98 @@ static void test_target_error_is_reached_not_assumed(void **state)
     pt_scene_free(&sc);
 }
 
+/* ---- exporting a scene to OBJ + MTL (pt_scene_write_obj) ----------------------- */
+
+static bool same_vec3(vec3 a, vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+/* Do two scenes have the same triangles (bit for bit, in order) and does
+ * each face have the same material (GGX's alpha within float rounding:
+ * the MTL stores it as Ns)? If not, why says where they part. */
+static bool scenes_match(const pt_scene *a, const pt_scene *b, char *why, size_t why_size)
+{
+    if (a->geometry.face_count != b->geometry.face_count) {
+        snprintf(why, why_size, "%d triangles against %d", a->geometry.face_count, b->geometry.face_count);
+        return false;
+    }
+    for (int i = 0; i < a->geometry.face_count; i++) {
+        for (int k = 0; k < 3; k++) {
+            vec3 p = mesh_vertex(&a->geometry, i, k), q = mesh_vertex(&b->geometry, i, k);
+            if (p.x != q.x || p.y != q.y || p.z != q.z) {
+                snprintf(why, why_size, "triangle %d corner %d moved", i, k);
+                return false;
+            }
+        }
+        const pt_material *m = &a->materials[a->geometry.faces[i].material];
+        const pt_material *n = &b->materials[b->geometry.faces[i].material];
+        bool same = m->kind == n->kind && same_vec3(m->albedo, n->albedo) && same_vec3(m->emission, n->emission) &&
+                    (m->kind != BSDF_GLASS || m->ior == n->ior) &&
+                    (m->kind != BSDF_GLOSSY || fabsf(m->roughness - n->roughness) <= 1e-6f * m->roughness);
+        if (!same) {
+            snprintf(why, why_size, "triangle %d: material kind %d albedo %g against kind %d albedo %g", i,
+                     (int)m->kind, (double)m->albedo.x, (int)n->kind, (double)n->albedo.x);
+            return false;
+        }
+    }
+    return true;
+}
+
+/* The Cornell room with a block of each exportable material: diffuse
+ * walls, the emitter, a GGX metal and glass. */
+static void build_export_scene(pt_scene *sc, pt_material extra)
+{
+    pt_scene_init(sc);
+    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
+    int metal = pt_scene_add_material(sc, pt_glossy(vec3_make(0.95f, 0.64f, 0.54f), 0.15f));
+    int glass = pt_scene_add_material(sc, extra);
+    pt_scene_add_cornell_room(sc, white, red, green, light);
+    pt_scene_add_quad(sc, vec3_make(100, 10, 100), vec3_make(200, 10, 100), vec3_make(200, 110, 100),
+                      vec3_make(100, 110, 100), metal);
+    pt_scene_add_quad(sc, vec3_make(300, 10, 200), vec3_make(400, 10, 200), vec3_make(400, 110, 200),
+                      vec3_make(300, 110, 200), glass);
+    pt_scene_finish(sc);
+}
+
+static void test_an_exported_scene_reads_back_the_same(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/test_ch09_export.XXXXXX", obj[256], mtl[256], err[1024], why[256];
+    assert_non_null(mkdtemp(dir));
+    snprintf(obj, sizeof obj, "%s/room.obj", dir);
+    snprintf(mtl, sizeof mtl, "%s/room.mtl", dir);
+    pt_scene sc, back;
+    build_export_scene(&sc, pt_glass(1.5f));
+    assert_true(pt_scene_write_obj(&sc, obj, err, sizeof err));
+    pt_scene_report_materials(NULL);
+    assert_true(pt_scene_load_obj(&back, obj, err, sizeof err));
+    bool match = scenes_match(&sc, &back, why, sizeof why);
+    if (!match)
+        print_message("%s\n", why);
+    assert_true(match);
+    /* the twin: one paint changed is seen */
+    sc.materials[0].albedo.x = 0.72f;
+    assert_false(scenes_match(&sc, &back, why, sizeof why));
+    pt_scene_free(&back);
+    pt_scene_free(&sc);
+    unlink(obj);
+    unlink(mtl);
+
+    /* What OBJ cannot hold is refused, and nothing is written. */
+    build_export_scene(&sc, pt_mirror(vec3_splat(1.0f)));
+    assert_false(pt_scene_write_obj(&sc, obj, err, sizeof err));
+    assert_non_null(strstr(err, "mirror"));
+    pt_scene_free(&sc);
+    pt_scene_build_cornell_box_materials(&sc);
+    assert_false(pt_scene_write_obj(&sc, obj, err, sizeof err));
+    assert_non_null(strstr(err, "spheres"));
+    pt_scene_free(&sc);
+    assert_int_equal(access(obj, F_OK), -1);
+    assert_int_equal(access(mtl, F_OK), -1);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1611,6 +1703,7 @@ int main(void)
         cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
         cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),
         cmocka_unit_test(test_objects_too_small_for_their_place_are_named),
+        cmocka_unit_test(test_an_exported_scene_reads_back_the_same),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);
 }

@@ -16,6 +16,10 @@
  *                     13 on Embree    the same, its rays traced by Embree 3
  *                                     (rtcIntersect1, rtcOccluded1) inside the
  *                                     same walls
+ *                     13 on Embree8   eight paths at a time on Embree's
+ *                                     rtcIntersect8 and rtcOccluded8 (where
+ *                                     chapter 13 has wide_trace.h, its
+ *                                     renderer's eight-ray trace interface)
  *                     09 mis          chapter 09's MIS rung on chapter 06's BVH
  *                   every case taking turns with the others, repeat after
  *                   repeat (A B C D A B C D ...), the best of --reps; then the
@@ -49,13 +53,22 @@
 #include "timer.h"
 #ifdef BENCH_EMBREE
 #include "embree_accel.h"
+/* Eight paths on Embree's eight-ray kernels, where chapter 13's renderer
+ * takes another tracer (wide_trace.h: render_estimate_wide_traced). */
+#if defined(__has_include)
+#if __has_include("13-production/wide_trace.h")
+#define BENCH_EMBREE8 1
+#include "13-production/wide_trace.h"
+#endif
+#endif
 #endif
 
 /* ---- the renderers ------------------------------------------------------------ */
 
-typedef enum { R_CH13, R_CH13_ONE_PATH, R_EMBREE, R_MIS, R_COUNT } renderer_kind;
-static const char *const RENDERER_NAMES[] = {"ch13", "ch13-one-path", "ch13-embree", "ch09-mis", NULL};
-static const char *const RENDERER_LABELS[] = {"13 as run", "13 one path", "13 on Embree", "09 mis"};
+typedef enum { R_CH13, R_CH13_ONE_PATH, R_EMBREE, R_EMBREE8, R_MIS, R_COUNT } renderer_kind;
+static const char *const RENDERER_NAMES[] = {"ch13", "ch13-one-path", "ch13-embree", "ch13-embree8", "ch09-mis", NULL};
+static const char *const RENDERER_LABELS[] = {"13 as run", "13 one path", "13 on Embree", "13 on Embree8",
+                                              "09 mis"};
 
 /* A scene with the three structures the renderers trace through: chapter
  * 06's BVH (chapter 09's default), chapter 13's (production_scene_accel:
@@ -112,9 +125,95 @@ static void bench_scene_free(bench_scene *b)
     pt_scene_free(&b->sc);
 }
 
+#ifdef BENCH_EMBREE8
+/* ---- Embree's eight-ray kernels as a wide_tracer --------------------------------
+ * rtcIntersect8 and rtcOccluded8 on the lanes of `active`, over the
+ * Embree scene of an embree_accel (context): the triangle's index, t and
+ * barycentrics as flat_hits8 wants them. */
+
+static void embree_rays8(const flat_rays8 *rays, int active, int valid[8], struct RTCRay8 *e)
+{
+    for (int k = 0; k < 8; k++) {
+        valid[k] = (active >> k & 1) ? -1 : 0;
+        e->org_x[k] = rays->origin[0][k];
+        e->org_y[k] = rays->origin[1][k];
+        e->org_z[k] = rays->origin[2][k];
+        e->dir_x[k] = rays->direction[0][k];
+        e->dir_y[k] = rays->direction[1][k];
+        e->dir_z[k] = rays->direction[2][k];
+        e->tnear[k] = rays->t_min[k];
+        e->tfar[k] = rays->t_max[k];
+        e->time[k] = 0.0f;
+        e->mask[k] = 0xFFFFFFFFu;
+        e->id[k] = (unsigned)k;
+        e->flags[k] = 0;
+    }
+}
+
+static int embree8_closest_hit(const void *context, const flat_rays8 *rays, int active, flat_hits8 *hits,
+                               ray_counters *counters)
+{
+    (void)counters;
+    const embree_accel *ea = context;
+    _Alignas(32) int valid[8];
+    struct RTCRayHit8 rh;
+    embree_rays8(rays, active, valid, &rh.ray);
+    for (int k = 0; k < 8; k++) {
+        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcIntersect8(valid, ea->scene, &ctx, &rh);
+    int hit = 0;
+    for (int k = 0; k < 8; k++)
+        if ((active >> k & 1) && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {
+            hits->index[k] = (int32_t)rh.hit.primID[k];
+            hits->t[k] = rh.ray.tfar[k];
+            hits->b1[k] = rh.hit.u[k];
+            hits->b2[k] = rh.hit.v[k];
+            hit |= 1 << k;
+        }
+    return hit;
+}
+
+static int embree8_any_hit(const void *context, const flat_rays8 *rays, int active, ray_counters *counters)
+{
+    (void)counters;
+    const embree_accel *ea = context;
+    _Alignas(32) int valid[8];
+    struct RTCRay8 e;
+    embree_rays8(rays, active, valid, &e);
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcOccluded8(valid, ea->scene, &ctx, &e);
+    int blocked = 0;
+    for (int k = 0; k < 8; k++)
+        blocked |= ((active >> k & 1) && e.tfar[k] < 0.0f) << k; /* occluded: tfar set to -inf */
+    return blocked;
+}
+
+/* The tracers of the scene's Embree structure (walls over Embree, as
+ * wide_scene_tracers_for() makes them of ours). */
+static wide_scene_tracers embree8_tracers(const accel *walls)
+{
+    wide_scene_tracers t;
+    t.all = (wide_tracer){embree8_closest_hit, embree8_any_hit, walls_all(walls), "Embree rtcIntersect8"};
+    t.walls = walls_found(walls) ? walls : NULL;
+    t.occluders = t.walls != NULL ? (wide_tracer){embree8_closest_hit, embree8_any_hit, walls_occluders(walls),
+                                                  "Embree rtcIntersect8"}
+                                  : wide_tracer_for(NULL);
+    return t;
+}
+#endif
+
 static bool renderer_available(const bench_scene *b, renderer_kind r)
 {
-    return r != R_EMBREE || b->structures[ON_EMBREE] != NULL;
+#ifndef BENCH_EMBREE8
+    if (r == R_EMBREE8)
+        return false;
+#endif
+    return (r != R_EMBREE && r != R_EMBREE8) || b->structures[ON_EMBREE] != NULL;
 }
 
 /* The path tracer renderer r runs: chapter 13's program's (the lecture
@@ -123,7 +222,7 @@ static bool renderer_available(const bench_scene *b, renderer_kind r)
  * structure is switched to the renderer's. */
 static path_tracer renderer_setup(bench_scene *b, renderer_kind r)
 {
-    b->sc.bvh = b->structures[r == R_MIS ? ON_CH06 : r == R_EMBREE ? ON_EMBREE : ON_CH13];
+    b->sc.bvh = b->structures[r == R_MIS ? ON_CH06 : r == R_EMBREE || r == R_EMBREE8 ? ON_EMBREE : ON_CH13];
     path_tracer pt = path_tracer_defaults(&b->sc);
     if (r == R_MIS)
         pt.integrator = PT_MIS;
@@ -145,6 +244,13 @@ static render_run render_once(bench_scene *b, renderer_kind r, const camera *cam
     double cpu_start = experiment_cpu_seconds();
     run.wide = r == R_CH13 && path_tracer_wide_supported(&pt, NULL, 0) &&
                render_estimate_wide(&pt, cam, spp, seed, threads, e);
+#ifdef BENCH_EMBREE8
+    if (r == R_EMBREE8) {
+        wide_scene_tracers t = embree8_tracers(b->structures[ON_EMBREE]);
+        run.wide = path_tracer_wide_supported(&pt, NULL, 0) &&
+                   render_estimate_wide_traced(&pt, &t, cam, spp, seed, threads, e);
+    }
+#endif
     if (!run.wide)
         *e = render_estimate(&pt, cam, spp, seed, threads);
     run.cpu = experiment_cpu_seconds() - cpu_start;
@@ -213,7 +319,7 @@ static void speed_scene(bench_scene *b, int size, int spp, int reps, FILE *csv)
             loop_best[t] = fmin(loop_best[t], parallel_loop(loop_work, t + 1));
         for (int r = 0; r < R_COUNT; r++)
             for (int t = 0; t < 2; t++) {
-                if (!renderer_available(b, (renderer_kind)r) || (r == R_CH13_ONE_PATH && !wide_here))
+                if (!renderer_available(b, (renderer_kind)r) || ((r == R_CH13_ONE_PATH || r == R_EMBREE8) && !wide_here))
                     continue;
                 estimate_image e;
                 render_run run = render_once(b, (renderer_kind)r, &cam, spp, 1, t + 1, &e);
@@ -234,7 +340,11 @@ static void speed_scene(bench_scene *b, int size, int spp, int reps, FILE *csv)
         const speed_row *row = &rows[r];
         if (!row->measured) {
             printf("%-14s %s\n", RENDERER_LABELS[r],
-                   r == R_CH13_ONE_PATH ? "(13 as run is one path at a time here)" : "(no Embree: make bench-deps)");
+                   r == R_CH13_ONE_PATH ? "(13 as run is one path at a time here)"
+                   : r == R_EMBREE8 && !renderer_available(b, R_EMBREE8)
+                       ? "(not built: needs Embree and chapter 13's wide_trace.h, the eight-ray trace interface)"
+                   : r == R_EMBREE8 ? "(13 as run is one path at a time here)"
+                                    : "(no Embree: make bench-deps)");
             continue;
         }
         for (int t = 0; t < 2; t++) {
@@ -254,6 +364,8 @@ static void speed_scene(bench_scene *b, int size, int spp, int reps, FILE *csv)
     printf("ratios, 1 thread, CPU: 13 as run / 09 mis speed %.2fx (target >= 4x)", mis->cpu[0] / ours->cpu[0]);
     if (embree->measured)
         printf("; 13 one path / 13 on Embree speed %.2fx (target >= 0.9x)", embree->cpu[0] / one->cpu[0]);
+    if (rows[R_EMBREE8].measured)
+        printf("; 13 as run / 13 on Embree8 speed %.2fx", rows[R_EMBREE8].cpu[0] / ours->cpu[0]);
     printf("\n2-thread scaling (wall): 13 as run %.2fx, 09 mis %.2fx; an embarrassingly parallel loop, taking "
            "turns with them, %.2fx (target: within 5 %%)\n", ours->wall[0] / ours->wall[1],
            mis->wall[0] / mis->wall[1], loop_best[0] / loop_best[1]);
@@ -283,7 +395,7 @@ static void usage(void)
            "them beside the same renderer on Embree's kernels and chapter 09's MIS rung.\n"
            "  --write DIR      write DIR/NAME.scene, NAME.obj, NAME.mtl for each scene\n"
            "  --speed DIR      time every renderer on DIR/NAME.scene, 1 and 2 threads, taking turns\n"
-           "  --render FILE    one image by --renderer (ch13, ch13-one-path, ch13-embree, ch09-mis);\n"
+           "  --render FILE    one image by --renderer (ch13, ch13-one-path, ch13-embree, ch13-embree8, ch09-mis);\n"
            "                   appends 'renderer,scene,spp,threads,seed,cpu_s,wall_s,file' to --manifest\n"
            "  --reference FILE chapter 09's MIS rung at --spp: FILE.exr and its -stderr.exr\n"
            "  --scenes LIST    which scenes (default all: cornell,cornell-10k,cornell-100k,cornell-1m,glossy-glass)\n"
@@ -330,7 +442,7 @@ static int parse_options(int argc, char **argv, bench_options *o)
             o->csv = value;
         } else if (strcmp(a, "--renderer") == 0) {
             if (!parse_renderer(value, &o->renderer)) {
-                fprintf(stderr, "bench_scenes: --renderer %s: unknown (ch13, ch13-one-path, ch13-embree, ch09-mis)\n",
+                fprintf(stderr, "bench_scenes: --renderer %s: unknown (ch13, ch13-one-path, ch13-embree, ch13-embree8, ch09-mis)\n",
                         value);
                 return 2;
             }
@@ -360,6 +472,12 @@ static int parse_options(int argc, char **argv, bench_options *o)
 #ifndef BENCH_EMBREE
     if (o->mode == MODE_RENDER && o->renderer == R_EMBREE) {
         fprintf(stderr, "bench_scenes: --renderer ch13-embree: built without Embree (make bench-deps)\n");
+        return 2;
+    }
+#endif
+#ifndef BENCH_EMBREE8
+    if (o->mode == MODE_RENDER && o->renderer == R_EMBREE8) {
+        fprintf(stderr, "bench_scenes: --renderer ch13-embree8: built without Embree or chapter 13's wide_trace.h\n");
         return 2;
     }
 #endif

@@ -121,7 +121,7 @@ static int program_explain(const cli_options *opts, const char *label, const ren
  * numbers from its own counters and the pixels' own streams, so the image
  * is untouched. Only renders of more than LONG_RENDER_PIXELS pixels are
  * piloted: smaller ones end before a warning would help. */
-enum { PILOT_PIXELS = 64, LONG_RENDER_PIXELS = 16384 };
+enum { PILOT_PIXELS = PROGRAM_PILOT_PIXELS, LONG_RENDER_PIXELS = 16384 };
 static const double LONG_RENDER_SECONDS = 60.0;
 
 static void warn_if_long(const cli_options *opts, const char *label, const render_job *job)
@@ -136,12 +136,22 @@ static void warn_if_long(const cli_options *opts, const char *label, const rende
         long i = (long)((double)k * (double)pixels / PILOT_PIXELS);
         render_pixel(job, (int)(i % job->cam->width), (int)(i / job->cam->width), &ignored, NULL);
     }
+    program_warn_long_render(opts, label, (timer_seconds() - start) / PILOT_PIXELS * (double)pixels, PILOT_PIXELS);
+}
+
+bool program_render_needs_pilot(const cli_options *opts)
+{
+    return !opts->quiet && (long)opts->width * opts->height >= LONG_RENDER_PIXELS;
+}
+
+void program_warn_long_render(const cli_options *opts, const char *label, double seconds_one_thread, int pilot_pixels)
+{
     int threads = opts->threads > 0 ? opts->threads : omp_get_max_threads();
-    double estimate = (timer_seconds() - start) / PILOT_PIXELS * (double)pixels / threads;
+    double estimate = seconds_one_thread / threads;
     if (estimate > LONG_RENDER_SECONDS)
         fprintf(stderr, "%s: warning: this render will take about %.0f minutes on %d threads (from a pilot of %d "
                 "pixels): a smaller --width, --height or --spp first, or a chapter with an acceleration structure "
-                "(06, 09, 13) for a large mesh\n", label, estimate / 60.0, threads, PILOT_PIXELS);
+                "(06, 09, 13) for a large mesh\n", label, estimate / 60.0, threads, pilot_pixels);
 }
 
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,

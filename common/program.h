@@ -30,6 +30,16 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
 int program_render_sampled(const cli_options *opts, const char *label, radiance_fn radiance, render_sample_fn sample,
                            const void *scene, const camera *cam, render_stats *stats);
 
+/* The warning before a long render that program_render() gives, for a
+ * program that renders its own way: should it run a pilot (an image large
+ * enough to be worth warning about, and not --quiet)? And, from the pilot's
+ * estimate of the whole render on one thread, the warning (to stderr) if
+ * it takes far above a minute on --threads. A pilot renders about
+ * PROGRAM_PILOT_PIXELS pixels at the full spp. */
+enum { PROGRAM_PILOT_PIXELS = 64 };
+bool program_render_needs_pilot(const cli_options *opts);
+void program_warn_long_render(const cli_options *opts, const char *label, double seconds_one_thread, int pilot_pixels);
+
 /* With --scene FILE: loads it into d (exits with status 1 and the parser's
  * "file:line:col: message" on error), applies its image statement to the
  * options the command line did not set, and returns true. Without --scene:

@@ -194,6 +194,8 @@ typedef struct {
 } bvh4_raw_hit;
 void bvh4_closest_hit_stream_raw(const accel *a, const ray *rays, int count, bvh4_raw_hit *hits, bool *hit_found,
                                  ray_counters *counters);
+/* The same for one ray, walked alone. */
+void bvh4_closest_hit_raw(const accel *a, ray r, bvh4_raw_hit *hit, ray_counters *counters);
 
 /* The traversal's stack: each node pushes at most BVH4_WIDTH - 1 entries,
  * and the wide tree is no deeper than the binary one plus the levels that split

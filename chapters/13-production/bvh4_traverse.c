@@ -722,6 +722,16 @@ void bvh4_any_hit_stream(const accel *a, const ray *rays, int count, bool *hit_f
     stream4_with_kernel(a, rays, count, NULL, hit_found, NULL, true, counters);
 }
 
+void bvh4_closest_hit_raw(const accel *a, ray r, bvh4_raw_hit *hit, ray_counters *counters)
+{
+    const bvh4 *b = (const bvh4 *)a;
+    bvh4_found found = traverse4_with(a, &r, false, b->kernel == BVH4_KERNEL_SSE, counters);
+    hit->index = found.lane < 0 ? -1 : bvh4_lane_triangle(b->packets[found.lane / 4].index[found.lane % 4]);
+    hit->t = found.t;
+    hit->b1 = found.b1;
+    hit->b2 = found.b2;
+}
+
 void bvh4_closest_hit_stream_raw(const accel *a, const ray *rays, int count, bvh4_raw_hit *hits, bool *hit_found,
                                  ray_counters *counters)
 {

@@ -13,9 +13,12 @@
  *   the flat set     flat.h's eight-ray AVX kernels, eight rays per
  *                    instruction against every triangle: for a few dozen
  *                    triangles (the Cornell box)
- *   the 4-wide BVH   bvh4.h's ray streams: the eight rays take turns node by
- *                    node, so one ray's wait for memory overlaps the
- *                    others' work: for meshes
+ *   the 4-wide BVH   bvh4.h's traversal, each lane's ray walking the tree
+ *                    alone (for meshes); or, on request, as a ray stream
+ *                    (bvh4_closest_hit_stream: the eight take turns node
+ *                    by node, so that one ray's wait for memory overlaps
+ *                    the others' work -- for eight rays the turns cost
+ *                    more than they hide)
  *   any accel        chapter 03's interface, one ray after the other (the
  *                    structures of chapters 03-06; a reference)
  *
@@ -53,5 +56,7 @@ typedef struct {
  * accel_any_hit() one ray at a time. NULL: a tracer that finds nothing (a
  * scene with no occluders). The structure must outlive the tracer. */
 wide_tracer wide_tracer_for(const accel *a);
+/* The same, but a 4-wide BVH's eight rays traced as a stream (to compare). */
+wide_tracer wide_tracer_streams(const accel *a);
 
 #endif

@@ -170,8 +170,8 @@ int main(int argc, char **argv)
     cli_spec spec = {"13-production",
                      "What production renderers do: chapter 09's lecture path tracer, eight paths at a time, on\n"
                      "any scene chapter 09 renders (meshes, spheres, every material, area and point lights,\n"
-                     "the environment): the flat set for at most 64 triangles, the 4-wide BVH's ray streams\n"
-                     "above, shadow rays that skip a room's walls where it has them. --bench measures each step.",
+                     "the environment): the flat set for at most 64 triangles, the 4-wide BVH above, shadow\n"
+                     "rays that skip a room's walls where it has them; it says which. --bench measures each step.",
                      extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision, one path at a time)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
     opts.jitter = true;

@@ -30,16 +30,6 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
 int program_render_sampled(const cli_options *opts, const char *label, radiance_fn radiance, render_sample_fn sample,
                            const void *scene, const camera *cam, render_stats *stats);
 
-/* The warning before a long render that program_render() gives, for a
- * program that renders its own way: should it run a pilot (an image large
- * enough to be worth warning about, and not --quiet)? And, from the pilot's
- * estimate of the whole render on one thread, the warning (to stderr) if
- * it takes far above a minute on --threads. A pilot renders about
- * PROGRAM_PILOT_PIXELS pixels at the full spp. */
-enum { PROGRAM_PILOT_PIXELS = 64 };
-bool program_render_needs_pilot(const cli_options *opts);
-void program_warn_long_render(const cli_options *opts, const char *label, double seconds_one_thread, int pilot_pixels);
-
 /* With --scene FILE: loads it into d (exits with status 1 and the parser's
  * "file:line:col: message" on error), applies its image statement to the
  * options the command line did not set, and returns true. Without --scene:
@@ -57,6 +47,19 @@ void program_note_effects(const effects_report *e);
 /* Records the acceleration structure the rays go through (its
  * accel_stats name), for the report and the counters file. */
 void program_note_accel(const char *name);
+
+/* A warning before a long render. A pilot renders 64 pixels spread over
+ * the image at the full spp, on one thread, through the job's own radiance
+ * or sample function (their own counters and the pixels' own streams: the
+ * image is untouched if the job's scene keeps no state), and scales the
+ * time to the image: program_pilot_seconds() returns that one-thread
+ * estimate (0 for images under 16,384 pixels, which end before a warning
+ * would help). program_warn_if_long() divides it by the threads and warns
+ * on stderr above a minute. program_render() does both; programs with a
+ * loop of their own (bidirectional, Metropolis, eight paths at a time)
+ * call them before theirs. */
+double program_pilot_seconds(const render_job *job);
+void program_warn_if_long(const cli_options *opts, const char *label, double one_thread_seconds);
 
 /* A chapter's warning about something in the scene file it cannot show:
  * "label: file:line:col: warning: message". */

@@ -31,10 +31,10 @@ static int render_eight_paths(const cli_options *opts, const path_tracer *pt, co
 {
     char err[1024], counters_path[4096];
     estimate_image e;
-    if (program_render_needs_pilot(opts)) /* the warning program_render() gives before a long render */
-        program_warn_long_render(opts, "13-production",
-                                 render_estimate_wide_pilot(pt, cam, opts->spp, opts->seed, PROGRAM_PILOT_PIXELS),
-                                 PROGRAM_PILOT_PIXELS);
+    /* the warning program_render() gives before a long render, from a
+     * pilot of 64 pixels, for images as large as it pilots */
+    if (!opts->quiet && (long)cam->width * cam->height >= 16384)
+        program_warn_if_long(opts, "13-production", render_estimate_wide_pilot(pt, cam, opts->spp, opts->seed, 64));
     render_estimate_wide(pt, cam, opts->spp, opts->seed, opts->threads, &e);
     counters_path_for_image(opts->out, counters_path, sizeof counters_path);
     int status = 0;

@@ -822,6 +822,99 @@ static int closest_hits(row_job *job, vertex_lanes *L, int active, int material[
     return hit_lanes | sphere_lanes;
 }
 
+/* What the rays found that needs no light sample, and what the lanes hit:
+ * the environment for the lanes that left the scene; the emission at the
+ * first hit (camera lanes) and after a mirror or glass; the lanes' bits by
+ * material (*diffuse, *glossy, *delta). */
+static void light_found(row_job *job, vertex_lanes *L, int active, int hit_lanes, int front,
+                        const int material[LANES], int *diffuse, int *glossy, int *delta)
+{
+    const pt_scene *sc = job->pt->scene;
+    lane *lanes = job->lanes;
+    /* Lane by lane, lowest first, only the lanes each part concerns:
+     * looping over all eight and asking each would branch on random
+     * answers. */
+    for (int left = active & ~hit_lanes; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left); /* left the scene: the environment */
+        vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
+        lanes[k].radiance = vec3_add(lanes[k].radiance, vec3_mul(throughput, sc->environment));
+    }
+    for (int left = job->camera & hit_lanes; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left); /* what the eye sees directly: the emission at the first hit */
+        lanes[k].radiance = (front >> k) & 1 ? sc->materials[material[k]].emission : vec3_splat(0.0f);
+        vec3 direction = vec3_make(L->ray.direction[0][k], L->ray.direction[1][k], L->ray.direction[2][k]);
+        lanes_set(L->wo, k, vec3_normalize(vec3_neg(direction)));
+        lanes[k].emission_counts = false;
+    }
+    job->camera &= ~active;
+    *diffuse = *glossy = *delta = 0;
+    for (int left = hit_lanes; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        const pt_material *m = &sc->materials[material[k]];
+        *diffuse |= (m->kind == BSDF_DIFFUSE) << k;
+        *glossy |= (m->kind == BSDF_GLOSSY) << k;
+        *delta |= bsdf_is_delta(m) << k;
+        if (lanes[k].emission_counts && ((front >> k) & 1)) { /* seen through a mirror or glass */
+            vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
+            lanes[k].radiance = vec3_add(lanes[k].radiance, vec3_mul(throughput, m->emission));
+        }
+        lanes[k].emission_counts = false;
+    }
+}
+
+/* Each lit lane's shadow ray joins the queue. Every surface lane writes its
+ * entry at the end of the queue, and only a lit one moves the end on: no
+ * branch on whether the light sample counted. Without shadows every light
+ * sample counts at once. */
+static void queue_light_samples(row_job *job, const vertex_lanes *L, int surface, int lit)
+{
+    lane *lanes = job->lanes;
+    const int shadows = job->pt->effects & EFFECT_SHADOWS ? lit : 0;
+    for (int left = surface; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left), q = job->queued, is_lit = (shadows >> k) & 1;
+        flat_rays8 *shadow = &job->queue.rays[q / LANES];
+        for (int c = 0; c < 3; c++) {
+            shadow->origin[c][q % LANES] = L->shadow_origin[c][k];
+            shadow->direction[c][q % LANES] = L->shadow_direction[c][k];
+        }
+        shadow->t_min[q % LANES] = L->shadow_t_min[k]; /* ray_spawn_to's */
+        shadow->t_max[q % LANES] = L->shadow_t_max[k];
+        job->queue.contribution[q] = vec3_make(L->contribution[0][k], L->contribution[1][k], L->contribution[2][k]);
+        job->queue.lane[q] = k;
+        job->queue.sample_id[q] = lanes[k].sample_id;
+        job->queued += is_lit;
+        lanes[k].unsettled += is_lit;
+    }
+    job->counters->shadow_rays += (uint64_t)__builtin_popcount((unsigned)shadows);
+    for (int left = lit & ~shadows; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        lanes[k].radiance = vec3_add(lanes[k].radiance,
+                                     vec3_make(L->contribution[0][k], L->contribution[1][k], L->contribution[2][k]));
+    }
+}
+
+/* The glossy lanes' bounces (of `glossy`, those the roulette let go on)
+ * and the mirrors' and glass's, kept aside: bounce_math_avx writes all
+ * eight lanes. Returns the lanes that go on. */
+static int bounces_aside(row_job *job, const vertex_lanes *L, int glossy, int delta, int front,
+                         const int material[LANES], lane_bounce aside[LANES])
+{
+    const pt_material *materials = job->pt->scene->materials;
+    int on = 0;
+    for (int left = glossy; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        on |= (int)bounce_surface_lane(L, k, &materials[material[k]], &aside[k]) << k;
+    }
+    job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)on);
+    for (int left = delta; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        on |= (int)bounce_delta_lane(&job->lanes[k], job->pt, L, k, &materials[material[k]], (front >> k) & 1,
+                                     &aside[k], job->counters)
+              << k;
+    }
+    return on;
+}
+
 /* One row of the image, eight pixels at a time. */
 static void render_row(row_job *job)
 {
@@ -840,47 +933,18 @@ static void render_row(row_job *job)
             active |= (lanes[k].x >= 0) << k;
         if (active == 0)
             return; /* every pixel written, so no shadow ray waits */
-        int material[LANES], front = 0, picked = 0;
+        int material[LANES], front = 0, picked = 0, diffuse, glossy, delta;
         int hit_lanes = closest_hits(job, &L, active, material, &front);
-        /* Lane by lane, lowest first, only the lanes each part concerns:
-         * looping over all eight and asking each would branch on random
-         * answers. */
-        for (int left = active & ~hit_lanes; left != 0; left &= left - 1) {
-            int k = __builtin_ctz((unsigned)left); /* left the scene: the environment */
-            vec3 throughput = vec3_make(L.throughput[0][k], L.throughput[1][k], L.throughput[2][k]);
-            lanes[k].radiance = vec3_add(lanes[k].radiance, vec3_mul(throughput, sc->environment));
-        }
-        for (int left = job->camera & hit_lanes; left != 0; left &= left - 1) {
-            int k = __builtin_ctz((unsigned)left); /* what the eye sees directly: the emission at the first hit */
-            lanes[k].radiance = (front >> k) & 1 ? sc->materials[material[k]].emission : vec3_splat(0.0f);
-            vec3 direction = vec3_make(L.ray.direction[0][k], L.ray.direction[1][k], L.ray.direction[2][k]);
-            lanes_set(L.wo, k, vec3_normalize(vec3_neg(direction)));
-            lanes[k].emission_counts = false;
-        }
-        job->camera &= ~active;
-        /* The materials: diffuse lanes take the AVX route below; glossy
-         * ones, mirrors and glass chapter 09's BSDFs lane by lane. */
-        int diffuse = 0, glossy = 0, delta = 0;
-        for (int left = hit_lanes; left != 0; left &= left - 1) {
-            int k = __builtin_ctz((unsigned)left);
-            const pt_material *m = &sc->materials[material[k]];
-            diffuse |= (m->kind == BSDF_DIFFUSE) << k;
-            glossy |= (m->kind == BSDF_GLOSSY) << k;
-            delta |= bsdf_is_delta(m) << k;
-            if (lanes[k].emission_counts && ((front >> k) & 1)) { /* seen through a mirror or glass */
-                vec3 throughput = vec3_make(L.throughput[0][k], L.throughput[1][k], L.throughput[2][k]);
-                lanes[k].radiance = vec3_add(lanes[k].radiance, vec3_mul(throughput, m->emission));
-            }
-            lanes[k].emission_counts = false;
-        }
+        light_found(job, &L, active, hit_lanes, front, material, &diffuse, &glossy, &delta);
+        /* Diffuse lanes take the AVX route; glossy ones, mirrors and glass
+         * chapter 09's BSDFs lane by lane. Each lane's random numbers, in
+         * shade()'s order: the point on the light, then the roulette and
+         * the next direction. The last do not depend on the light sample,
+         * so they are drawn before its arithmetic, and the light's and the
+         * bounce's arithmetic run back to back, where the processor
+         * overlaps their long chains of divisions and square roots.
+         * Mirrors and glass draw theirs in bounce_delta_lane. */
         const int surface = diffuse | glossy;
-        /* Each lane's random numbers, in shade()'s order: the point on the
-         * light, then the roulette and the next direction. The last do not
-         * depend on the light sample, so they are drawn before its
-         * arithmetic, and the light's and the bounce's arithmetic run back
-         * to back, where the processor overlaps their long chains of
-         * divisions and square roots. Mirrors and glass draw theirs in
-         * bounce_delta_lane. */
         int lit = 0, bounce = 0;
         for (int left = surface; left != 0; left &= left - 1) {
             int k = __builtin_ctz((unsigned)left);
@@ -899,47 +963,9 @@ static void render_row(row_job *job)
             int k = __builtin_ctz((unsigned)left);
             lit |= light_math_surface_lane(&L, k, &sc->materials[material[k]]);
         }
-        /* The other lanes' bounces, kept aside: bounce_math_avx writes all
-         * eight lanes (and reads wo and throughput, which the bounce
-         * replaces with the next vertex's). */
         lane_bounce aside[LANES];
-        int aside_on = 0;
-        for (int left = bounce & glossy; left != 0; left &= left - 1) {
-            int k = __builtin_ctz((unsigned)left);
-            aside_on |= (int)bounce_surface_lane(&L, k, &sc->materials[material[k]], &aside[k]) << k;
-        }
-        for (int left = delta; left != 0; left &= left - 1) {
-            int k = __builtin_ctz((unsigned)left);
-            aside_on |= (int)bounce_delta_lane(&lanes[k], pt, &L, k, &sc->materials[material[k]], (front >> k) & 1,
-                                               &aside[k], job->counters)
-                        << k;
-        }
-        /* Each lit lane's shadow ray joins the queue. Every surface lane
-         * writes its entry at the end of the queue, and only a lit one
-         * moves the end on: no branch on whether the light sample
-         * counted. */
-        const int shadows = pt->effects & EFFECT_SHADOWS ? lit : 0;
-        for (int left = surface; left != 0; left &= left - 1) {
-            int k = __builtin_ctz((unsigned)left), q = job->queued, is_lit = (shadows >> k) & 1;
-            flat_rays8 *shadow = &job->queue.rays[q / LANES];
-            for (int c = 0; c < 3; c++) {
-                shadow->origin[c][q % LANES] = L.shadow_origin[c][k];
-                shadow->direction[c][q % LANES] = L.shadow_direction[c][k];
-            }
-            shadow->t_min[q % LANES] = L.shadow_t_min[k]; /* ray_spawn_to's */
-            shadow->t_max[q % LANES] = L.shadow_t_max[k];
-            job->queue.contribution[q] = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
-            job->queue.lane[q] = k;
-            job->queue.sample_id[q] = lanes[k].sample_id;
-            job->queued += is_lit;
-            lanes[k].unsettled += is_lit;
-        }
-        job->counters->shadow_rays += (uint64_t)__builtin_popcount((unsigned)shadows);
-        for (int left = lit & ~shadows; left != 0; left &= left - 1) { /* no shadows: every light sample counts */
-            int k = __builtin_ctz((unsigned)left);
-            vec3 contribution = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
-            lanes[k].radiance = vec3_add(lanes[k].radiance, contribution);
-        }
+        int aside_on = bounces_aside(job, &L, bounce & glossy, delta, front, material, aside);
+        queue_light_samples(job, &L, surface, lit);
         if (sc->point_light_count > 0) /* lights without area: before the bounce replaces wo and throughput */
             for (int left = surface; left != 0; left &= left - 1) {
                 int k = __builtin_ctz((unsigned)left);
@@ -947,25 +973,24 @@ static void render_row(row_job *job)
             }
 #if WIDE_HAVE_AVX
         if ((bounce & diffuse) != 0 && job->avx)
-            bounce = (bounce & ~diffuse) | bounce_math_avx(&L, bounce & diffuse);
+            bounce = bounce_math_avx(&L, bounce & diffuse);
         else
 #endif
         {
-            int lanes_on = bounce & ~diffuse;
+            int lanes_on = 0;
             for (int left = bounce & diffuse; left != 0; left &= left - 1)
                 lanes_on |= bounce_math_lane(&L, __builtin_ctz((unsigned)left));
             bounce = lanes_on;
         }
-        job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)(bounce & diffuse));
-        job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)(aside_on & glossy));
-        bounce = (bounce & diffuse) | aside_on;
-        for (int left = aside_on; left != 0; left &= left - 1) {
+        job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)bounce);
+        for (int left = aside_on; left != 0; left &= left - 1) { /* the lanes kept aside, back */
             int k = __builtin_ctz((unsigned)left);
             flat_rays8_set(&L.ray, k, aside[k].next);
             lanes_set(L.throughput, k, aside[k].throughput);
             lanes_set(L.wo, k, aside[k].wo);
             lanes[k].emission_counts = (delta >> k) & 1;
         }
+        bounce |= aside_on;
         /* The shadow rays wait until there are eight: a light sample that
          * faces away needs none, so one step's would fill a packet a little
          * over half, and cost as much as a full one. */

@@ -62,8 +62,8 @@ static void report_structures(const pt_scene *sc, bool walls_asked)
         printf("13-production: %d triangles: the flat set (at most 64: every triangle tested, eight rays per AVX "
                "instruction)\n", sc->triangles.count);
     else if (bvh4_is(all))
-        printf("13-production: %d triangles: the 4-wide BVH (more than the 64 the flat set holds), the eight paths' "
-               "rays as streams\n", sc->triangles.count);
+        printf("13-production: %d triangles: the 4-wide BVH (more than the 64 the flat set holds), each lane's ray "
+               "walking it alone\n", sc->triangles.count);
     if (!walls_asked)
         printf("13-production: walls off (--walls off)\n");
     else if (walls_found(sc->bvh))

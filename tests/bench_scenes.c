@@ -5,8 +5,9 @@
  *   --write DIR     the scene set as DIR/NAME.scene + NAME.obj + NAME.mtl
  *                   (what every renderer of the benchmark loads, Cycles too)
  *   --speed         for each scene: seconds per million camera samples (wall
- *                   and this process's CPU time), rays per second and rays
- *                   per sample, 1 and 2 threads, of
+ *                   and this process's CPU time), million rays per second
+ *                   (wall) and per CPU-second, and rays per sample, on 1
+ *                   and 2 threads, of
  *                     13 as run       chapter 13's renderer as its program runs
  *                                     it: eight paths at a time where
  *                                     path_tracer_wide_supported() says so,
@@ -330,8 +331,8 @@ static void speed_scene(bench_scene *b, int size, int spp, int reps, FILE *csv)
     }
     printf("\n%s: %d triangles, %dx%d, %d spp (%.3f M camera samples), best of %d, cases taking turns\n", b->name,
            b->sc.triangles.count, size, size, spp, msamples, reps);
-    printf("%-14s %-9s %7s %11s %11s %11s %9s %8s\n", "renderer", "paths", "threads", "s/M wall", "s/M CPU",
-           "Mrays/s", "rays/spl", "scaling");
+    printf("%-14s %-9s %7s %10s %10s %9s %11s %9s %8s\n", "renderer", "paths", "threads", "s/M wall", "s/M CPU",
+           "Mrays/s", "Mrays/CPUs", "rays/spl", "scaling");
     for (int r = 0; r < R_COUNT; r++) {
         const speed_row *row = &rows[r];
         if (!row->measured) {
@@ -344,9 +345,10 @@ static void speed_scene(bench_scene *b, int size, int spp, int reps, FILE *csv)
             continue;
         }
         for (int t = 0; t < 2; t++) {
-            printf("%-14s %-9s %7d %11.3f %11.3f %11.2f %9.2f %7.2fx\n", RENDERER_LABELS[r],
+            printf("%-14s %-9s %7d %10.3f %10.3f %9.2f %11.2f %9.2f %7.2fx\n", RENDERER_LABELS[r],
                    row->wide ? "8 at once" : "one", t + 1, row->wall[t], row->cpu[t],
-                   row->rays_per_sample / row->wall[t], row->rays_per_sample, row->wall[0] / row->wall[t]);
+                   row->rays_per_sample / row->wall[t], row->rays_per_sample / row->cpu[t], row->rays_per_sample,
+                   row->wall[0] / row->wall[t]);
             if (csv != NULL)
                 fprintf(csv, "%s,%d,%s,%d,%d,%.5f,%.5f,%.4f,%.3f,%d\n", b->name, b->sc.triangles.count,
                         RENDERER_NAMES[r], t + 1, row->wide, row->wall[t], row->cpu[t],

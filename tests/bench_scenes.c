@@ -18,9 +18,9 @@
  *                                     (rtcIntersect1, rtcOccluded1) inside the
  *                                     same walls
  *                     13 on Embree8   eight paths at a time on Embree's
- *                                     rtcIntersect8 and rtcOccluded8: needs
- *                                     chapter 13's eight-ray trace interface
- *                                     (wide_trace.h; branch bench-embree8)
+ *                                     rtcIntersect8 and rtcOccluded8, through
+ *                                     the renderer's eight-ray trace
+ *                                     interface (wide_trace.h)
  *                     09 mis          chapter 09's MIS rung on chapter 06's BVH
  *                   every case taking turns with the others, repeat after
  *                   repeat (A B C D A B C D ...), the best of --reps; then the
@@ -54,6 +54,10 @@
 #include "timer.h"
 #ifdef BENCH_EMBREE
 #include "embree_accel.h"
+/* Eight paths on Embree's eight-ray kernels: chapter 13's renderer takes
+ * another tracer (wide_trace.h: render_estimate_wide_traced). */
+#define BENCH_EMBREE8 1
+#include "13-production/wide_trace.h"
 #endif
 
 /* ---- the renderers ------------------------------------------------------------ */
@@ -118,15 +122,94 @@ static void bench_scene_free(bench_scene *b)
     pt_scene_free(&b->sc);
 }
 
+#ifdef BENCH_EMBREE8
+/* ---- Embree's eight-ray kernels as a wide_tracer --------------------------------
+ * rtcIntersect8 and rtcOccluded8 on the lanes of `active`, over the
+ * Embree scene of an embree_accel (context): the triangle's index, t and
+ * barycentrics as flat_hits8 wants them. */
 
-/* The row "13 on Embree8" (eight paths on Embree's rtcIntersect8 and
- * rtcOccluded8) needs chapter 13's eight-ray trace interface
- * (wide_trace.h, render_estimate_wide_traced), which this tree does not
- * have yet: branch bench-embree8 adds it on top of it. */
+static void embree_rays8(const flat_rays8 *rays, int active, int valid[8], struct RTCRay8 *e)
+{
+    for (int k = 0; k < 8; k++) {
+        valid[k] = (active >> k & 1) ? -1 : 0;
+        e->org_x[k] = rays->origin[0][k];
+        e->org_y[k] = rays->origin[1][k];
+        e->org_z[k] = rays->origin[2][k];
+        e->dir_x[k] = rays->direction[0][k];
+        e->dir_y[k] = rays->direction[1][k];
+        e->dir_z[k] = rays->direction[2][k];
+        e->tnear[k] = rays->t_min[k];
+        e->tfar[k] = rays->t_max[k];
+        e->time[k] = 0.0f;
+        e->mask[k] = 0xFFFFFFFFu;
+        e->id[k] = (unsigned)k;
+        e->flags[k] = 0;
+    }
+}
+
+static int embree8_closest_hit(const void *context, const flat_rays8 *rays, int active, flat_hits8 *hits,
+                               ray_counters *counters)
+{
+    (void)counters;
+    const embree_accel *ea = context;
+    _Alignas(32) int valid[8];
+    struct RTCRayHit8 rh;
+    embree_rays8(rays, active, valid, &rh.ray);
+    for (int k = 0; k < 8; k++) {
+        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcIntersect8(valid, ea->scene, &ctx, &rh);
+    int hit = 0;
+    for (int k = 0; k < 8; k++)
+        if ((active >> k & 1) && rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID) {
+            hits->index[k] = (int32_t)rh.hit.primID[k];
+            hits->t[k] = rh.ray.tfar[k];
+            hits->b1[k] = rh.hit.u[k];
+            hits->b2[k] = rh.hit.v[k];
+            hit |= 1 << k;
+        }
+    return hit;
+}
+
+static int embree8_any_hit(const void *context, const flat_rays8 *rays, int active, ray_counters *counters)
+{
+    (void)counters;
+    const embree_accel *ea = context;
+    _Alignas(32) int valid[8];
+    struct RTCRay8 e;
+    embree_rays8(rays, active, valid, &e);
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcOccluded8(valid, ea->scene, &ctx, &e);
+    int blocked = 0;
+    for (int k = 0; k < 8; k++)
+        blocked |= ((active >> k & 1) && e.tfar[k] < 0.0f) << k; /* occluded: tfar set to -inf */
+    return blocked;
+}
+
+/* The tracers of the scene's Embree structure (walls over Embree, as
+ * wide_scene_tracers_for() makes them of ours). */
+static wide_scene_tracers embree8_tracers(const accel *walls)
+{
+    wide_scene_tracers t;
+    t.all = (wide_tracer){embree8_closest_hit, embree8_any_hit, walls_all(walls), "Embree rtcIntersect8"};
+    t.walls = walls_found(walls) ? walls : NULL;
+    t.occluders = t.walls != NULL ? (wide_tracer){embree8_closest_hit, embree8_any_hit, walls_occluders(walls),
+                                                  "Embree rtcIntersect8"}
+                                  : wide_tracer_for(NULL);
+    return t;
+}
+#endif
+
 static bool renderer_available(const bench_scene *b, renderer_kind r)
 {
+#ifndef BENCH_EMBREE8
     if (r == R_EMBREE8)
         return false;
+#endif
     return (r != R_EMBREE && r != R_EMBREE8) || b->structures[ON_EMBREE] != NULL;
 }
 
@@ -158,6 +241,13 @@ static render_run render_once(bench_scene *b, renderer_kind r, const camera *cam
     double cpu_start = experiment_cpu_seconds();
     run.wide = r == R_CH13 && path_tracer_wide_supported(&pt, NULL, 0) &&
                render_estimate_wide(&pt, cam, spp, seed, threads, e);
+#ifdef BENCH_EMBREE8
+    if (r == R_EMBREE8) {
+        wide_scene_tracers t = embree8_tracers(b->structures[ON_EMBREE]);
+        run.wide = path_tracer_wide_supported(&pt, NULL, 0) &&
+                   render_estimate_wide_traced(&pt, &t, cam, spp, seed, threads, e);
+    }
+#endif
     if (!run.wide)
         *e = render_estimate(&pt, cam, spp, seed, threads);
     run.cpu = experiment_cpu_seconds() - cpu_start;
@@ -249,7 +339,7 @@ static void speed_scene(bench_scene *b, int size, int spp, int reps, FILE *csv)
             printf("%-14s %s\n", RENDERER_LABELS[r],
                    r == R_CH13_ONE_PATH ? "(13 as run is one path at a time here)"
                    : r == R_EMBREE8 && !renderer_available(b, R_EMBREE8)
-                       ? "(not here: needs chapter 13's eight-ray trace interface, wide_trace.h)"
+                       ? "(no Embree: make bench-deps)"
                    : r == R_EMBREE8 ? "(13 as run is one path at a time here)"
                                     : "(no Embree: make bench-deps)");
             continue;
@@ -383,10 +473,12 @@ static int parse_options(int argc, char **argv, bench_options *o)
         return 2;
     }
 #endif
+#ifndef BENCH_EMBREE8
     if (o->mode == MODE_RENDER && o->renderer == R_EMBREE8) {
-        fprintf(stderr, "bench_scenes: --renderer ch13-embree8: needs chapter 13's wide_trace.h (branch bench-embree8)\n");
+        fprintf(stderr, "bench_scenes: --renderer ch13-embree8: built without Embree (make bench-deps)\n");
         return 2;
     }
+#endif
     return 0;
 }
 

@@ -808,6 +808,30 @@ static void test_one_sided_emitter(void **state)
     pt_scene_free(&sc);
 }
 
+/* The slide's ray_generation adds shade(p, wo) only, the light reflected
+ * at p, so a lamp seen directly renders black (as in the course's
+ * assignment). The lecture rung adds the emission at the first hit: a lamp
+ * that reflects nothing, seen from the front, is its L_e in every pixel,
+ * where the slide's version would give 0. */
+static void test_lecture_rung_sees_the_lamp_directly(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_init(&sc);
+    int light = pt_scene_add_material(&sc, pt_emitter(vec3_splat(0.0f), vec3_splat(3.0f)));
+    pt_scene_add_quad(&sc, vec3_make(-1, 1, -1), vec3_make(1, 1, -1), vec3_make(1, 1, 1), vec3_make(-1, 1, 1), light);
+    pt_scene_finish(&sc);
+    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+    sc.eye = vec3_make(0, -3, 0.01f);
+    sc.target = vec3_make(0, 1, 0);
+    render_result r = render(&pt, 4, 4, 4, 93, 1);
+    vec3 centre = image_get(&r.mean, 2, 2);
+    assert_close(centre.x, 3.0, 1e-5);
+    assert_close(centre.y, 3.0, 1e-5);
+    render_result_free(&r);
+    pt_scene_free(&sc);
+}
+
 static void test_ggx_sampling_matches_its_pdf(void **state)
 {
     (void)state;
@@ -1590,6 +1614,7 @@ int main(void)
         cmocka_unit_test(test_an_emitting_mesh_casts_shadows),
         cmocka_unit_test(test_chapter_06s_bvh_is_what_chapter_09_traces),
         cmocka_unit_test(test_furnace_every_pixel_is_one),
+        cmocka_unit_test(test_lecture_rung_sees_the_lamp_directly),
         cmocka_unit_test(test_scene_files_render_the_built_in_scenes),
         cmocka_unit_test(test_direct_light_only_equals_depth_one),
         cmocka_unit_test(test_point_light_in_a_sphere_needs_no_shadow_ray),

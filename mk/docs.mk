@@ -89,19 +89,19 @@ $(DOCS)/book.css: docs/book.css | docs-deps
 	cp $< $@
 
 $(DOCS)/%.html: chapters/%/README.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(wildcard $(BUILD)/plots/*.md) $(DOCS)/book.css
-	$(DOC_PANDOC) -f gfm -M page=chapter -M chapter=$* -M files="$(notdir $(wildcard chapters/$*/*.[ch]))" $< -o $@
+	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=chapter -M chapter=$* -M files="$(notdir $(wildcard chapters/$*/*.[ch]))" $< -o $@
 
 # The index shows each chapter's picture: it waits for them (with -j, it
 # was made before them and refused, naming the missing images).
 $(DOCS)/index.html: docs/index.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOCS)/book.css
-	$(DOC_PANDOC) -f gfm -M page=index -M chapter= $< -o $@
+	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=index -M chapter= $< -o $@
 
 # The notes beside the chapters: the scene format and the hard-case catalog.
 $(patsubst %,$(DOCS)/%.html,$(DOC_NOTES)): $(DOCS)/%.html: docs/%.md $(DOC_INPUTS) $(DOCS)/book.css
-	$(DOC_PANDOC) -f gfm -M page=note -M chapter= $< -o $@
+	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=note -M chapter= $< -o $@
 
 $(DOCS)/coverage.html: docs/coverage.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(DOCS)/book.css
-	$(DOC_PANDOC) -f gfm -M page=coverage -M chapter= $< -o $@
+	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=coverage -M chapter= $< -o $@
 
 # The checks fail when they should: a coverage row naming a function that
 # does not exist, an excerpt whose function is gone (each must name its file
@@ -112,7 +112,7 @@ test-docs: docs | docs-deps
 	@mkdir -p $(DOCS_TEST)
 	@for bad in tests/docs/bad_*.md; do \
 	  want=$$(sed -n 's/^<!-- expect: \(.*\) -->$$/\1/p' $$bad); \
-	  if $(DOC_PANDOC) -f gfm -M page=$$(sed -n 's/^<!-- page: \(.*\) -->$$/\1/p' $$bad) \
+	  if $(DOC_PANDOC) -f gfm+tex_math_dollars -M page=$$(sed -n 's/^<!-- page: \(.*\) -->$$/\1/p' $$bad) \
 	       -M chapter=$$(sed -n 's/^<!-- chapter: \(.*\) -->$$/\1/p' $$bad) \
 	       $$bad -o $(DOCS_TEST)/bad.html 2> $(DOCS_TEST)/bad.log; then \
 	    echo "FAIL: $$bad was accepted"; exit 1; fi; \

@@ -46,7 +46,9 @@ docs: $(DOC_PAGES)
 # shows (the READMEs link them, so that they read with their pictures on any
 # Git host, without a build): each made again from the build's own (the
 # program's picture, or the plot, from the data `make plots` has: quick, or
-# FULL=1), renders shrunk to at most FIGURE_WIDTH pixels wide, plots to PLOT_WIDTH.
+# FULL=1), renders shrunk to at most FIGURE_WIDTH pixels wide, plots and strips
+# of small renders side by side (*_strip.png: their panels are small already)
+# to PLOT_WIDTH.
 # docs/img/SOURCES says where each copy came from and how its data was made.
 FIGURE_WIDTH ?= 320
 PLOT_WIDTH ?= 800
@@ -58,7 +60,9 @@ figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
 	  > docs/img/SOURCES.tmp
 	@for f in $(notdir $(COMMITTED_FIGURES)); do \
 	  if grep -q "^out/$$f " docs/figures.txt; then \
-	    src=out/$$f; width=$(FIGURE_WIDTH); run="rendered (at most $(FIGURE_WIDTH) px wide here)"; \
+	    src=out/$$f; width=$(FIGURE_WIDTH); \
+	    case $$f in *_strip.png) width=$(PLOT_WIDTH);; esac; \
+	    run="rendered (at most $$width px wide here)"; \
 	  else \
 	    src=plots/$$f; width=$(PLOT_WIDTH); n=$$(echo $$f | sed -n 's/^ch\([0-9][0-9]\)_.*/\1/p'); \
 	    rec=accel; [ -z "$$n" ] || rec=ch$$n; \

@@ -26,7 +26,7 @@ DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.tx
 # diagram of it (docs/diagrams/*.svg), or the weave stops.
 # A chapter page prints on at most this many pages of A4 (make test-docs).
 DOC_MAX_PRINTED := 20
-DIAGRAM_CHAPTERS := 01 02 03 04 05 06 07 09
+DIAGRAM_CHAPTERS := 01 02 03 04 05 06 07 08 09 10 11 12
 DOC_ROOT = $(shell realpath -m --relative-to=$(DOCS) .)
 DOC_PANDOC = pandoc --fail-if-warnings --mathml --standalone --template docs/template.html \
   --lua-filter docs/weave.lua -M chapters="$(CHAPTERS)" -M build=$(BUILD) -M docs=$(DOCS) \

@@ -462,6 +462,11 @@ int main(int argc, char **argv)
                      "each panel labelled. --width and --height are one panel's size.",
                      extras, sizeof extras / sizeof extras[0], NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    if (opts.scene != NULL) { /* say so rather than ignore it */
+        fprintf(stderr, "%s: --scene: the strips show the chapters' built-in scenes; render a scene file with\n"
+                        "09-path-tracing --scene FILE --spp N for each N\n", PROGRAM);
+        return 2;
+    }
     const char *defaults[] = {"1,4,16,64,256", "0.2,0.5,0.8,1", "1,4,16,64,256"};
     double counts[MAX_PANELS];
     int n;

@@ -121,27 +121,38 @@ static int program_explain(const cli_options *opts, const char *label, const ren
  * numbers from its own counters and the pixels' own streams, so the image
  * is untouched. Only renders of more than LONG_RENDER_PIXELS pixels are
  * piloted: smaller ones end before a warning would help. */
-enum { PILOT_PIXELS = 64, LONG_RENDER_PIXELS = 16384 };
+enum { PILOT_PIXELS = 8 * 8, LONG_RENDER_PIXELS = 16384 };
 static const double LONG_RENDER_SECONDS = 60.0;
 
-static void warn_if_long(const cli_options *opts, const char *label, const render_job *job)
+double program_pilot_seconds(const render_job *job)
 {
     long pixels = (long)job->cam->width * job->cam->height;
-    if (opts->quiet || pixels < LONG_RENDER_PIXELS)
-        return;
+    if (pixels < LONG_RENDER_PIXELS)
+        return 0.0;
     ray_counters ignored;
     memset(&ignored, 0, sizeof ignored);
     double start = timer_seconds();
+    /* An 8 x 8 grid of pixels, each at the centre of its cell: every part
+     * of the picture has its say, the sky and the model alike. */
     for (int k = 0; k < PILOT_PIXELS; k++) {
-        long i = (long)((double)k * (double)pixels / PILOT_PIXELS);
-        render_pixel(job, (int)(i % job->cam->width), (int)(i / job->cam->width), &ignored, NULL);
+        int x = (int)(((double)(k % 8) + 0.5) * job->cam->width / 8.0);
+        int y = (int)(((double)(k / 8) + 0.5) * job->cam->height / 8.0);
+        render_pixel(job, x, y, &ignored, NULL);
     }
+    return (timer_seconds() - start) / PILOT_PIXELS * (double)pixels;
+}
+
+void program_warn_if_long(const cli_options *opts, const char *label, double one_thread_seconds)
+{
     int threads = opts->threads > 0 ? opts->threads : omp_get_max_threads();
-    double estimate = (timer_seconds() - start) / PILOT_PIXELS * (double)pixels / threads;
-    if (estimate > LONG_RENDER_SECONDS)
-        fprintf(stderr, "%s: warning: this render will take about %.0f minutes on %d threads (from a pilot of %d "
-                "pixels): a smaller --width, --height or --spp first, or a chapter with an acceleration structure "
-                "(06, 09, 13) for a large mesh\n", label, estimate / 60.0, threads, PILOT_PIXELS);
+    double estimate = one_thread_seconds / threads;
+    if (opts->quiet || estimate <= LONG_RENDER_SECONDS)
+        return;
+    bool minutes = estimate >= 120.0;
+    fprintf(stderr, "%s: warning: this render will take about %.0f %s on %d threads (from a pilot of %d "
+            "pixels): a smaller --width, --height or --spp first, or a chapter with an acceleration structure "
+            "(06, 09, 13) for a large mesh\n", label, minutes ? estimate / 60.0 : estimate,
+            minutes ? "minutes" : "seconds", threads, PILOT_PIXELS);
 }
 
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
@@ -166,7 +177,8 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
                       .sample = sample};
     if (opts->explain)
         return program_explain(opts, label, &job, stats_out);
-    warn_if_long(opts, label, &job);
+    if (!opts->quiet)
+        program_warn_if_long(opts, label, program_pilot_seconds(&job));
     image img = image_make(cam->width, cam->height);
     if (img.rgb == NULL) {
         fprintf(stderr, "%s: out of memory for a %dx%d image\n", label, cam->width, cam->height);

@@ -73,7 +73,7 @@ plot-tables:
 	  name=$$(basename $$t .table); rec=$(BUILD)/data/$${name%%_*}.run; \
 	  { awk -v data_dir='$(BUILD)/data' -f plots/tables.awk -f $$t && echo && \
 	    printf '*Measured by the run that drew the figure: `%s` (%s data%s).*\n' "$$(cut -f2 $$rec)" \
-	      "$$(cut -f1 $$rec)" "$$(grep -q ^quick $$rec && echo ': small images, short references; make plots FULL=1 for the full size')"; \
+	      "$$(cut -f1 $$rec)" "$$(grep -q ^quick $$rec && echo ': a smaller, rougher run; make plots FULL=1 for the full size')"; \
 	  } > $(BUILD)/plots/$$name.md.tmp && mv $(BUILD)/plots/$$name.md.tmp $(BUILD)/plots/$$name.md || exit 1; \
 	  echo "awk -f $$t > build/plots/$$name.md"; \
 	done

@@ -56,3 +56,14 @@ function runs_longest(n,    k, t) {
 function error_text(x) { return x >= 0.01 ? sprintf("%.3f", x) : sprintf("%.1e", x) }
 # A time: "0.25 s", or "–" for never.
 function time_text(t) { return t < 0 ? "–" : sprintf("%.2f s", t) }
+
+# A whole number as superscript digits (10⁷), which every Markdown shows.
+function superscript(n,    s, d, k) {
+    split("⁰ ¹ ² ³ ⁴ ⁵ ⁶ ⁷ ⁸ ⁹", d, " ")
+    s = ""
+    n = sprintf("%d", n)
+    for (k = 1; k <= length(n); k++) s = s (substr(n, k, 1) == "-" ? "⁻" : d[substr(n, k, 1) + 1])
+    return s
+}
+# A signed number with the minus sign typography uses (−0.50).
+function signed(x, format) { return x < 0 ? "−" sprintf(format, -x) : sprintf(format, x) }

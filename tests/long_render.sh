@@ -31,7 +31,7 @@ renders=(
     "11-bidirectional --integrator pt"
     "12-metropolis"
     "12-metropolis --path-trace"
-    # "13-production" (eight paths at a time): with the renderer of every scene
+    "13-production"
     "13-production --one-path"
 )
 

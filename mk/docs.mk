@@ -26,7 +26,7 @@ DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.tx
 # diagram of it (docs/diagrams/*.svg), or the weave stops.
 # A chapter page prints on at most this many pages of A4 (make test-docs).
 DOC_MAX_PRINTED := 20
-DIAGRAM_CHAPTERS := 01 02 03 04 05 06 07 09
+DIAGRAM_CHAPTERS := 01 02 03 04 05 06 07 08 09 10 11 12
 DOC_ROOT = $(shell realpath -m --relative-to=$(DOCS) .)
 DOC_PANDOC = pandoc --fail-if-warnings --mathml --standalone --template docs/template.html \
   --lua-filter docs/weave.lua -M chapters="$(CHAPTERS)" -M build=$(BUILD) -M docs=$(DOCS) \
@@ -46,7 +46,9 @@ docs: $(DOC_PAGES)
 # shows (the READMEs link them, so that they read with their pictures on any
 # Git host, without a build): each made again from the build's own (the
 # program's picture, or the plot, from the data `make plots` has: quick, or
-# FULL=1), renders shrunk to at most FIGURE_WIDTH pixels wide, plots to PLOT_WIDTH.
+# FULL=1), renders shrunk to at most FIGURE_WIDTH pixels wide, plots and strips
+# of small renders side by side (*_strip.png: their panels are small already)
+# to PLOT_WIDTH.
 # docs/img/SOURCES says where each copy came from and how its data was made.
 FIGURE_WIDTH ?= 320
 PLOT_WIDTH ?= 800
@@ -60,7 +62,9 @@ figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
 	  > docs/img/SOURCES.tmp
 	@for f in $(notdir $(COMMITTED_FIGURES)); do \
 	  if grep -q "^out/$$f " docs/figures.txt; then \
-	    src=out/$$f; width=$(FIGURE_WIDTH); run="rendered (at most $(FIGURE_WIDTH) px wide here)"; \
+	    src=out/$$f; width=$(FIGURE_WIDTH); \
+	    case $$f in *_strip.png) width=$(PLOT_WIDTH);; esac; \
+	    run="rendered (at most $$width px wide here)"; \
 	  else \
 	    src=plots/$$f; width=$(PLOT_WIDTH); n=$$(echo $$f | sed -n 's/^ch\([0-9][0-9]\)_.*/\1/p'); \
 	    rec=accel; [ -z "$$n" ] || rec=ch$$n; \

@@ -134,9 +134,20 @@ void bvh4_packet_set_lane(bvh4_packet *packet, int k, const triangle *tri, int i
 /* The bvh4's accel_ops.use_triangle_test: rewrites every lane for `test`. */
 bool bvh4_use_triangle_test(accel *a, triangle_test test);
 
+/* Is the AVX path compiled in? It is chosen at run time, where the
+ * processor has AVX (bvh4_set_kernel). */
+#if BVH4_HAVE_SSE && defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
+#define BVH4_HAVE_AVX 1
+#else
+#define BVH4_HAVE_AVX 0
+#endif
+
 /* Which code tests boxes and triangles: the SSE intrinsics, or a plain C
- * loop over the four lanes with the same arithmetic (the same answers). */
-typedef enum { BVH4_KERNEL_SSE, BVH4_KERNEL_SCALAR } bvh4_kernel;
+ * loop over the four lanes with the same arithmetic (the same answers), or
+ * AVX: the eight boxes of an 8-wide node in one slab test of eight lanes,
+ * the same operations lane by lane, so again the same answers (triangles
+ * as with SSE, in AVX's encoding). */
+typedef enum { BVH4_KERNEL_SSE, BVH4_KERNEL_SCALAR, BVH4_KERNEL_AVX } bvh4_kernel;
 
 typedef struct {
     accel base;
@@ -157,9 +168,11 @@ accel *bvh4_build(const triangle_set *set, bvh_split split);
 bool bvh4_is(const accel *a);
 
 /* Switch the kernel of a built bvh4; returns false (and changes nothing)
- * for BVH4_KERNEL_SSE when it is not compiled in. The default is SSE where
- * compiled in. */
+ * for a kernel not compiled in or that this processor cannot run
+ * (bvh4_kernel_runs). The default is the fastest that runs: AVX, SSE,
+ * scalar. */
 bool bvh4_set_kernel(accel *a, bvh4_kernel kernel);
+bool bvh4_kernel_runs(bvh4_kernel kernel);
 
 /* The two tests the traversal runs, on their own (for the tests): the slab
  * test of a node's BVH4_WIDTH boxes, as bvh_slab_test() does for one, returning

@@ -301,6 +301,8 @@ accel *bvh4_build(const triangle_set *set, bvh_split split)
     free(c.packets);
     accel_destroy(binary_accel);
     bvh4_use_triangle_test(&b->base, TRIANGLE_TEST_WATERTIGHT); /* the lanes' coordinates */
+    if (bvh4_kernel_runs(BVH4_KERNEL_AVX))
+        bvh4_set_kernel(&b->base, BVH4_KERNEL_AVX);
 
     b->base.stats.name = split == BVH_SPLIT_SAH ? "bvh4 sah" : "bvh4 median";
     b->base.stats.bytes = sizeof *b + (size_t)b->node_count * sizeof(bvh4_node) +

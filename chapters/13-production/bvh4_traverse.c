@@ -517,6 +517,24 @@ static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool 
 #endif
             mask = slab_test4_scalar(node, &w->r4, w->r.t_min, cull, t_enter);
         w->box_tests += (uint64_t)child_count(node);
+        if (mask != 0 && stop_at_first) {
+            /* Any hit: every child hit may end the walk, whichever is
+             * first; no order to sort. Visit the nearest (the likeliest to
+             * block), push the others as they come. */
+            int k = lowest_bit((unsigned)mask);
+            mask &= mask - 1;
+            while (mask != 0) {
+                int j = lowest_bit((unsigned)mask);
+                mask &= mask - 1;
+                bool nearer = t_enter[j] < t_enter[k];
+                int pushed = nearer ? k : j;
+                k = nearer ? j : k;
+                prefetch_child(b, node->child[pushed]);
+                w->stack[w->top++] = (bvh4_entry){node->child[pushed], t_enter[pushed]};
+            }
+            w->current = node->child[k];
+            return true;
+        }
         if (mask != 0) {
             int k = lowest_bit((unsigned)mask);
             mask &= mask - 1;

@@ -73,10 +73,11 @@ static inline int bvh4_leaf_first_packet(uint32_t ref) { return (int)(ref & ((1u
 
 /* One node: the boxes of its BVH4_WIDTH children, by plane then by child
  * (bounds[0][k] is child k's lo.x; 0..2 lo x, y, z, 3..5 hi x, y, z, the
- * order of bvh_node.bounds), and the child references. Children come
- * first, empty slots last. Aligned to a cache line and a whole number of
- * them: 128 bytes for 4 children (112 would do, but then half the nodes
- * would straddle three cache lines instead of two), 256 for 8 (224). */
+ * order of bvh_node.bounds), the child references, children first, empty
+ * slots last, and how many are children. Aligned to a cache line and a
+ * whole number of them: 128 bytes for 4 children (116 would do, but then
+ * half the nodes would straddle three cache lines instead of two), 256 for
+ * 8 (228). */
 #ifndef BVH4_WIDTH
 #define BVH4_WIDTH 8
 #endif
@@ -84,6 +85,7 @@ _Static_assert(BVH4_WIDTH == 4 || BVH4_WIDTH == 8, "a node holds 4 or 8 children
 typedef struct {
     _Alignas(64) float bounds[6][BVH4_WIDTH]; /* one SSE load per plane and group of 4 */
     uint32_t child[BVH4_WIDTH];
+    uint32_t children; /* how many slots are not empty (in the padding: for the counters) */
 } bvh4_node;
 
 _Static_assert(sizeof(bvh4_node) % 64 == 0, "a node is whole cache lines");

@@ -458,15 +458,6 @@ static ALWAYS_INLINE bool test_leaf4(const bvh4 *b, uint32_t ref, const bvh4_ray
     return false;
 }
 
-/* Real children of a node (the empty slots come last). */
-static inline int child_count(const bvh4_node *node)
-{
-    int count = 1;
-    for (int k = 1; k < BVH4_WIDTH; k++)
-        count += node->child[k] != BVH4_EMPTY;
-    return count;
-}
-
 /* One ray's walk through the tree, as data: what the loop of a traversal
  * keeps between one node and the next. Kept in a struct, rather than in
  * local variables, so that several rays can take turns (the stream below);
@@ -516,7 +507,7 @@ static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool 
         else
 #endif
             mask = slab_test4_scalar(node, &w->r4, w->r.t_min, cull, t_enter);
-        w->box_tests += (uint64_t)child_count(node);
+        w->box_tests += node->children;
         if (mask != 0 && stop_at_first) {
             /* Any hit: every child hit may end the walk, whichever is
              * first; no order to sort. Visit the nearest (the likeliest to

@@ -1466,7 +1466,7 @@ static void test_eight_paths_agree_with_chapter_09_on_every_scene(void **state)
     build_every_scene(&mesh, 0, 0);
     use_production(&mesh, true);
     assert_true(mesh.triangles.count > 64 && bvh4_is(walls_all(mesh.bvh)));
-    assert_string_equal(wide_scene_tracers_for(&mesh).all.name, "the 4-wide BVH, each lane's ray walking it alone");
+    assert_string_equal(wide_scene_tracers_for(&mesh).all.name, "the " BVH4_NAME ", each lane's ray walking it alone");
     pt_scene_free(&mesh);
     for (int scene = 0; scene < 3; scene++)
         assert_image_check(every_scene_check(scene, 0, RR_FIXED, PT_SAMPLER_RANDOM, 171 + 2 * (uint64_t)scene),
@@ -1896,7 +1896,7 @@ static void leak_through_eight_paths(leak_tally *t, const pt_scene *sc, const le
     assert_false(walls_found(sc->bvh));
     assert_null(trace.walls);
     const accel *all = walls_all(sc->bvh);
-    leak_through_tracer(t, flat_is(all) ? "flat set" : "4-wide BVH", sc, &trace.all, c);
+    leak_through_tracer(t, flat_is(all) ? "flat set" : BVH4_NAME, sc, &trace.all, c);
     if (bvh4_is(all)) {
         wide_tracer streams = wide_tracer_streams(all);
         leak_through_tracer(t, "4-wide BVH streams", sc, &streams, c);

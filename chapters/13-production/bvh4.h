@@ -82,6 +82,13 @@ static inline int bvh4_leaf_first_packet(uint32_t ref) { return (int)(ref & ((1u
 #define BVH4_WIDTH 8
 #endif
 _Static_assert(BVH4_WIDTH == 4 || BVH4_WIDTH == 8, "a node holds 4 or 8 children");
+/* How the program names the tree it built, by its width. */
+#if BVH4_WIDTH == 8
+#define BVH4_NAME "8-wide BVH"
+#else
+#define BVH4_NAME "4-wide BVH"
+#endif
+
 typedef struct {
     _Alignas(64) float bounds[6][BVH4_WIDTH]; /* one SSE load per plane and group of 4 */
     uint32_t child[BVH4_WIDTH];

@@ -22,6 +22,9 @@
 /* traverse4(), test_leaf4() and triangle_test4() are inlined into each of
  * their callers, so that `sse`, `watertight` and `stop_at_first` are
  * constants there and the compiler drops the branches on them. */
+/* Code compiled for AVX, called only where the processor has it. */
+#define AVX_CODE __attribute__((target("avx")))
+
 #if defined(__GNUC__)
 #define ALWAYS_INLINE inline __attribute__((always_inline))
 #else
@@ -148,7 +151,7 @@ static inline int slab_test4_sse(const bvh4_node *node, const bvh4_ray *r, float
  * for every box. The empty slots' boxes (+inf, -inf) fail as in the SSE
  * test. Its target is AVX, so it is not always_inline: it is inlined into
  * the AVX entry points (flatten), which alone call it. */
-__attribute__((target("avx"))) static inline int slab_test_avx(const bvh4_node *node, const bvh4_ray *r, float t_min,
+AVX_CODE static inline int slab_test_avx(const bvh4_node *node, const bvh4_ray *r, float t_min,
                                                                 float t_max, float t_enter[BVH4_WIDTH])
 {
 #if BVH4_WIDTH == 8
@@ -178,7 +181,7 @@ __attribute__((target("avx"))) static inline int slab_test_avx(const bvh4_node *
 #endif
 }
 
-__attribute__((target("avx"), noinline)) static int slab_test_avx_alone(const bvh4_node *node, const bvh4_ray *r,
+AVX_CODE __attribute__((noinline)) static int slab_test_avx_alone(const bvh4_node *node, const bvh4_ray *r,
                                                                          float t_min, float t_max,
                                                                          float t_enter[BVH4_WIDTH])
 {
@@ -654,13 +657,13 @@ static bvh4_found any_sse(const accel *a, const ray *r, ray_counters *counters)
 #endif
 
 #if BVH4_HAVE_AVX
-__attribute__((target("avx"), flatten)) static bvh4_found closest_avx(const accel *a, const ray *r,
+AVX_CODE __attribute__((flatten)) static bvh4_found closest_avx(const accel *a, const ray *r,
                                                                       ray_counters *counters)
 {
     return traverse4_with(a, r, false, true, true, counters);
 }
 
-__attribute__((target("avx"), flatten)) static bvh4_found any_avx(const accel *a, const ray *r, ray_counters *counters)
+AVX_CODE __attribute__((flatten)) static bvh4_found any_avx(const accel *a, const ray *r, ray_counters *counters)
 {
     return traverse4_with(a, r, true, true, true, counters);
 }
@@ -828,7 +831,7 @@ static ALWAYS_INLINE void stream4_with(const bvh4 *b, const ray *rays, int count
 }
 
 #if BVH4_HAVE_AVX
-__attribute__((target("avx"), flatten)) static void stream4_avx(const bvh4 *b, const ray *rays, int count,
+AVX_CODE __attribute__((flatten)) static void stream4_avx(const bvh4 *b, const ray *rays, int count,
                                                                 hit_record *hits, bool *hit_found, bvh4_found *raw,
                                                                 bool stop_at_first, ray_counters *counters)
 {

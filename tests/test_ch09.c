@@ -25,6 +25,7 @@
 #include "08-monte-carlo/estimators.h"
 #include "08-monte-carlo/sampling.h"
 #include "effects.h"
+#include "explain.h"
 #include "render.h"
 #include "scene_file.h"
 #include "stats.h"
@@ -806,6 +807,74 @@ static void test_one_sided_emitter(void **state)
         assert_close(above.mean.rgb[i], 0.0, 0.0);
     render_result_free(&above);
     pt_scene_free(&sc);
+}
+
+/* The slide's ray_generation adds shade(p, wo) only, the light reflected
+ * at p, so a lamp seen directly renders black (as in the course's
+ * assignment). The lecture rung adds the emission at the first hit: a lamp
+ * that reflects nothing, seen from the front, is its L_e in every pixel,
+ * where the slide's version would give 0. */
+static void test_lecture_rung_sees_the_lamp_directly(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_init(&sc);
+    int light = pt_scene_add_material(&sc, pt_emitter(vec3_splat(0.0f), vec3_splat(3.0f)));
+    pt_scene_add_quad(&sc, vec3_make(-1, 1, -1), vec3_make(1, 1, -1), vec3_make(1, 1, 1), vec3_make(-1, 1, 1), light);
+    pt_scene_finish(&sc);
+    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+    sc.eye = vec3_make(0, -3, 0.01f);
+    sc.target = vec3_make(0, 1, 0);
+    render_result r = render(&pt, 4, 4, 4, 93, 1);
+    vec3 centre = image_get(&r.mean, 2, 2);
+    assert_close(centre.x, 3.0, 1e-5);
+    assert_close(centre.y, 3.0, 1e-5);
+    render_result_free(&r);
+    pt_scene_free(&sc);
+}
+
+/* What --explain prints for one Cornell box pixel with `integrator`, in a
+ * buffer of `size` bytes. */
+static void explain_pixel(pt_integrator integrator, char *text, size_t size)
+{
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    path_tracer pt = tracer(&sc, integrator, RR_FIXED);
+    camera cam = pt_scene_camera(&sc, 64, 64);
+    render_job job = {.cam = &cam, .spp = 8, .seed = 1, .threads = 1, .quiet = true,
+                      .radiance = path_trace_radiance, .scene = &pt, .jitter = true};
+    FILE *out = tmpfile();
+    assert_non_null(out);
+    ray_counters counters;
+    memset(&counters, 0, sizeof counters);
+    explain_begin(out);
+    render_pixel(&job, 32, 40, &counters, NULL);
+    explain_end();
+    rewind(out);
+    size_t n = fread(text, 1, size - 1, out);
+    text[n] = '\0';
+    fclose(out);
+    pt_scene_free(&sc);
+}
+
+/* --explain shows each rung's own arithmetic: the lecture's light sample in
+ * the slide's area form (pdf_light per unit area, cos theta'), the cosine
+ * rung's per steradian with no MIS weight, MIS's with its weight. The twin:
+ * the MIS rung's text has the weight the others must not print. */
+static void test_explain_shows_each_rungs_light_sample(void **state)
+{
+    (void)state;
+    static char text[1 << 16];
+    explain_pixel(PT_LECTURE, text, sizeof text);
+    assert_non_null(strstr(text, "pdf_light"));
+    assert_non_null(strstr(text, "per unit area"));
+    assert_null(strstr(text, "per sr"));
+    assert_null(strstr(text, "MIS weight"));
+    explain_pixel(PT_COSINE, text, sizeof text);
+    assert_non_null(strstr(text, "per sr"));
+    assert_null(strstr(text, "MIS weight"));
+    explain_pixel(PT_MIS, text, sizeof text);
+    assert_non_null(strstr(text, "MIS weight"));
 }
 
 static void test_ggx_sampling_matches_its_pdf(void **state)
@@ -1590,6 +1659,8 @@ int main(void)
         cmocka_unit_test(test_an_emitting_mesh_casts_shadows),
         cmocka_unit_test(test_chapter_06s_bvh_is_what_chapter_09_traces),
         cmocka_unit_test(test_furnace_every_pixel_is_one),
+        cmocka_unit_test(test_lecture_rung_sees_the_lamp_directly),
+        cmocka_unit_test(test_explain_shows_each_rungs_light_sample),
         cmocka_unit_test(test_scene_files_render_the_built_in_scenes),
         cmocka_unit_test(test_direct_light_only_equals_depth_one),
         cmocka_unit_test(test_point_light_in_a_sphere_needs_no_shadow_ray),

@@ -120,6 +120,11 @@ static void build_box_scene(pt_scene *sc, int scene)
 /* ==== the 4-wide BVH, streams and flat packets (from chapter 06's structures) ==== */
 /* ---- the 4-wide BVH ------------------------------------------------------------ */
 
+/* Every kernel, the plain C loop first: the tests below run each that this
+ * processor runs (bvh4_kernel_runs). */
+static const bvh4_kernel bvh4_kernels[] = {BVH4_KERNEL_SCALAR, BVH4_KERNEL_SSE, BVH4_KERNEL_AVX};
+enum { BVH4_KERNELS = sizeof bvh4_kernels / sizeof bvh4_kernels[0] };
+
 static accel *build_bvh4_sah(const triangle_set *set) { return bvh4_build(set, BVH_SPLIT_SAH); }
 static accel *build_bvh4_median(const triangle_set *set) { return bvh4_build(set, BVH_SPLIT_MEDIAN); }
 static accel *build_bvh4_sah_scalar(const triangle_set *set)
@@ -263,8 +268,9 @@ static void test_bvh4_more_coincident_triangles_than_a_leaf_holds(void **state)
     accel *a = bvh4_build(&set, BVH_SPLIT_SAH), *brute = brute_force_build(&set);
     check_bvh4_structure(a);
     assert_true(((const bvh4 *)a)->node_count >= 2); /* the root, and the node splitting the leaf */
-    for (int kernel = 0; kernel < 2; kernel++) {
-        bvh4_set_kernel(a, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+    for (int kernel = 0; kernel < BVH4_KERNELS; kernel++) {
+        if (!bvh4_set_kernel(a, bvh4_kernels[kernel]))
+            continue;
         pcg32 rng = pcg32_for_pixel(6, 4);
         int hits = 0;
         for (int i = 0; i < 2000; i++) {
@@ -374,22 +380,27 @@ static void test_bvh4_kernels_give_identical_answers(void **state)
         /* the watertight test on three rays in four, Moller-Trumbore on the fourth */
         assert_true(accel_use_triangle_test(a, i % 4 == 3 ? TRIANGLE_TEST_MOLLER_TRUMBORE : TRIANGLE_TEST_WATERTIGHT));
         ray r = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
-        hit_record sse_hit, scalar_hit;
-        ray_counters sse = {0}, scalar = {0};
-        assert_true(bvh4_set_kernel(a, BVH4_KERNEL_SSE));
-        bool sse_found = accel_closest_hit(a, r, &sse_hit, &sse);
-        bool sse_any = accel_any_hit(a, r, &sse);
+        hit_record scalar_hit;
+        ray_counters scalar = {0};
         bvh4_set_kernel(a, BVH4_KERNEL_SCALAR);
         bool scalar_found = accel_closest_hit(a, r, &scalar_hit, &scalar);
         bool scalar_any = accel_any_hit(a, r, &scalar);
-        assert_int_equal(sse_found, scalar_found);
-        assert_int_equal(sse_any, scalar_any);
-        assert_int_equal(sse.box_tests, scalar.box_tests);
-        assert_int_equal(sse.primitive_tests, scalar.primitive_tests);
-        if (sse_found) {
-            hits++;
-            assert_true(sse_hit.t == scalar_hit.t && sse_hit.u == scalar_hit.u && sse_hit.v == scalar_hit.v);
-            assert_int_equal(sse_hit.shape_id, scalar_hit.shape_id);
+        hits += scalar_found;
+        for (int kernel = 1; kernel < BVH4_KERNELS; kernel++) { /* SSE, AVX */
+            hit_record simd_hit;
+            ray_counters simd = {0};
+            if (!bvh4_set_kernel(a, bvh4_kernels[kernel]))
+                continue;
+            bool simd_found = accel_closest_hit(a, r, &simd_hit, &simd);
+            bool simd_any = accel_any_hit(a, r, &simd);
+            assert_int_equal(simd_found, scalar_found);
+            assert_int_equal(simd_any, scalar_any);
+            assert_int_equal(simd.box_tests, scalar.box_tests);
+            assert_int_equal(simd.primitive_tests, scalar.primitive_tests);
+            if (simd_found) {
+                assert_true(simd_hit.t == scalar_hit.t && simd_hit.u == scalar_hit.u && simd_hit.v == scalar_hit.v);
+                assert_int_equal(simd_hit.shape_id, scalar_hit.shape_id);
+            }
         }
     }
     assert_true(hits > 5000);
@@ -444,9 +455,11 @@ static void test_bvh4_slab_test_matches_chapter_03(void **state)
         ray r = ray_from(o[0], o[1], o[2], d[0], d[1], d[2]);
         r.t_max = (i % 3 == 0) ? INFINITY : 5.0f;
         slab_ray sr = slab_ray_make(r);
-        for (int kernel = 0; kernel < 2; kernel++) {
+        for (int kernel = 0; kernel < BVH4_KERNELS; kernel++) {
             float enter4[BVH4_WIDTH];
-            int mask = bvh4_slab_test(&node, r, r.t_min, r.t_max, enter4, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE);
+            if (!bvh4_kernel_runs(bvh4_kernels[kernel]))
+                continue;
+            int mask = bvh4_slab_test(&node, r, r.t_min, r.t_max, enter4, bvh4_kernels[kernel]);
             for (int k = 0; k < BVH4_WIDTH; k++) {
                 float enter03 = 0.0f, exit03 = 0.0f;
                 bool hit03 = aabb_slab_test(&boxes[k], &sr, r.t_min, r.t_max, &enter03, &exit03);
@@ -465,8 +478,9 @@ static void test_bvh4_slab_test_matches_chapter_03(void **state)
                 empty.bounds[3 + axis][k] = -INFINITY;
             }
         float enter4[BVH4_WIDTH];
-        assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SSE), 0);
-        assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, BVH4_KERNEL_SCALAR), 0);
+        for (int kernel = 0; kernel < BVH4_KERNELS; kernel++)
+            if (bvh4_kernel_runs(bvh4_kernels[kernel]))
+                assert_int_equal(bvh4_slab_test(&empty, r, r.t_min, r.t_max, enter4, bvh4_kernels[kernel]), 0);
     }
     print_message("bvh4 slab tests: %d boxes, %d hit, %d axes with 0 * inf\n", 50000 * BVH4_WIDTH, hits, nan_cases);
     assert_true(hits > 10000 && nan_cases > 3000);
@@ -507,10 +521,11 @@ static void test_bvh4_triangle_test_matches_chapter_01(void **state)
         vec3 o = vec3_make(pcg32_float(&rng) * 6 - 3, pcg32_float(&rng) * 6 - 3, pcg32_float(&rng) * 6 - 3);
         ray r = ray_make(o, vec3_sub(target, o));
         float t_max = i % 5 == 0 ? 0.9f : INFINITY;
-        for (int kernel = 0; kernel < 2; kernel++) {
+        for (int kernel = 0; kernel < BVH4_KERNELS; kernel++) {
             float t[4] = {0}, b1[4] = {0}, b2[4] = {0};
-            int mask =
-                bvh4_triangle_test(&packet, r, t_max, t, b1, b2, kernel ? BVH4_KERNEL_SCALAR : BVH4_KERNEL_SSE, test);
+            if (!bvh4_kernel_runs(bvh4_kernels[kernel]))
+                continue;
+            int mask = bvh4_triangle_test(&packet, r, t_max, t, b1, b2, bvh4_kernels[kernel], test);
             for (int k = 0; k < 4; k++) {
                 float want_t = 0.0f, want_b1 = 0.0f, want_b2 = 0.0f;
                 bool want = !(k == 3 && empty_lane) &&
@@ -817,8 +832,8 @@ static void test_bvh4_stream_gives_each_ray_its_own_answer(void **state)
             if (i % 2 == 1 && accel_closest_hit(a, rays[i], &h, &c))
                 rays[i].t_max = h.t * 0.5f;
         }
-        for (int kernel = 0; kernel < 2; kernel++) {
-            if (!bvh4_set_kernel(a, kernel == 0 ? BVH4_KERNEL_SSE : BVH4_KERNEL_SCALAR))
+        for (int kernel = 0; kernel < BVH4_KERNELS; kernel++) {
+            if (!bvh4_set_kernel(a, bvh4_kernels[kernel]))
                 continue;
             for (size_t l = 0; l < sizeof lengths / sizeof lengths[0]; l++) {
                 int n = lengths[l];
@@ -1452,7 +1467,7 @@ static void test_eight_paths_agree_with_chapter_09_on_every_scene(void **state)
     build_every_scene(&mesh, 0, 0);
     use_production(&mesh, true);
     assert_true(mesh.triangles.count > 64 && bvh4_is(walls_all(mesh.bvh)));
-    assert_string_equal(wide_scene_tracers_for(&mesh).all.name, "the 4-wide BVH, each lane's ray walking it alone");
+    assert_string_equal(wide_scene_tracers_for(&mesh).all.name, "the " BVH4_NAME ", each lane's ray walking it alone");
     pt_scene_free(&mesh);
     for (int scene = 0; scene < 3; scene++)
         assert_image_check(every_scene_check(scene, 0, RR_FIXED, PT_SAMPLER_RANDOM, 171 + 2 * (uint64_t)scene),
@@ -1882,7 +1897,7 @@ static void leak_through_eight_paths(leak_tally *t, const pt_scene *sc, const le
     assert_false(walls_found(sc->bvh));
     assert_null(trace.walls);
     const accel *all = walls_all(sc->bvh);
-    leak_through_tracer(t, flat_is(all) ? "flat set" : "4-wide BVH", sc, &trace.all, c);
+    leak_through_tracer(t, flat_is(all) ? "flat set" : BVH4_NAME, sc, &trace.all, c);
     if (bvh4_is(all)) {
         wide_tracer streams = wide_tracer_streams(all);
         leak_through_tracer(t, "4-wide BVH streams", sc, &streams, c);
@@ -1895,7 +1910,7 @@ static void leak_trace_case(const leak_case *c, leak_tally *t)
     triangle_set set;
     triangle_set_from_mesh(&set, c->m);
     /* the structures, each switched to the case's test */
-    enum { STRUCTURES = 12 };
+    enum { STRUCTURES = 13 };
     struct {
         char name[48];
         accel *a;
@@ -1912,8 +1927,14 @@ static void leak_trace_case(const leak_case *c, leak_tally *t)
     const int bvh4_first = n;
     snprintf(s[n].name, sizeof s[n].name, "ch13 bvh4 (scalar)"), s[n].a = bvh4_build(&set, BVH_SPLIT_SAH);
     assert_true(bvh4_set_kernel(s[n++].a, BVH4_KERNEL_SCALAR));
-    if (BVH4_HAVE_SSE)
-        snprintf(s[n].name, sizeof s[n].name, "ch13 bvh4 (sse)"), s[n++].a = bvh4_build(&set, BVH_SPLIT_SAH);
+    if (bvh4_kernel_runs(BVH4_KERNEL_SSE)) {
+        snprintf(s[n].name, sizeof s[n].name, "ch13 bvh4 (sse)"), s[n].a = bvh4_build(&set, BVH_SPLIT_SAH);
+        assert_true(bvh4_set_kernel(s[n++].a, BVH4_KERNEL_SSE));
+    }
+    if (bvh4_kernel_runs(BVH4_KERNEL_AVX)) {
+        snprintf(s[n].name, sizeof s[n].name, "ch13 bvh4 (avx)"), s[n].a = bvh4_build(&set, BVH_SPLIT_SAH);
+        assert_true(bvh4_set_kernel(s[n++].a, BVH4_KERNEL_AVX));
+    }
     const int flat_first = n;
     const flat_kernel kernels[] = {FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR};
     const char *kernel_names[] = {"avx-512 registers", "avx", "sse", "scalar"};

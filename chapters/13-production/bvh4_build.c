@@ -293,6 +293,12 @@ accel *bvh4_build(const triangle_set *set, bvh_split split)
             collapse_interior(&c, 0, new_node(&c), 0);
         }
     }
+    for (int n = 0; n < c.node_count; n++) {
+        bvh4_node *node = &c.nodes[n];
+        node->children = 0;
+        for (int k = 0; k < BVH4_WIDTH; k++)
+            node->children += node->child[k] != BVH4_EMPTY;
+    }
     b->node_count = c.node_count;
     b->packet_count = c.packet_count;
     b->nodes = c.node_count > 0 ? huge_copy(c.nodes, (size_t)c.node_count * sizeof(bvh4_node)) : NULL;
@@ -301,6 +307,8 @@ accel *bvh4_build(const triangle_set *set, bvh_split split)
     free(c.packets);
     accel_destroy(binary_accel);
     bvh4_use_triangle_test(&b->base, TRIANGLE_TEST_WATERTIGHT); /* the lanes' coordinates */
+    if (bvh4_kernel_runs(BVH4_KERNEL_AVX))
+        bvh4_set_kernel(&b->base, BVH4_KERNEL_AVX);
 
     b->base.stats.name = split == BVH_SPLIT_SAH ? "bvh4 sah" : "bvh4 median";
     b->base.stats.bytes = sizeof *b + (size_t)b->node_count * sizeof(bvh4_node) +

@@ -22,6 +22,9 @@
 /* traverse4(), test_leaf4() and triangle_test4() are inlined into each of
  * their callers, so that `sse`, `watertight` and `stop_at_first` are
  * constants there and the compiler drops the branches on them. */
+/* Code compiled for AVX, called only where the processor has it. */
+#define AVX_CODE __attribute__((target("avx")))
+
 #if defined(__GNUC__)
 #define ALWAYS_INLINE inline __attribute__((always_inline))
 #else
@@ -137,6 +140,52 @@ static inline int slab_test4_sse(const bvh4_node *node, const bvh4_ray *r, float
             break; /* the next four slots are empty: no box there to hit */
     }
     return mask;
+}
+#endif
+
+#if BVH4_HAVE_AVX
+/* The same for all BVH4_WIDTH boxes of a node at once: one test of eight
+ * lanes for an 8-wide node (a 4-wide one: the SSE test, in AVX's
+ * encoding). _mm256_max_ps and _mm256_min_ps select as their SSE forms do,
+ * and _CMP_LE_OQ answers as _mm_cmple_ps (false for NaN): the same answer
+ * for every box. The empty slots' boxes (+inf, -inf) fail as in the SSE
+ * test. Its target is AVX, so it is not always_inline: it is inlined into
+ * the AVX entry points (flatten), which alone call it. */
+AVX_CODE static inline int slab_test_avx(const bvh4_node *node, const bvh4_ray *r, float t_min,
+                                                                float t_max, float t_enter[BVH4_WIDTH])
+{
+#if BVH4_WIDTH == 8
+    const bvh_ray *s = &r->scalar;
+    const __m256 ox = _mm256_set1_ps(s->origin.x), oy = _mm256_set1_ps(s->origin.y), oz = _mm256_set1_ps(s->origin.z);
+    const __m256 ix = _mm256_set1_ps(s->inverse_direction.x), iy = _mm256_set1_ps(s->inverse_direction.y);
+    const __m256 iz = _mm256_set1_ps(s->inverse_direction.z);
+    __m256 near_x = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[s->near_x]), ox), ix);
+    __m256 far_x = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[r->far_x]), ox), ix);
+    __m256 near_y = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[s->near_y]), oy), iy);
+    __m256 far_y = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[r->far_y]), oy), iy);
+    __m256 near_z = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[s->near_z]), oz), iz);
+    __m256 far_z = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[r->far_z]), oz), iz);
+    __m256 enter = _mm256_set1_ps(t_min), exit = _mm256_set1_ps(INFINITY);
+    enter = _mm256_max_ps(near_x, enter);
+    enter = _mm256_max_ps(near_y, enter);
+    enter = _mm256_max_ps(near_z, enter);
+    exit = _mm256_min_ps(far_x, exit);
+    exit = _mm256_min_ps(far_y, exit);
+    exit = _mm256_min_ps(far_z, exit);
+    exit = _mm256_mul_ps(exit, _mm256_set1_ps(BVH_SLAB_ROUNDING_PAD));
+    exit = _mm256_min_ps(_mm256_set1_ps(t_max), exit);
+    _mm256_storeu_ps(t_enter, enter);
+    return _mm256_movemask_ps(_mm256_cmp_ps(enter, exit, _CMP_LE_OQ));
+#else
+    return slab_test4_sse(node, r, t_min, t_max, t_enter);
+#endif
+}
+
+AVX_CODE __attribute__((noinline)) static int slab_test_avx_alone(const bvh4_node *node, const bvh4_ray *r,
+                                                                         float t_min, float t_max,
+                                                                         float t_enter[BVH4_WIDTH])
+{
+    return slab_test_avx(node, r, t_min, t_max, t_enter);
 }
 #endif
 
@@ -272,6 +321,10 @@ static ALWAYS_INLINE int triangle_test4_sse(const bvh4_packet *p, const bvh4_ray
 int bvh4_slab_test(const bvh4_node *node, ray r, float t_min, float t_max, float t_enter[BVH4_WIDTH], bvh4_kernel kernel)
 {
     bvh4_ray r4 = bvh4_ray_make(&r);
+#if BVH4_HAVE_AVX
+    if (kernel == BVH4_KERNEL_AVX)
+        return slab_test_avx_alone(node, &r4, t_min, t_max, t_enter);
+#endif
 #if BVH4_HAVE_SSE
     if (kernel == BVH4_KERNEL_SSE)
         return slab_test4_sse(node, &r4, t_min, t_max, t_enter);
@@ -299,7 +352,7 @@ int bvh4_triangle_test(const bvh4_packet *packet, ray r, float t_max, float t[4]
 {
     bvh4_ray r4 = bvh4_ray_make(&r);
     float lane_t[4], lane_b1[4], lane_b2[4];
-    int mask = triangle_test4(packet, &r4, &r, t_max, lane_t, lane_b1, lane_b2, kernel == BVH4_KERNEL_SSE,
+    int mask = triangle_test4(packet, &r4, &r, t_max, lane_t, lane_b1, lane_b2, kernel != BVH4_KERNEL_SCALAR,
                               test == TRIANGLE_TEST_WATERTIGHT);
     for (int k = 0; k < 4; k++) /* lanes not hit keep what they had */
         if (mask >> k & 1) {
@@ -408,15 +461,6 @@ static ALWAYS_INLINE bool test_leaf4(const bvh4 *b, uint32_t ref, const bvh4_ray
     return false;
 }
 
-/* Real children of a node (the empty slots come last). */
-static inline int child_count(const bvh4_node *node)
-{
-    int count = 1;
-    for (int k = 1; k < BVH4_WIDTH; k++)
-        count += node->child[k] != BVH4_EMPTY;
-    return count;
-}
-
 /* One ray's walk through the tree, as data: what the loop of a traversal
  * keeps between one node and the next. Kept in a struct, rather than in
  * local variables, so that several rays can take turns (the stream below);
@@ -447,7 +491,7 @@ static ALWAYS_INLINE bool traversal_begin(const bvh4 *b, const ray *r, bvh4_trav
 /* Visit w->current -- slab-test a node's children, or test a leaf's
  * triangles -- and choose the next one to visit. Returns false when the
  * walk is over: the stack is empty, or (any hit) a triangle was hit. */
-static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool stop_at_first, bool sse,
+static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool stop_at_first, bool sse, bool avx,
                                          bool watertight)
 {
     if (!bvh4_is_leaf(w->current)) {
@@ -455,13 +499,36 @@ static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool 
         float t_enter[BVH4_WIDTH];
         float cull = w->found.t * BVH_CULL_SLACK;
         int mask;
+#if BVH4_HAVE_AVX
+        if (avx)
+            mask = slab_test_avx(node, &w->r4, w->r.t_min, cull, t_enter);
+        else
+#endif
 #if BVH4_HAVE_SSE
         if (sse)
             mask = slab_test4_sse(node, &w->r4, w->r.t_min, cull, t_enter);
         else
 #endif
             mask = slab_test4_scalar(node, &w->r4, w->r.t_min, cull, t_enter);
-        w->box_tests += (uint64_t)child_count(node);
+        w->box_tests += node->children;
+        if (mask != 0 && stop_at_first) {
+            /* Any hit: every child hit may end the walk, whichever is
+             * first; no order to sort. Visit the nearest (the likeliest to
+             * block), push the others as they come. */
+            int k = lowest_bit((unsigned)mask);
+            mask &= mask - 1;
+            while (mask != 0) {
+                int j = lowest_bit((unsigned)mask);
+                mask &= mask - 1;
+                bool nearer = t_enter[j] < t_enter[k];
+                int pushed = nearer ? k : j;
+                k = nearer ? j : k;
+                prefetch_child(b, node->child[pushed]);
+                w->stack[w->top++] = (bvh4_entry){node->child[pushed], t_enter[pushed]};
+            }
+            w->current = node->child[k];
+            return true;
+        }
         if (mask != 0) {
             int k = lowest_bit((unsigned)mask);
             mask &= mask - 1;
@@ -520,12 +587,12 @@ static ALWAYS_INLINE bool traversal_step(const bvh4 *b, bvh4_traversal *w, bool 
     return true;
 }
 
-static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_first, bool sse, bool watertight,
-                                          ray_counters *counters)
+static ALWAYS_INLINE bvh4_found traverse4(const bvh4 *b, const ray *r, bool stop_at_first, bool sse, bool avx,
+                                          bool watertight, ray_counters *counters)
 {
     bvh4_traversal w;
     if (traversal_begin(b, r, &w))
-        while (traversal_step(b, &w, stop_at_first, sse, watertight))
+        while (traversal_step(b, &w, stop_at_first, sse, avx, watertight))
             ;
     counters->box_tests += w.box_tests;
     counters->primitive_tests += w.primitive_tests;
@@ -554,46 +621,105 @@ static bool finish_closest(const bvh4 *b, const bvh4_found *found, const ray *r,
     return true;
 }
 
-/* One entry point per kernel, query and triangle test, each with all three
- * constant inside (ALWAYS_INLINE), the test chosen once per ray. */
-static bvh4_found traverse4_with(const accel *a, const ray *r, bool stop_at_first, bool sse, ray_counters *counters)
+/* One walk per kernel and query, each with the kernel and the query
+ * constant inside (ALWAYS_INLINE), the triangle test chosen once per ray.
+ * The AVX ones are compiled for AVX, everything they call inlined
+ * (flatten), the SSE tests included, in AVX's encoding. */
+static ALWAYS_INLINE bvh4_found traverse4_with(const accel *a, const ray *r, bool stop_at_first, bool sse, bool avx,
+                                               ray_counters *counters)
 {
     const bvh4 *b = (const bvh4 *)a;
-    bool wt = a->triangle_test == TRIANGLE_TEST_WATERTIGHT;
+    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
+        return traverse4(b, r, stop_at_first, sse, avx, true, counters);
+    return traverse4(b, r, stop_at_first, sse, avx, false, counters);
+}
+
+static bvh4_found closest_scalar(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, false, false, false, counters);
+}
+
+static bvh4_found any_scalar(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, true, false, false, counters);
+}
+
 #if BVH4_HAVE_SSE
-    if (sse) {
-        if (stop_at_first)
-            return wt ? traverse4(b, r, true, true, true, counters) : traverse4(b, r, true, true, false, counters);
-        return wt ? traverse4(b, r, false, true, true, counters) : traverse4(b, r, false, true, false, counters);
-    }
+static bvh4_found closest_sse(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, false, true, false, counters);
+}
+
+static bvh4_found any_sse(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, true, true, false, counters);
+}
 #endif
-    (void)sse;
-    if (stop_at_first)
-        return wt ? traverse4(b, r, true, false, true, counters) : traverse4(b, r, true, false, false, counters);
-    return wt ? traverse4(b, r, false, false, true, counters) : traverse4(b, r, false, false, false, counters);
+
+#if BVH4_HAVE_AVX
+AVX_CODE __attribute__((flatten)) static bvh4_found closest_avx(const accel *a, const ray *r,
+                                                                      ray_counters *counters)
+{
+    return traverse4_with(a, r, false, true, true, counters);
+}
+
+AVX_CODE __attribute__((flatten)) static bvh4_found any_avx(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, true, true, true, counters);
+}
+#endif
+
+/* The walk of the tree's kernel. */
+static bvh4_found closest_found(const accel *a, const ray *r, ray_counters *counters)
+{
+    switch (((const bvh4 *)a)->kernel) {
+#if BVH4_HAVE_AVX
+    case BVH4_KERNEL_AVX:
+        return closest_avx(a, r, counters);
+#endif
+#if BVH4_HAVE_SSE
+    case BVH4_KERNEL_SSE:
+        return closest_sse(a, r, counters);
+#endif
+    default:
+        return closest_scalar(a, r, counters);
+    }
 }
 
 static bool closest_hit_scalar(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
-    bvh4_found found = traverse4_with(a, &r, false, false, counters);
+    bvh4_found found = closest_scalar(a, &r, counters);
     return finish_closest((const bvh4 *)a, &found, &r, hit);
 }
 
 static bool any_hit_scalar(const accel *a, ray r, ray_counters *counters)
 {
-    return traverse4_with(a, &r, true, false, counters).lane >= 0;
+    return any_scalar(a, &r, counters).lane >= 0;
 }
 
 #if BVH4_HAVE_SSE
 static bool closest_hit_sse(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
-    bvh4_found found = traverse4_with(a, &r, false, true, counters);
+    bvh4_found found = closest_sse(a, &r, counters);
     return finish_closest((const bvh4 *)a, &found, &r, hit);
 }
 
 static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
 {
-    return traverse4_with(a, &r, true, true, counters).lane >= 0;
+    return any_sse(a, &r, counters).lane >= 0;
+}
+#endif
+
+#if BVH4_HAVE_AVX
+static bool closest_hit_avx(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    bvh4_found found = closest_avx(a, &r, counters);
+    return finish_closest((const bvh4 *)a, &found, &r, hit);
+}
+
+static bool any_hit_avx(const accel *a, ray r, ray_counters *counters)
+{
+    return any_avx(a, &r, counters).lane >= 0;
 }
 #endif
 
@@ -608,7 +734,7 @@ static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
  * node has arrived. Each ray does exactly what it would alone, in the same
  * order: the same hits, bit for bit. */
 static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
-                                  bvh4_found *raw, bool stop_at_first, bool sse, bool watertight,
+                                  bvh4_found *raw, bool stop_at_first, bool sse, bool avx, bool watertight,
                                   ray_counters *counters)
 {
     bvh4_traversal lanes[BVH4_STREAM_LANES];
@@ -651,7 +777,7 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
             if (ray_of[k] < 0)
                 continue;
             bvh4_traversal *w = &lanes[k];
-            if (traversal_step(b, w, stop_at_first, sse, watertight)) {
+            if (traversal_step(b, w, stop_at_first, sse, avx, watertight)) {
                 prefetch_child(b, w->current);
                 continue;
             }
@@ -683,32 +809,54 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
     }
 }
 
-/* The kernel and the triangle test chosen once per stream, so stream4() is
- * compiled with them fixed. */
+/* The query and the triangle test chosen once per stream, so stream4() is
+ * compiled with them fixed, for each kernel. */
+static ALWAYS_INLINE void stream4_with(const bvh4 *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                                       bvh4_found *raw, bool stop_at_first, bool sse, bool avx,
+                                       ray_counters *counters)
+{
+    bool watertight = b->base.triangle_test == TRIANGLE_TEST_WATERTIGHT;
+    if (stop_at_first) {
+        if (watertight)
+            stream4(b, rays, count, hits, hit_found, NULL, true, sse, avx, true, counters);
+        else
+            stream4(b, rays, count, hits, hit_found, NULL, true, sse, avx, false, counters);
+    } else if (raw != NULL) {
+        stream4(b, rays, count, hits, hit_found, raw, false, sse, avx, watertight, counters);
+    } else if (watertight) {
+        stream4(b, rays, count, hits, hit_found, NULL, false, sse, avx, true, counters);
+    } else {
+        stream4(b, rays, count, hits, hit_found, NULL, false, sse, avx, false, counters);
+    }
+}
+
+#if BVH4_HAVE_AVX
+AVX_CODE __attribute__((flatten)) static void stream4_avx(const bvh4 *b, const ray *rays, int count,
+                                                                hit_record *hits, bool *hit_found, bvh4_found *raw,
+                                                                bool stop_at_first, ray_counters *counters)
+{
+    stream4_with(b, rays, count, hits, hit_found, raw, stop_at_first, true, true, counters);
+}
+#endif
+
 static void stream4_with_kernel(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
                                 bvh4_found *raw, bool stop_at_first, ray_counters *counters)
 {
     const bvh4 *b = (const bvh4 *)a;
-    bool watertight = a->triangle_test == TRIANGLE_TEST_WATERTIGHT;
-#if BVH4_HAVE_SSE
-    if (b->kernel == BVH4_KERNEL_SSE) {
-        if (stop_at_first) {
-            if (watertight)
-                stream4(b, rays, count, hits, hit_found, NULL, true, true, true, counters);
-            else
-                stream4(b, rays, count, hits, hit_found, NULL, true, true, false, counters);
-        } else {
-            if (raw != NULL)
-                stream4(b, rays, count, hits, hit_found, raw, false, true, watertight, counters);
-            else if (watertight)
-                stream4(b, rays, count, hits, hit_found, NULL, false, true, true, counters);
-            else
-                stream4(b, rays, count, hits, hit_found, NULL, false, true, false, counters);
-        }
+#if BVH4_HAVE_AVX
+    if (b->kernel == BVH4_KERNEL_AVX) {
+        stream4_avx(b, rays, count, hits, hit_found, raw, stop_at_first, counters);
         return;
     }
 #endif
-    stream4(b, rays, count, hits, hit_found, raw, stop_at_first, false, watertight, counters);
+#if BVH4_HAVE_SSE
+    if (b->kernel == BVH4_KERNEL_SSE) {
+        stream4_with(b, rays, count, hits, hit_found, raw, stop_at_first, true, false, counters);
+        return;
+    }
+#endif
+    bool watertight = a->triangle_test == TRIANGLE_TEST_WATERTIGHT;
+    stream4(b, rays, count, hits, hit_found, raw, stop_at_first, false, false, watertight, counters);
 }
 
 void bvh4_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
@@ -725,7 +873,7 @@ void bvh4_any_hit_stream(const accel *a, const ray *rays, int count, bool *hit_f
 void bvh4_closest_hit_raw(const accel *a, ray r, bvh4_raw_hit *hit, ray_counters *counters)
 {
     const bvh4 *b = (const bvh4 *)a;
-    bvh4_found found = traverse4_with(a, &r, false, b->kernel == BVH4_KERNEL_SSE, counters);
+    bvh4_found found = closest_found(a, &r, counters);
     hit->index = found.lane < 0 ? -1 : bvh4_lane_triangle(b->packets[found.lane / 4].index[found.lane % 4]);
     hit->t = found.t;
     hit->b1 = found.b1;
@@ -764,6 +912,9 @@ static const accel_ops bvh4_ops_scalar = {closest_hit_scalar, any_hit_scalar, bv
 #if BVH4_HAVE_SSE
 static const accel_ops bvh4_ops_sse = {closest_hit_sse, any_hit_sse, bvh4_destroy, bvh4_use_triangle_test};
 #endif
+#if BVH4_HAVE_AVX
+static const accel_ops bvh4_ops_avx = {closest_hit_avx, any_hit_avx, bvh4_destroy, bvh4_use_triangle_test};
+#endif
 
 bool bvh4_is(const accel *a) { return a != NULL && a->ops->destroy == bvh4_destroy; }
 
@@ -776,19 +927,38 @@ const accel_ops *bvh4_default_ops(void)
 #endif
 }
 
+bool bvh4_kernel_runs(bvh4_kernel kernel)
+{
+    switch (kernel) {
+    case BVH4_KERNEL_SCALAR:
+        return true;
+    case BVH4_KERNEL_SSE:
+        return BVH4_HAVE_SSE;
+    case BVH4_KERNEL_AVX:
+#if BVH4_HAVE_AVX
+        return __builtin_cpu_supports("avx");
+#else
+        return false;
+#endif
+    }
+    return false;
+}
+
 bool bvh4_set_kernel(accel *a, bvh4_kernel kernel)
 {
-    bvh4 *b = (bvh4 *)a;
-    if (kernel == BVH4_KERNEL_SCALAR) {
-        b->kernel = kernel;
-        b->base.ops = &bvh4_ops_scalar;
-        return true;
-    }
+    static const accel_ops *const ops[] = {
 #if BVH4_HAVE_SSE
-    b->kernel = kernel;
-    b->base.ops = &bvh4_ops_sse;
-    return true;
-#else
-    return false;
+        [BVH4_KERNEL_SSE] = &bvh4_ops_sse,
 #endif
+#if BVH4_HAVE_AVX
+        [BVH4_KERNEL_AVX] = &bvh4_ops_avx,
+#endif
+        [BVH4_KERNEL_SCALAR] = &bvh4_ops_scalar,
+    };
+    if (!bvh4_kernel_runs(kernel))
+        return false;
+    bvh4 *b = (bvh4 *)a;
+    b->kernel = kernel;
+    b->base.ops = ops[kernel];
+    return true;
 }

@@ -1,5 +1,5 @@
 /* 13-production: chapter 09's path tracer on the production structures --
- * the flat set or the 4-wide BVH, the walls, eight paths at a time -- and
+ * the flat set or the 8-wide BVH, the walls, eight paths at a time -- and
  * the table of what each step buys (--bench). */
 #include <stdio.h>
 #include <string.h>
@@ -62,7 +62,7 @@ static void report_structures(const pt_scene *sc, bool walls_asked)
         printf("13-production: %d triangles: the flat set (at most 64: every triangle tested, eight rays per AVX "
                "instruction)\n", sc->triangles.count);
     else if (bvh4_is(all))
-        printf("13-production: %d triangles: the 4-wide BVH (more than the 64 the flat set holds), each lane's ray "
+        printf("13-production: %d triangles: the " BVH4_NAME " (more than the 64 the flat set holds), each lane's ray "
                "walking it alone\n", sc->triangles.count);
     if (!walls_asked)
         printf("13-production: walls off (--walls off)\n");
@@ -170,7 +170,7 @@ int main(int argc, char **argv)
     cli_spec spec = {"13-production",
                      "What production renderers do: chapter 09's lecture path tracer, eight paths at a time, on\n"
                      "any scene chapter 09 renders (meshes, spheres, every material, area and point lights,\n"
-                     "the environment): the flat set for at most 64 triangles, the 4-wide BVH above, shadow\n"
+                     "the environment): the flat set for at most 64 triangles, the " BVH4_NAME " above, shadow\n"
                      "rays that skip a room's walls where it has them; it says which. --bench measures each step.",
                      extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision, one path at a time)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);

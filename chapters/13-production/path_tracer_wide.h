@@ -5,7 +5,7 @@
  * each with its own random numbers, its samples one after another -- are
  * eight chains side by side: their rays are traced together, eight at a
  * time (wide_trace.h: the flat set's AVX kernels for a few dozen
- * triangles, the 4-wide BVH's streams for meshes; shadow rays queued until
+ * triangles, the 8-wide BVH for meshes; shadow rays queued until
  * there are eight, and tested against the occluders alone when all eight
  * lie inside the walls), so are the diffuse lanes' light sample and bounce
  * (AVX2, where the processor has it; lane by lane, with the same bits,

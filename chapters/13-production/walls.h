@@ -2,7 +2,7 @@
  *
  * production_accel_build() picks a structure by size: the flat set (every
  * triangle tested, eight per AVX instruction) for a few dozen triangles,
- * the 4-wide BVH above that.
+ * the 8-wide BVH above that.
  *
  * Walls cast no shadows. A triangle lies in a plane; a segment whose two
  * ends are in front of that plane cannot meet it (a half-space is convex).
@@ -31,7 +31,7 @@
 #include "09-path-tracing/scene_pt.h"
 #include "13-production/flat.h"
 
-/* The flat set for at most 64 triangles, else the 4-wide BVH (binned SAH). */
+/* The flat set for at most 64 triangles, else the 8-wide BVH (binned SAH). */
 accel *production_accel_build(const triangle_set *set);
 
 typedef struct walls_accel walls_accel;

@@ -16,7 +16,7 @@ static int flat_any(const void *context, const flat_rays8 *rays, int active, ray
     return flat_any_hit8_raw(context, rays, active, counters);
 }
 
-/* ---- the 4-wide BVH: the lanes as a stream ------------------------------------- */
+/* ---- the wide BVH: the lanes as a stream --------------------------------------- */
 
 /* The active lanes, packed, as rays. */
 static int lanes_to_rays(const flat_rays8 *rays, int active, ray out[FLAT_LANES], int lane_of[FLAT_LANES])
@@ -136,7 +136,7 @@ wide_tracer wide_tracer_for(const accel *a)
     if (flat_is(a))
         return (wide_tracer){flat_closest, flat_any, a, "the flat set, eight rays per AVX instruction"};
     if (bvh4_is(a))
-        return (wide_tracer){bvh4_closest_single, accel_any, a, "the 4-wide BVH, each lane's ray walking it alone"};
+        return (wide_tracer){bvh4_closest_single, accel_any, a, "the " BVH4_NAME ", each lane's ray walking it alone"};
     return (wide_tracer){accel_closest, accel_any, a, "one ray at a time"};
 }
 
@@ -144,5 +144,5 @@ wide_tracer wide_tracer_streams(const accel *a)
 {
     if (!bvh4_is(a))
         return wide_tracer_for(a);
-    return (wide_tracer){bvh4_closest, bvh4_any, a, "the 4-wide BVH, the eight rays as a stream"};
+    return (wide_tracer){bvh4_closest, bvh4_any, a, "the " BVH4_NAME ", the eight rays as a stream"};
 }

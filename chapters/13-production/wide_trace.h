@@ -13,7 +13,7 @@
  *   the flat set     flat.h's eight-ray AVX kernels, eight rays per
  *                    instruction against every triangle: for a few dozen
  *                    triangles (the Cornell box)
- *   the 4-wide BVH   bvh4.h's traversal, each lane's ray walking the tree
+ *   the 8-wide BVH   bvh4.h's traversal, each lane's ray walking the tree
  *                    alone (for meshes); or, on request, as a ray stream
  *                    (bvh4_closest_hit_stream: the eight take turns node
  *                    by node, so that one ray's wait for memory overlaps
@@ -52,11 +52,11 @@ typedef struct {
 } wide_tracer;
 
 /* The tracer of a built structure: the flat set's kernels for flat_build's,
- * the 4-wide BVH's streams for bvh4_build's, else accel_closest_hit() and
+ * the 8-wide BVH's walk for bvh4_build's, else accel_closest_hit() and
  * accel_any_hit() one ray at a time. NULL: a tracer that finds nothing (a
  * scene with no occluders). The structure must outlive the tracer. */
 wide_tracer wide_tracer_for(const accel *a);
-/* The same, but a 4-wide BVH's eight rays traced as a stream (to compare). */
+/* The same, but an 8-wide BVH's eight rays traced as a stream (to compare). */
 wide_tracer wide_tracer_streams(const accel *a);
 
 #endif

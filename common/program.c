@@ -1,12 +1,15 @@
 #include "program.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "explain.h"
 #include "input_file.h"
+#include "mpi_split.h"
 #include "run_record.h"
 #include "timer.h"
 
@@ -84,6 +87,27 @@ bool program_load_scene(cli_options *opts, const char *label, scene_desc *d)
     return true;
 }
 
+/* Under mpirun: how many ranks, and what handing their rows over cost,
+ * for the record and the report. */
+static void note_ranks(const render_stats *stats)
+{
+    if (mpi_split_ranks() == 1)
+        return;
+    char text[64];
+    snprintf(text, sizeof text, "%d", mpi_split_ranks());
+    run_record_note("mpi_ranks", text);
+    snprintf(text, sizeof text, "%.6f", stats->gather_seconds);
+    run_record_note("mpi_gather_seconds", text);
+}
+
+void program_print_ranks(const render_stats *stats)
+{
+    if (mpi_split_ranks() > 1)
+        printf("split over %d MPI ranks: handing rows between them took %.3f s, %.2f%% of the render\n",
+               mpi_split_ranks(), stats->gather_seconds,
+               stats->seconds > 0.0 ? 100.0 * stats->gather_seconds / stats->seconds : 0.0);
+}
+
 /* --explain X,Y: one pixel, one thread, every step printed. */
 static int program_explain(const cli_options *opts, const char *label, const render_job *job, render_stats *stats_out)
 {
@@ -121,27 +145,113 @@ static int program_explain(const cli_options *opts, const char *label, const ren
  * numbers from its own counters and the pixels' own streams, so the image
  * is untouched. Only renders of more than LONG_RENDER_PIXELS pixels are
  * piloted: smaller ones end before a warning would help. */
-enum { PILOT_PIXELS = 64, LONG_RENDER_PIXELS = 16384 };
+enum { PILOT_PIXELS = 64, LONG_RENDER_PIXELS = 16384, PROGRESSIVE_PILOT_SPP = 16 };
 static const double LONG_RENDER_SECONDS = 60.0;
 
-static void warn_if_long(const cli_options *opts, const char *label, const render_job *job)
+/* The pilot's estimate of the whole render's seconds on `threads` threads,
+ * and through std_error (if not NULL) the relative error its pixels show
+ * (estimate_relative_error's measure over the pilot's pixels). */
+static double pilot_seconds(const render_job *job, int threads, double *relative_error)
 {
     long pixels = (long)job->cam->width * job->cam->height;
-    if (opts->quiet || pixels < LONG_RENDER_PIXELS)
-        return;
     ray_counters ignored;
     memset(&ignored, 0, sizeof ignored);
-    double start = timer_seconds();
+    double start = timer_seconds(), sum = 0.0;
     for (int k = 0; k < PILOT_PIXELS; k++) {
         long i = (long)((double)k * (double)pixels / PILOT_PIXELS);
-        render_pixel(job, (int)(i % job->cam->width), (int)(i / job->cam->width), &ignored, NULL);
+        vec3 se;
+        vec3 m = render_pixel(job, (int)(i % job->cam->width), (int)(i / job->cam->width), &ignored, &se);
+        const float mean[3] = {m.x, m.y, m.z}, error[3] = {se.x, se.y, se.z};
+        for (int c = 0; c < 3; c++) /* progressive.c's RELATIVE_ERROR_EPSILON */
+            sum += (double)error[c] * error[c] / ((double)mean[c] * mean[c] + 1e-2);
     }
-    int threads = opts->threads > 0 ? opts->threads : omp_get_max_threads();
-    double estimate = (timer_seconds() - start) / PILOT_PIXELS * (double)pixels / threads;
+    if (relative_error != NULL)
+        *relative_error = sqrt(sum / (3.0 * PILOT_PIXELS));
+    return (timer_seconds() - start) / PILOT_PIXELS * (double)pixels / threads;
+}
+
+static void warn_long(const char *label, double estimate, int threads, const char *how)
+{
     if (estimate > LONG_RENDER_SECONDS)
-        fprintf(stderr, "%s: warning: this render will take about %.0f minutes on %d threads (from a pilot of %d "
+        fprintf(stderr, "%s: warning: this render will take about %.0f minutes on %d threads%s (from a pilot of %d "
                 "pixels): a smaller --width, --height or --spp first, or a chapter with an acceleration structure "
-                "(06, 09, 13) for a large mesh\n", label, estimate / 60.0, threads, PILOT_PIXELS);
+                "(06, 09, 13) for a large mesh\n", label, estimate / 60.0, threads, how, PILOT_PIXELS);
+}
+
+void program_warn_if_long_progressive(const cli_options *opts, const char *label, const render_job *job,
+                                      double seconds, double target_error, long spp_done)
+{
+    long pixels = (long)job->cam->width * job->cam->height;
+    if (opts->quiet || pixels < LONG_RENDER_PIXELS || (seconds > 0.0 && seconds <= LONG_RENDER_SECONDS))
+        return;
+    int threads = (opts->threads > 0 ? opts->threads : omp_get_max_threads()) * mpi_split_ranks();
+    double estimate = seconds;
+    if (target_error > 0.0) {
+        /* The error falls as 1/sqrt(spp): from the pilot's error at its
+         * spp, the passes (doubling from 2) stop at the first power of two
+         * past PILOT_SPP (e / target)^2, and at 16 at least. */
+        render_job pilot = *job;
+        pilot.spp = PROGRESSIVE_PILOT_SPP;
+        double error = 0.0;
+        double per_spp = pilot_seconds(&pilot, threads, &error) / PROGRESSIVE_PILOT_SPP;
+        double needed = PROGRESSIVE_PILOT_SPP * (error / target_error) * (error / target_error);
+        long spp = 16;
+        while ((double)spp < needed && spp < (1L << 40))
+            spp *= 2;
+        double until_target = per_spp * (double)(spp - spp_done);
+        estimate = seconds > 0.0 && seconds < until_target ? seconds : until_target;
+    }
+    warn_long(label, estimate, threads, mpi_split_ranks() > 1 ? " of every rank" : "");
+}
+
+/* The pilot's estimate of the seconds the render still needs (a resumed
+ * one has only the rest to do), with the warning if that is long; 0 for
+ * renders too small to pilot. */
+static double warn_if_long(const cli_options *opts, const char *label, const render_job *job, int spp_done)
+{
+    long pixels = (long)job->cam->width * job->cam->height;
+    if (pixels < LONG_RENDER_PIXELS || spp_done >= job->spp)
+        return 0.0;
+    int threads = (opts->threads > 0 ? opts->threads : omp_get_max_threads()) * mpi_split_ranks();
+    double estimate = pilot_seconds(job, threads, NULL) * (double)(job->spp - spp_done) / job->spp;
+    if (!opts->quiet)
+        warn_long(label, estimate, threads, mpi_split_ranks() > 1 ? " of every rank" : "");
+    return estimate;
+}
+
+bool program_checkpointing(const cli_options *opts, const char *label, const char *kind, size_t payload_bytes,
+                           checkpointing *cp, checkpoint *resumed)
+{
+    memset(cp, 0, sizeof *cp);
+    memset(resumed, 0, sizeof *resumed);
+    if (!opts->checkpoint_offered)
+        return true;
+    cp->path = opts->checkpoint;
+    cp->every_seconds = opts->checkpoint_every;
+    cp->id = checkpoint_identity_of(kind, label, opts);
+    cp->quiet = opts->quiet;
+    cp->resuming = opts->resume != NULL;
+    if (!cp->resuming)
+        return true;
+    char err[8192] = "";
+    int ok = !mpi_split_is_root() || checkpoint_read(opts->resume, &cp->id, payload_bytes, resumed, err, sizeof err);
+    if (!mpi_split_broadcast_int(ok)) {
+        if (mpi_split_is_root())
+            fprintf(stderr, "%s: --resume %s\n", label, err);
+        return false;
+    }
+    cp->resume = resumed;
+    if (!opts->quiet)
+        printf("%s: resuming %s: %ld samples per pixel done in %.1f s\n", label, opts->resume, resumed->spp_done,
+               resumed->seconds);
+    return true;
+}
+
+void program_checkpoint_done(const cli_options *opts, const checkpointing *cp)
+{
+    /* The image holds all the checkpoint did: it has served. */
+    if (cp->path != NULL && mpi_split_is_root() && opts->checkpoint_offered)
+        unlink(cp->path);
 }
 
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
@@ -164,9 +274,19 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
                       .jitter = opts->jitter,
                       .stratify = opts->stratify,
                       .sample = sample};
-    if (opts->explain)
-        return program_explain(opts, label, &job, stats_out);
-    warn_if_long(opts, label, &job);
+    if (opts->explain) /* one rank explains */
+        return mpi_split_is_root() ? program_explain(opts, label, &job, stats_out) : 0;
+    checkpointing cp;
+    checkpoint resumed;
+    if (!program_checkpointing(opts, label, "render", (size_t)cam->width * cam->height * sizeof(render_pixel_state),
+                               &cp, &resumed))
+        return 1;
+    /* A render that ends before its first checkpoint would be due runs in
+     * one pass, without keeping every pixel's state (88 bytes a pixel). */
+    double estimate = mpi_split_is_root() ? warn_if_long(opts, label, &job, cp.resume != NULL ? (int)cp.resume->done : 0) : 0.0;
+    mpi_split_broadcast(&estimate, sizeof estimate);
+    if (cp.resuming || (cp.path != NULL && estimate >= cp.every_seconds))
+        job.checkpoints = &cp;
     image img = image_make(cam->width, cam->height);
     if (img.rgb == NULL) {
         fprintf(stderr, "%s: out of memory for a %dx%d image\n", label, cam->width, cam->height);
@@ -174,6 +294,12 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
     }
     render_stats stats;
     render_image(&job, &img, &stats);
+    checkpoint_free(&resumed);
+    note_ranks(&stats);
+    if (!mpi_split_is_root()) { /* rank 0 writes and reports */
+        image_free(&img);
+        return 0;
+    }
 
     char err[IMAGE_ERROR_SIZE];
     bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err);
@@ -189,9 +315,11 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
         fprintf(stderr, "%s: %s\n", label, err);
         return 1;
     }
+    program_checkpoint_done(opts, &cp);
     if (!opts->quiet) {
         printf("%s: %dx%d, %d spp, %d threads, %.3f s -> %s\n", label, cam->width, cam->height, opts->spp,
                opts->threads, stats.seconds, opts->out);
+        program_print_ranks(&stats);
         counters_print(stdout, &stats.counters, stats.seconds);
         if (noted_accel[0] != '\0')
             printf("rays traced through: %s\n", noted_accel);

@@ -8,6 +8,7 @@
 #include "09-path-tracing/path_tracer.h"
 #include "cli.h"
 #include "effects.h"
+#include "mpi_split.h"
 #include "program.h"
 #include "run_record.h"
 
@@ -127,7 +128,8 @@ static int run_experiments(const cli_options *opts, const chapter_flags *f, cons
     return ok ? 0 : 1;
 }
 
-/* --time-budget, --target-error: passes until either is reached. */
+/* --time-budget, --target-error: passes until either is reached, with
+ * checkpoints of the passes so far (--resume continues them). */
 static int render_progressively(const cli_options *opts, const chapter_flags *f, const path_tracer *pt)
 {
     if (opts->explain) {
@@ -136,11 +138,28 @@ static int render_progressively(const cli_options *opts, const chapter_flags *f,
     }
     char err[1024], counters_path[4096];
     camera cam = pt_scene_camera(pt->scene, opts->width, opts->height);
-    estimate_image e = render_progressive(pt, &cam, opts->seed, opts->threads, f->time_budget, f->target_error,
-                                          opts->quiet ? NULL : stdout);
-    counters_path_for_image(opts->out, counters_path, sizeof counters_path);
-    bool ok = image_write(&e.mean, opts->out, opts->exposure, err, sizeof err) &&
-              counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err);
+    checkpointing cp;
+    checkpoint resumed;
+    size_t state_bytes = 2 * (size_t)cam.width * (size_t)cam.height * 3 * sizeof(float);
+    if (!program_checkpointing(opts, PROGRAM, "progressive", state_bytes, &cp, &resumed))
+        return 1;
+    render_job pilot = {.cam = &cam, .seed = opts->seed, .radiance = path_trace_radiance,
+                        .sample = path_tracer_sample_fn(pt), .scene = pt, .jitter = true, .threads = opts->threads};
+    if (mpi_split_is_root())
+        program_warn_if_long_progressive(opts, PROGRAM, &pilot, f->time_budget, f->target_error,
+                                         cp.resume != NULL ? cp.resume->spp_done : 0);
+    estimate_image e = progressive_render_resumable(path_trace_radiance, path_tracer_sample_fn(pt), pt, &cam,
+                                                    opts->seed, opts->threads, f->time_budget, f->target_error,
+                                                    opts->quiet ? NULL : stdout, &cp);
+    checkpoint_free(&resumed);
+    bool ok = true;
+    if (mpi_split_is_root()) { /* rank 0 writes */
+        counters_path_for_image(opts->out, counters_path, sizeof counters_path);
+        ok = image_write(&e.mean, opts->out, opts->exposure, err, sizeof err) &&
+             counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err);
+    }
+    if (ok)
+        program_checkpoint_done(opts, &cp);
     if (!ok) {
         fprintf(stderr, PROGRAM ": %s\n", err);
     } else if (!opts->quiet) {
@@ -205,6 +224,7 @@ int main(int argc, char **argv)
          1 << 20},
         {"--experiment-spp", CLI_INT, &f.experiment_spp, "N", "largest spp of the experiments (default 256)", 1,
          1 << 16},
+        CLI_CHECKPOINT_FLAGS(opts),
     };
     cli_spec spec = {PROGRAM,
                      "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"

@@ -12,6 +12,8 @@
 #   make test-bvh8   the wide BVH's suite with 8 children per node instead of 4
 #   make valgrind    one small render of each chapter program under valgrind
 #   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
+#   make mpi         the programs built against OpenMPI, in build/mpi/ (mpirun -np N splits a render)
+#   make test-mpi    1, 2 and 3 MPI ranks make the image one process makes; a killed rank stops the run
 #   make bench       time the acceleration structures beside Embree, and the path tracer, also on Embree's kernels (figures, CSV)
 #   make plots       draw every figure (gnuplot) from data the programs write
 #   make docs        the book: one HTML page per chapter, woven by pandoc, in build/docs/
@@ -23,6 +25,7 @@
 #   mk/config.mk     flags, Debian packages (make deps)
 #   mk/chapters.mk   common/, and per chapter: library, program, suite, chNN, test-chNN
 #   mk/tests.mk      make test, sanitize, test-seeds, fp-contract-leaks, test-bvh8, valgrind, fuzz
+#   mk/mpi.mk        make mpi, mpi-deps, test-mpi
 #   mk/bench.mk      make bench
 #   mk/plots.mk      make plots
 #   mk/docs.mk       make docs, test-docs
@@ -36,6 +39,7 @@
 include mk/config.mk
 include mk/chapters.mk
 include mk/tests.mk
+include mk/mpi.mk
 include mk/bench.mk
 include mk/plots.mk
 include mk/docs.mk

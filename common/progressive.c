@@ -29,12 +29,19 @@ estimate_image estimate_render(radiance_fn radiance, const void *scene, const ca
 estimate_image estimate_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
                                        const camera *cam, int spp, uint64_t seed, int threads)
 {
+    return estimate_render_checkpointed(radiance, sample, scene, cam, spp, seed, threads, NULL);
+}
+
+estimate_image estimate_render_checkpointed(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                            const camera *cam, int spp, uint64_t seed, int threads,
+                                            const checkpointing *cp)
+{
     estimate_image e;
     e.mean = image_make(cam->width, cam->height);
     e.standard_error = image_make(cam->width, cam->height);
     render_job job = {.cam = cam, .spp = spp, .seed = seed, .threads = threads, .quiet = true,
                       .radiance = radiance, .scene = scene, .standard_error = &e.standard_error,
-                      .jitter = true, .sample = sample};
+                      .jitter = true, .sample = sample, .checkpoints = cp};
     render_stats stats;
     render_image(&job, &e.mean, &stats);
     e.spp = spp;
@@ -100,7 +107,7 @@ static void write_progress(const checkpointing *cp, const estimate_image *total,
     if (!checkpoint_write(cp->path, &c, err, sizeof err))
         fprintf(stderr, "warning: no checkpoint: %s\n", err);
     else if (!cp->quiet)
-        fprintf(stderr, "checkpoint: %ld samples per pixel (%d passes) -> %s (--resume %s continues)\n", total->spp,
+        fprintf(stderr, "checkpoint: %ld samples per pixel after pass %d -> %s (--resume %s continues)\n", total->spp,
                 pass, cp->path, cp->path);
     free(payload);
 }

@@ -43,6 +43,12 @@ estimate_image estimate_render(radiance_fn radiance, const void *scene, const ca
 estimate_image estimate_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
                                        const camera *cam, int spp, uint64_t seed, int threads);
 
+/* The same, keeping checkpoints or resuming one (render.h's checkpoints;
+ * NULL: neither). */
+estimate_image estimate_render_checkpointed(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                            const camera *cam, int spp, uint64_t seed, int threads,
+                                            const checkpointing *cp);
+
 /* The error the image's own variance predicts: sqrt of the mean over pixels
  * and channels of standard_error^2 / (mean^2 + eps), a relative RMSE. */
 double estimate_relative_error(const estimate_image *e);

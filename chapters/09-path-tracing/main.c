@@ -91,7 +91,10 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
 /* --data: on the chosen scene a cached reference, then every rung at
  * doubling sample counts, then (on the first scene) the Russian roulette
  * sweep. The Cornell box, all diffuse, is where MIS gains least; by
- * default the Veach scene, where it gains most, is measured after it. */
+ * default the Veach scene, where it gains most, is measured after it.
+ * Under mpirun every rank renders the references with the others; then
+ * rank 0 alone measures (the other ranks stop: a measurement of time
+ * wants the machine to itself). */
 static int run_experiments(const cli_options *opts, const chapter_flags *f, const path_tracer *pt)
 {
     const char *first = f->obj != NULL ? "obj" : cli_choice_name(&f->builtin);
@@ -99,32 +102,43 @@ static int run_experiments(const cli_options *opts, const chapter_flags *f, cons
     int scene_count = strcmp(first, "cornell") == 0 ? 2 : 1;
     char err[1024] = "";
     bool ok = true;
-    for (int k = 0; k < scene_count && ok; k++) {
-        pt_scene other;
-        path_tracer experiment_pt = *pt;
-        if (k > 0) {
-            pt_scene_build_builtin(&other, names[k]);
-            experiment_pt.scene = &other;
-        }
-        const pt_scene *scene = experiment_pt.scene;
-        camera cam = pt_scene_camera(scene, f->experiment_size, f->experiment_size);
+    pt_scene other;
+    path_tracer experiment_pt[2] = {*pt, *pt};
+    if (scene_count > 1) {
+        pt_scene_build_builtin(&other, names[1]);
+        experiment_pt[1].scene = &other;
+    }
+    camera cams[2];
+    estimate_image references[2];
+    memset(references, 0, sizeof references);
+    int made = 0;
+    for (int k = 0; k < scene_count && ok; k++, made++) {
+        cams[k] = pt_scene_camera(experiment_pt[k].scene, f->experiment_size, f->experiment_size);
         char reference_path[4096];
         snprintf(reference_path, sizeof reference_path, "%s/ch09_reference_%s_%d.exr", f->data, names[k],
                  f->experiment_size);
-        estimate_image reference;
-        printf("\n== scene %s\n", names[k]);
-        ok = experiment_reference(&experiment_pt, &cam, f->reference_spp, opts->threads, reference_path, &reference,
-                                  err, sizeof err) &&
-             experiment_convergence(scene, names[k], &cam, &reference, f->experiment_spp, opts->threads, f->data,
-                                    err, sizeof err) &&
-             (k > 0 || experiment_russian_roulette(scene, &cam, &reference, 64, opts->threads, f->data, err,
-                                                   sizeof err));
-        estimate_image_free(&reference);
-        if (k > 0)
-            pt_scene_free(&other);
+        if (mpi_split_is_root())
+            printf("\n== reference of scene %s\n", names[k]);
+        ok = experiment_reference(&experiment_pt[k], &cams[k], f->reference_spp, opts->threads, reference_path,
+                                  &references[k], err, sizeof err);
+        ok = mpi_split_broadcast_int(ok); /* rank 0's saving may fail: all stop */
     }
-    if (!ok)
-        fprintf(stderr, PROGRAM ": %s\n", err);
+    if (mpi_split_leave()) { /* rank 0 measures */
+        for (int k = 0; k < scene_count && ok; k++) {
+            const pt_scene *scene = experiment_pt[k].scene;
+            printf("\n== scene %s\n", names[k]);
+            ok = experiment_convergence(scene, names[k], &cams[k], &references[k], f->experiment_spp, opts->threads,
+                                        f->data, err, sizeof err) &&
+                 (k > 0 || experiment_russian_roulette(scene, &cams[k], &references[k], 64, opts->threads, f->data,
+                                                       err, sizeof err));
+        }
+        if (!ok)
+            fprintf(stderr, PROGRAM ": %s\n", err);
+    }
+    for (int k = 0; k < made; k++)
+        estimate_image_free(&references[k]);
+    if (scene_count > 1)
+        pt_scene_free(&other);
     return ok ? 0 : 1;
 }
 

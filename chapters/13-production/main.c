@@ -13,6 +13,7 @@
 #include "effects.h"
 #include "program.h"
 #include "run_record.h"
+#include "mpi_split.h"
 
 typedef struct {
     cli_choice builtin, walls, rr;
@@ -81,7 +82,12 @@ static int render(cli_options *opts, const production_flags *f)
     char why[160];
     int status;
     run_record_note("russian_roulette", pt_russian_roulette_name(pt.russian_roulette));
-    if (!f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why)) {
+    bool wide = !f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why);
+    if (wide && mpi_split_refuse("13-production", "eight paths at a time (--one-path is)")) {
+        pt_scene_free(&sc);
+        return 2;
+    }
+    if (wide) {
         run_record_note("integrator", "lecture, eight paths at a time");
         status = render_eight_paths(opts, &pt, &cam);
     } else {
@@ -111,6 +117,7 @@ int main(int argc, char **argv)
         {"--bench", CLI_BOOL, &f.bench, NULL, "the table of what each step buys, on the Cornell box (a square of "
                                               "--width pixels, --spp samples; best of 5)", 0, 0},
         {"--bench-csv", CLI_STRING, &f.bench_csv, "FILE", "with --bench: also write the table as CSV", 0, 0},
+        CLI_CHECKPOINT_FLAGS(opts),
     };
     cli_spec spec = {"13-production",
                      "What production renderers do: chapter 09's lecture path tracer on the flat set or the\n"
@@ -118,6 +125,8 @@ int main(int argc, char **argv)
                      "allows (at most 64 diffuse triangles, no spheres or point lights). --bench measures each step.",
                      extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision, one path at a time)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    if (f.bench && mpi_split_refuse("13-production", "--bench"))
+        return 2;
     opts.jitter = true;
     if (f.bench_csv != NULL && !f.bench) {
         fprintf(stderr, "13-production: --bench-csv %s: only with --bench\ntry --help\n", f.bench_csv);

@@ -433,11 +433,23 @@ void cli_print_help(const cli_spec *spec, const cli_options *d)
 static void protect_checkpoint(const cli_spec *spec, cli_options *opts)
 {
     static char default_path[PATH_MAX];
+    char err[512];
+    const size_t err_size = sizeof err;
     opts->checkpoint_offered = find_extra(spec, "--resume", false) != NULL;
     if (!opts->checkpoint_offered)
         return;
     if (opts->resume != NULL)
         input_file_check_not_output(opts->resume);
+    if (opts->checkpoint != NULL) { /* its directory must be there and writable, as --out's */
+        char dir[PATH_MAX];
+        const char *slash = strrchr(opts->checkpoint, '/');
+        snprintf(dir, sizeof dir, "%.*s", slash == NULL ? 1 : slash == opts->checkpoint ? 1 : (int)(slash - opts->checkpoint),
+                 slash == NULL ? "." : opts->checkpoint);
+        if (!check_directory("--checkpoint", opts->checkpoint, dir, err, err_size)) {
+            fprintf(stderr, "%s: %s\n(try '%s --help')\n", spec->program, err, spec->program);
+            exit(2);
+        }
+    }
     if (opts->checkpoint == NULL && opts->resume != NULL) {
         opts->checkpoint = opts->resume;
     } else if (opts->checkpoint == NULL) {

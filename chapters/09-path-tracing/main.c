@@ -39,6 +39,9 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     if (from_file && (f->obj != NULL || f->data != NULL)) {
         snprintf(err, sizeof err, "--scene does not combine with --obj or --data");
         status = 2;
+    } else if (f->data != NULL && opts->resume != NULL) {
+        snprintf(err, sizeof err, "--resume continues a render, not --data (whose references resume by themselves)");
+        status = 2;
     } else if (f->integrator.index < 0 && from_file && desc.integrator[0] != '\0' &&
                !pt_integrator_parse(desc.integrator, &integrator)) {
         snprintf(err, sizeof err, "%s:%d:%d: unknown integrator '%s' (lecture, cosine, mis)", desc.source,

@@ -83,7 +83,10 @@ static int render(cli_options *opts, const production_flags *f)
     int status;
     run_record_note("russian_roulette", pt_russian_roulette_name(pt.russian_roulette));
     bool wide = !f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why);
-    if (wide && mpi_split_refuse("13-production", "eight paths at a time (--one-path is)")) {
+    if (wide && opts->resume != NULL)
+        fprintf(stderr, "13-production: --resume %s: eight paths at a time keep no checkpoints (--one-path does)\n",
+                opts->resume);
+    if (wide && (opts->resume != NULL || mpi_split_refuse("13-production", "eight paths at a time (--one-path is)"))) {
         pt_scene_free(&sc);
         return 2;
     }

@@ -145,7 +145,7 @@ static int program_explain(const cli_options *opts, const char *label, const ren
  * numbers from its own counters and the pixels' own streams, so the image
  * is untouched. Only renders of more than LONG_RENDER_PIXELS pixels are
  * piloted: smaller ones end before a warning would help. */
-enum { PILOT_PIXELS = 64, LONG_RENDER_PIXELS = 16384, PROGRESSIVE_PILOT_SPP = 16 };
+enum { PILOT_GRID = 8, PILOT_PIXELS = PILOT_GRID * PILOT_GRID, LONG_RENDER_PIXELS = 16384, PROGRESSIVE_PILOT_SPP = 16 };
 static const double LONG_RENDER_SECONDS = 60.0;
 
 /* The pilot's estimate of the whole render's seconds on `threads` threads,
@@ -158,9 +158,12 @@ static double pilot_seconds(const render_job *job, int threads, double *relative
     memset(&ignored, 0, sizeof ignored);
     double start = timer_seconds(), sum = 0.0;
     for (int k = 0; k < PILOT_PIXELS; k++) {
-        long i = (long)((double)k * (double)pixels / PILOT_PIXELS);
+        /* the centres of an 8 x 8 grid of cells over the image (pixel k *
+         * pixels / 64 would fall in one column, often the image's black edge) */
+        int x = (int)((2 * (k % PILOT_GRID) + 1) * (long)job->cam->width / (2 * PILOT_GRID));
+        int y = (int)((2 * (k / PILOT_GRID) + 1) * (long)job->cam->height / (2 * PILOT_GRID));
         vec3 se;
-        vec3 m = render_pixel(job, (int)(i % job->cam->width), (int)(i / job->cam->width), &ignored, &se);
+        vec3 m = render_pixel(job, x, y, &ignored, &se);
         const float mean[3] = {m.x, m.y, m.z}, error[3] = {se.x, se.y, se.z};
         for (int c = 0; c < 3; c++) /* progressive.c's RELATIVE_ERROR_EPSILON */
             sum += (double)error[c] * error[c] / ((double)mean[c] * mean[c] + 1e-2);
@@ -170,12 +173,16 @@ static double pilot_seconds(const render_job *job, int threads, double *relative
     return (timer_seconds() - start) / PILOT_PIXELS * (double)pixels / threads;
 }
 
-static void warn_long(const char *label, double estimate, int threads, const char *how)
+/* The advice for a plain render. */
+static const char PLAIN_ADVICE[] = "a smaller --width, --height or --spp first, or a chapter with an acceleration "
+                                   "structure (06, 09, 13) for a large mesh";
+
+static void warn_long(const char *label, double estimate, int threads, const char *advice)
 {
     if (estimate > LONG_RENDER_SECONDS)
         fprintf(stderr, "%s: warning: this render will take about %.0f minutes on %d threads%s (from a pilot of %d "
-                "pixels): a smaller --width, --height or --spp first, or a chapter with an acceleration structure "
-                "(06, 09, 13) for a large mesh\n", label, estimate / 60.0, threads, how, PILOT_PIXELS);
+                "pixels): %s\n", label, estimate / 60.0, threads, mpi_split_ranks() > 1 ? " of all ranks" : "",
+                PILOT_PIXELS, advice);
 }
 
 void program_warn_if_long_progressive(const cli_options *opts, const char *label, const render_job *job,
@@ -201,7 +208,8 @@ void program_warn_if_long_progressive(const cli_options *opts, const char *label
         double until_target = per_spp * (double)(spp - spp_done);
         estimate = seconds > 0.0 && seconds < until_target ? seconds : until_target;
     }
-    warn_long(label, estimate, threads, mpi_split_ranks() > 1 ? " of every rank" : "");
+    warn_long(label, estimate, threads,
+              target_error > 0.0 ? "a larger --target-error, or a --time-budget, first" : "a smaller --time-budget first");
 }
 
 /* The pilot's estimate of the seconds the render still needs (a resumed
@@ -215,7 +223,7 @@ static double warn_if_long(const cli_options *opts, const char *label, const ren
     int threads = (opts->threads > 0 ? opts->threads : omp_get_max_threads()) * mpi_split_ranks();
     double estimate = pilot_seconds(job, threads, NULL) * (double)(job->spp - spp_done) / job->spp;
     if (!opts->quiet)
-        warn_long(label, estimate, threads, mpi_split_ranks() > 1 ? " of every rank" : "");
+        warn_long(label, estimate, threads, PLAIN_ADVICE);
     return estimate;
 }
 

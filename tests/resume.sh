@@ -13,6 +13,8 @@
 #   - a checkpoint of another render (seed, size, spp, scene file, another
 #     flag) or not a checkpoint at all is refused with status 1 and a
 #     message naming what differs, and nothing is written;
+#   - a progressive render of hours is announced before it starts, one of
+#     a moment is not;
 #   - the twin: a checkpoint whose state is changed by one byte (one
 #     pixel's random stream, as a resume that restarted the streams would
 #     have it) resumes into a different image, so the comparison above can
@@ -116,8 +118,27 @@ offset=$(($(stat -c %s "$work/changed.checkpoint") - 88 * (40 * 32 - (40 * 16 + 
 printf '\x5a' | dd of="$work/changed.checkpoint" bs=1 seek=$offset conv=notrunc status=none
 "$program" $plain --threads 2 --out "$work/changed.exr" --resume "$work/changed.checkpoint"
 differ() { ! cmp -s "$1" "$2"; }
+not_grep() { ! grep -q "$1" "$2"; }
 check "the twin: a resume with one stream changed is not the uninterrupted render" \
     differ "$work/whole.exr" "$work/changed.exr"
+
+# A progressive render that would take far more than a minute says so
+# before it starts (the pilot's error at 16 spp: 0.001 needs some 10^5 spp);
+# one that reaches its target at once does not.
+"$program" --width 256 --height 256 --target-error 0.001 --threads 1 --out "$work/long.exr" \
+    >/dev/null 2>"$work/long.log" &
+long_pid=$!
+waited=0
+while ! grep -q "will take" "$work/long.log" && kill -0 $long_pid 2>/dev/null && [ $waited -lt 200 ]; do
+    sleep 0.05
+    waited=$((waited + 1))
+done
+kill $long_pid 2>/dev/null
+wait $long_pid 2>/dev/null
+check "a progressive render of hours is announced ($(head -c 300 "$work/long.log"))" \
+    grep -q "warning: this render will take about [0-9]* minutes" "$work/long.log"
+"$program" --width 128 --height 128 --target-error 0.5 --threads 1 --out "$work/short.exr" >/dev/null 2>"$work/short.log"
+check "a short progressive render is not" not_grep "will take about" "$work/short.log"
 
 echo "resume: $checks checks, $failures failed"
 [ $failures = 0 ]

@@ -148,20 +148,20 @@ static int program_explain(const cli_options *opts, const char *label, const ren
 enum { PILOT_GRID = 8, PILOT_PIXELS = PILOT_GRID * PILOT_GRID, LONG_RENDER_PIXELS = 16384, PROGRESSIVE_PILOT_SPP = 16 };
 static const double LONG_RENDER_SECONDS = 60.0;
 
-/* The pilot's estimate of the whole render's seconds on `threads` threads,
- * and through std_error (if not NULL) the relative error its pixels show
- * (estimate_relative_error's measure over the pilot's pixels). */
-static double pilot_seconds(const render_job *job, int threads, double *relative_error)
+/* The pilot: one-thread seconds for the whole image, and through
+ * relative_error (if not NULL) the error its pixels show, measured as
+ * estimate_relative_error measures an image. */
+static double pilot(const render_job *job, double *relative_error)
 {
     long pixels = (long)job->cam->width * job->cam->height;
     ray_counters ignored;
     memset(&ignored, 0, sizeof ignored);
     double start = timer_seconds(), sum = 0.0;
+    /* An 8 x 8 grid of pixels, each at the centre of its cell: every part
+     * of the picture has its say, the sky and the model alike. */
     for (int k = 0; k < PILOT_PIXELS; k++) {
-        /* the centres of an 8 x 8 grid of cells over the image (pixel k *
-         * pixels / 64 would fall in one column, often the image's black edge) */
-        int x = (int)((2 * (k % PILOT_GRID) + 1) * (long)job->cam->width / (2 * PILOT_GRID));
-        int y = (int)((2 * (k / PILOT_GRID) + 1) * (long)job->cam->height / (2 * PILOT_GRID));
+        int x = (int)(((double)(k % PILOT_GRID) + 0.5) * job->cam->width / (double)PILOT_GRID);
+        int y = (int)(((double)(k / PILOT_GRID) + 0.5) * job->cam->height / (double)PILOT_GRID);
         vec3 se;
         vec3 m = render_pixel(job, x, y, &ignored, &se);
         const float mean[3] = {m.x, m.y, m.z}, error[3] = {se.x, se.y, se.z};
@@ -170,19 +170,38 @@ static double pilot_seconds(const render_job *job, int threads, double *relative
     }
     if (relative_error != NULL)
         *relative_error = sqrt(sum / (3.0 * PILOT_PIXELS));
-    return (timer_seconds() - start) / PILOT_PIXELS * (double)pixels / threads;
+    return (timer_seconds() - start) / PILOT_PIXELS * (double)pixels;
 }
 
-/* The advice for a plain render. */
-static const char PLAIN_ADVICE[] = "a smaller --width, --height or --spp first, or a chapter with an acceleration "
-                                   "structure (06, 09, 13) for a large mesh";
-
-static void warn_long(const char *label, double estimate, int threads, const char *advice)
+double program_pilot_seconds(const render_job *job)
 {
-    if (estimate > LONG_RENDER_SECONDS)
-        fprintf(stderr, "%s: warning: this render will take about %.0f minutes on %d threads%s (from a pilot of %d "
-                "pixels): %s\n", label, estimate / 60.0, threads, mpi_split_ranks() > 1 ? " of all ranks" : "",
-                PILOT_PIXELS, advice);
+    long pixels = (long)job->cam->width * job->cam->height;
+    return pixels < LONG_RENDER_PIXELS ? 0.0 : pilot(job, NULL);
+}
+
+/* Every thread of every rank (mpi_split.h) shares the work. */
+static int all_threads(const cli_options *opts)
+{
+    return (opts->threads > 0 ? opts->threads : omp_get_max_threads()) * mpi_split_ranks();
+}
+
+static void warn_long(const cli_options *opts, const char *label, double one_thread_seconds, const char *advice)
+{
+    int threads = all_threads(opts);
+    double estimate = one_thread_seconds / threads;
+    if (opts->quiet || estimate <= LONG_RENDER_SECONDS)
+        return;
+    bool minutes = estimate >= 120.0;
+    fprintf(stderr, "%s: warning: this render will take about %.0f %s on %d threads%s (from a pilot of %d "
+            "pixels): %s\n", label, minutes ? estimate / 60.0 : estimate, minutes ? "minutes" : "seconds", threads,
+            mpi_split_ranks() > 1 ? " of all ranks" : "", PILOT_PIXELS, advice);
+}
+
+void program_warn_if_long(const cli_options *opts, const char *label, double one_thread_seconds)
+{
+    warn_long(opts, label, one_thread_seconds,
+              "a smaller --width, --height or --spp first, or a chapter with an acceleration structure (06, 09, 13) "
+              "for a large mesh");
 }
 
 void program_warn_if_long_progressive(const cli_options *opts, const char *label, const render_job *job,
@@ -191,40 +210,24 @@ void program_warn_if_long_progressive(const cli_options *opts, const char *label
     long pixels = (long)job->cam->width * job->cam->height;
     if (opts->quiet || pixels < LONG_RENDER_PIXELS || (seconds > 0.0 && seconds <= LONG_RENDER_SECONDS))
         return;
-    int threads = (opts->threads > 0 ? opts->threads : omp_get_max_threads()) * mpi_split_ranks();
-    double estimate = seconds;
+    double one_thread = seconds * all_threads(opts); /* the budget, if that is all */
     if (target_error > 0.0) {
         /* The error falls as 1/sqrt(spp): from the pilot's error at its
          * spp, the passes (doubling from 2) stop at the first power of two
          * past PILOT_SPP (e / target)^2, and at 16 at least. */
-        render_job pilot = *job;
-        pilot.spp = PROGRESSIVE_PILOT_SPP;
+        render_job at_16 = *job;
+        at_16.spp = PROGRESSIVE_PILOT_SPP;
         double error = 0.0;
-        double per_spp = pilot_seconds(&pilot, threads, &error) / PROGRESSIVE_PILOT_SPP;
+        double per_spp = pilot(&at_16, &error) / PROGRESSIVE_PILOT_SPP;
         double needed = PROGRESSIVE_PILOT_SPP * (error / target_error) * (error / target_error);
         long spp = 16;
         while ((double)spp < needed && spp < (1L << 40))
             spp *= 2;
-        double until_target = per_spp * (double)(spp - spp_done);
-        estimate = seconds > 0.0 && seconds < until_target ? seconds : until_target;
+        double until_target = per_spp * (double)(spp > spp_done ? spp - spp_done : 0);
+        one_thread = seconds > 0.0 && one_thread < until_target ? one_thread : until_target;
     }
-    warn_long(label, estimate, threads,
+    warn_long(opts, label, one_thread,
               target_error > 0.0 ? "a larger --target-error, or a --time-budget, first" : "a smaller --time-budget first");
-}
-
-/* The pilot's estimate of the seconds the render still needs (a resumed
- * one has only the rest to do), with the warning if that is long; 0 for
- * renders too small to pilot. */
-static double warn_if_long(const cli_options *opts, const char *label, const render_job *job, int spp_done)
-{
-    long pixels = (long)job->cam->width * job->cam->height;
-    if (pixels < LONG_RENDER_PIXELS || spp_done >= job->spp)
-        return 0.0;
-    int threads = (opts->threads > 0 ? opts->threads : omp_get_max_threads()) * mpi_split_ranks();
-    double estimate = pilot_seconds(job, threads, NULL) * (double)(job->spp - spp_done) / job->spp;
-    if (!opts->quiet)
-        warn_long(label, estimate, threads, PLAIN_ADVICE);
-    return estimate;
 }
 
 bool program_checkpointing(const cli_options *opts, const char *label, const char *kind, size_t payload_bytes,
@@ -289,11 +292,20 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
     if (!program_checkpointing(opts, label, "render", (size_t)cam->width * cam->height * sizeof(render_pixel_state),
                                &cp, &resumed))
         return 1;
-    /* A render that ends before its first checkpoint would be due runs in
-     * one pass, without keeping every pixel's state (88 bytes a pixel). */
-    double estimate = mpi_split_is_root() ? warn_if_long(opts, label, &job, cp.resume != NULL ? (int)cp.resume->done : 0) : 0.0;
-    mpi_split_broadcast(&estimate, sizeof estimate);
-    if (cp.resuming || (cp.path != NULL && estimate >= cp.every_seconds))
+    /* The pilot warns of a long render, and decides whether it keeps
+     * checkpoints: one that ends before the first would be due runs in one
+     * pass, without every pixel's state (88 bytes a pixel). A resumed
+     * render has only the rest to do. */
+    double one_thread = 0.0;
+    if (mpi_split_is_root() && (!opts->quiet || cp.path != NULL) && !cp.resuming) {
+        one_thread = program_pilot_seconds(&job);
+        program_warn_if_long(opts, label, one_thread);
+    } else if (mpi_split_is_root() && cp.resuming && !opts->quiet) {
+        program_warn_if_long(opts, label,
+                             program_pilot_seconds(&job) * (double)(job.spp - cp.resume->done) / job.spp);
+    }
+    mpi_split_broadcast(&one_thread, sizeof one_thread);
+    if (cp.resuming || (cp.path != NULL && one_thread / all_threads(opts) >= cp.every_seconds))
         job.checkpoints = &cp;
     image img = image_make(cam->width, cam->height);
     if (img.rgb == NULL) {

@@ -67,6 +67,19 @@ void program_note_effects(const effects_report *e);
  * accel_stats name), for the report and the counters file. */
 void program_note_accel(const char *name);
 
+/* A warning before a long render. A pilot renders 64 pixels spread over
+ * the image at the full spp, on one thread, through the job's own radiance
+ * or sample function (their own counters and the pixels' own streams: the
+ * image is untouched if the job's scene keeps no state), and scales the
+ * time to the image: program_pilot_seconds() returns that one-thread
+ * estimate (0 for images under 16,384 pixels, which end before a warning
+ * would help). program_warn_if_long() divides it by the threads and warns
+ * on stderr above a minute. program_render() does both; programs with a
+ * loop of their own (bidirectional, Metropolis, eight paths at a time)
+ * call them before theirs. */
+double program_pilot_seconds(const render_job *job);
+void program_warn_if_long(const cli_options *opts, const char *label, double one_thread_seconds);
+
 /* A chapter's warning about something in the scene file it cannot show:
  * "label: file:line:col: warning: message". */
 void program_warn(const char *label, const scene_desc *d, int line, int column, const char *format, ...)

@@ -228,12 +228,8 @@ static render_pixel_state *start_states(const render_job *job, int *done, double
     *done = 0;
     *seconds = 0.0;
     memset(counters, 0, sizeof *counters);
-    if (!cp->resuming) {
-        for (int y = 0; y < height; y++)
-            for (int x = 0; x < width; x++)
-                states[(size_t)y * width + x] = pixel_state_start(job, x, y);
-        return states;
-    }
+    if (!cp->resuming)
+        return states; /* each pixel's starts with its first sample (render_in_passes) */
     if (mpi_split_is_root()) {
         memcpy(states, cp->resume->payload, pixels * sizeof *states);
         *done = (int)cp->resume->done;
@@ -268,8 +264,12 @@ static void render_in_passes(const render_job *job, image *out, render_stats *st
             for (int y = 0; y < height; y++) {
                 if (!mpi_split_owns_row(y))
                     continue;
-                for (int x = 0; x < width; x++)
-                    pixel_add_samples(job, x, y, done, done + n, &states[(size_t)y * width + x], &mine);
+                for (int x = 0; x < width; x++) {
+                    render_pixel_state *st = &states[(size_t)y * width + x];
+                    if (done == 0) /* here, not all at once: the pages fill as the rows are rendered */
+                        *st = pixel_state_start(job, x, y);
+                    pixel_add_samples(job, x, y, done, done + n, st, &mine);
+                }
                 progress_advance(&bar, n);
             }
 #pragma omp critical(render_counters)

@@ -17,6 +17,9 @@ What it does to a page:
     quick or full). A hand-drawn diagram, docs/diagrams/X.svg, is copied as
     it is and named under it. An image that is missing (in the repository
     or the build), or has no command, stops the build.
+  * Measured tables. Between "<!-- table NAME -->" and "<!-- end of table
+    NAME -->" the page shows build/plots/NAME.md, the table `make plots`
+    wrote from the data of this build's plot (docs/splice.sh).
   * Links. A link to another chapter's README.md goes to that chapter's page;
     a link to a source file goes to the file in the repository; an #anchor
     must name a heading of the page.
@@ -797,6 +800,28 @@ local function check_diagram(doc, chapter)
   end
 end
 
+-- A measured table (docs/splice.sh): the README holds the committed copy,
+-- from the run that drew the committed figure; the page shows the table of
+-- this build's run (build/plots/NAME.md), which drew this page's plot.
+local function splice_tables(blocks)
+  local out, skipping = {}, nil
+  for _, b in ipairs(blocks) do
+    local text = b.t == "RawBlock" and b.text:gsub("%s+$", "") or ""
+    local name = text:match("^<!%-%- table ([%w_]+) %-%->$")
+    if skipping then
+      if text == "<!-- end of table " .. skipping .. " -->" then skipping = nil end
+    elseif name then
+      local md = read_file(M.build .. "/plots/" .. name .. ".md")
+      if not md then fail(where("<!-- table " .. name), "no table " .. M.build .. "/plots/" .. name .. ".md (make plots)") end
+      for _, t in ipairs(pandoc.read(md, "gfm").blocks) do table.insert(out, t) end
+      skipping = name
+    else
+      table.insert(out, b)
+    end
+  end
+  return out
+end
+
 local function check_plots_shown(chapter)
   local number = chapter:sub(1, 2)
   for _, f in ipairs(split_words(M.plots or "")) do
@@ -836,6 +861,7 @@ function Pandoc(doc)
     end
   end
 
+  doc.blocks = splice_tables(doc.blocks)
   local blocks = {}
   local head_done = false
   if chapter then check_sections(doc, chapter) end

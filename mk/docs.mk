@@ -52,6 +52,8 @@ FIGURE_WIDTH ?= 320
 PLOT_WIDTH ?= 800
 COMMITTED_FIGURES := $(sort $(patsubst %,docs/img/%,$(notdir $(shell grep -ho 'img/[A-Za-z0-9_]*\.png' \
   chapters/*/README.md docs/index.md README.md))))
+COMMITTED_TABLES := $(sort $(shell sed -n 's/^<!-- table \([a-z0-9_]*\) -->$$/\1/p' \
+  chapters/*/README.md docs/*.md README.md))
 figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
 	@mkdir -p docs/img
 	@printf '# The committed copies of the figures (make figures): file, source, how its data was made.\n' \
@@ -68,6 +70,8 @@ figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
 	  printf '%s\tbuild/%s\t%s\n' $$f $$src "$$run" >> docs/img/SOURCES.tmp; \
 	done
 	@mv docs/img/SOURCES.tmp docs/img/SOURCES
+	@for t in $(COMMITTED_TABLES); do cp $(BUILD)/plots/$$t.md docs/img/$$t.md || exit 1; done
+	@docs/splice.sh docs/img README.md docs/*.md chapters/*/README.md
 	@du -ch docs/img/*.png | tail -1 | sed 's|$$| in docs/img/ (commit them)|'
 
 # Each figure by the command docs/figures.txt gives it (build/ there means $(BUILD)).
@@ -84,7 +88,7 @@ $(DOCS)/book.css: docs/book.css | docs-deps
 	@mkdir -p $(DOCS)/img
 	cp $< $@
 
-$(DOCS)/%.html: chapters/%/README.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(DOCS)/book.css
+$(DOCS)/%.html: chapters/%/README.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(wildcard $(BUILD)/plots/*.md) $(DOCS)/book.css
 	$(DOC_PANDOC) -f gfm -M page=chapter -M chapter=$* -M files="$(notdir $(wildcard chapters/$*/*.[ch]))" $< -o $@
 
 # The index shows each chapter's picture: it waits for them (with -j, it
@@ -123,6 +127,12 @@ test-docs: docs | docs-deps
 	  || { echo "FAIL: tests/check_images.sh accepted tests/docs/bad_missing_image.md"; exit 1; }; \
 	grep -q 'no_such_figure.png does not exist' $(DOCS_TEST)/bad_images.txt || { cat $(DOCS_TEST)/bad_images.txt; exit 1; }; \
 	echo "ok: tests/docs/bad_missing_image.md is refused: its image is not in the repository"
+	@cp tests/docs/hand_edited_table.md $(DOCS_TEST)/hand_edited_table.md; \
+	! docs/splice.sh --check docs/img $(DOCS_TEST)/hand_edited_table.md > $(DOCS_TEST)/hand_edited_table.txt \
+	  || { echo "FAIL: a table edited by hand (tests/docs/hand_edited_table.md) passed the check"; exit 1; }; \
+	echo "ok: tests/docs/hand_edited_table.md is refused: its table is not the one its run wrote"
+	@docs/splice.sh --check docs/img README.md docs/*.md chapters/*/README.md \
+	  && echo "ok: every measured table a README quotes is the one the run that drew its figure wrote"
 	@tests/check_images.sh README.md docs/*.md chapters/*/README.md \
 	  && echo "ok: every image the READMEs and pages show is a file of the repository"
 	@! CHROMIUM="$(CHROMIUM)" tests/docs_print_pages.sh $(DOC_MAX_PRINTED) tests/docs/bad_long_page.html \

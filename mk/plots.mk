@@ -10,10 +10,14 @@
 # build/data/NAME.run ("quick" or "full", then the command), which the book
 # prints under each plot. The --data runs write their images under
 # build/data/, never over the build/out/ pictures that `make chNN` made.
+# Beside a plot, plots/NAME.table (awk) writes build/plots/NAME.md: the
+# table the chapter quotes, from the same CSV, with the run's command.
 
-.PHONY: plots plot-data
+.PHONY: plots plot-data plot-tables
 
 PLOT_SCRIPTS := $(sort $(wildcard plots/*.gp))
+# The measured tables the chapters quote, from the same data (docs/splice.sh).
+PLOT_TABLES := $(sort $(wildcard plots/*.table))
 DATA_CHAPTERS := $(foreach c,$(CHAPTERS),$(if $(wildcard plots/ch$(call chapter_number,$(c))_*.gp),$(c)))
 
 # Each chapter's quick flags (chapter 07's tables take a second as they are).
@@ -72,4 +76,17 @@ plots: plot-data
 	  echo "gnuplot $$s"; \
 	  gnuplot -e "data_dir='$(BUILD)/data'; plot_dir='$(BUILD)/plots'" $$s || exit 1; \
 	done
+	@$(MAKE) --no-print-directory plot-tables
 	@echo "Plots are in $(BUILD)/plots/ (PNG and SVG), from $(PLOT_MODE) data (make plots FULL=1: full size)."
+
+# The measured tables alone, from the data there is (make plots has run).
+plot-tables:
+	@mkdir -p $(BUILD)/plots
+	@for t in $(PLOT_TABLES); do \
+	  name=$$(basename $$t .table); rec=$(BUILD)/data/$${name%%_*}.run; \
+	  { awk -v data_dir='$(BUILD)/data' -f plots/tables.awk -f $$t && echo && \
+	    printf '*Measured by the run that drew the figure: `%s` (%s data%s).*\n' "$$(cut -f2 $$rec)" \
+	      "$$(cut -f1 $$rec)" "$$(grep -q ^quick $$rec && echo ': a smaller, rougher run; make plots FULL=1 for the full size')"; \
+	  } > $(BUILD)/plots/$$name.md.tmp && mv $(BUILD)/plots/$$name.md.tmp $(BUILD)/plots/$$name.md || exit 1; \
+	  echo "awk -f $$t > build/plots/$$name.md"; \
+	done

@@ -42,7 +42,7 @@ do for [term = 1:2] {
         set terminal svg size 900,600 font ",9"
         set output plot_dir."/ch08_rmse.svg"
     }
-    set multiplot layout 2,2 title "Monte Carlo: RMSE against sample count N (256 independent runs per N)"
+    set multiplot layout 2,2 title "Monte Carlo: RMSE against sample count N"
     set logscale x 2
     set logscale y 10
     set xtics 16

@@ -7,7 +7,7 @@ file = data_dir."/ch09_roulettes.csv"
 do for [t=1:2] {
   if (t == 1) { set terminal pngcairo size 1000,450 font ",10"; set output plot_dir."/ch09_roulettes.png" }
   if (t == 2) { set terminal svg size 1000,450; set output plot_dir."/ch09_roulettes.svg" }
-  set multiplot layout 1,2 title "Four roulettes on the Cornell box (lecture rung, 64 spp, at most 50 bounces)"
+  set multiplot layout 1,2 title "Four roulettes on the Cornell box (lecture rung, at most 50 bounces)"
   set grid ytics
   set key below
   set style fill solid 0.5

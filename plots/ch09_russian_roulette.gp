@@ -6,7 +6,7 @@ file = data_dir."/ch09_russian_roulette.csv"
 do for [t=1:2] {
   if (t == 1) { set terminal pngcairo size 1000,450 font ",10"; set output plot_dir."/ch09_russian_roulette.png" }
   if (t == 2) { set terminal svg size 1000,450; set output plot_dir."/ch09_russian_roulette.svg" }
-  set multiplot layout 1,2 title "Russian roulette with a fixed P_{RR} (cosine rung, 64 spp)"
+  set multiplot layout 1,2 title "Russian roulette with a fixed P_{RR} (cosine rung)"
   set grid
   set key top left
   set xlabel "P_{RR}"

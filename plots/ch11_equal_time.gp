@@ -7,7 +7,7 @@ titles = "path-tracing(ch09-MIS) bidirectional(MIS)"
 do for [format in "png svg"] {
     if (format eq "png") { set terminal pngcairo size 1000,450 font ",10" } else { set terminal svg size 1000,450 }
     set output plot_dir."/ch11_equal_time.".format
-    set multiplot layout 1,2 title "Equal time: error against CPU seconds (32x32, against a 32768-spp reference)"
+    set multiplot layout 1,2 title "Equal time: error against CPU seconds"
     set logscale xy
     set grid
     set key bottom left

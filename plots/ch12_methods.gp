@@ -14,7 +14,7 @@ array colours[3] = ["#1f77b4", "#d62728", "#2ca02c"]
 do for [format in "png svg"] {
     if (format eq "png") { set terminal pngcairo size 1500,480 font ",10" } else { set terminal svg size 1500,480 }
     set output plot_dir."/ch12_methods.".format
-    set multiplot layout 1,3 title "Which method for which scene: error against CPU seconds (128x128; lower is better)"
+    set multiplot layout 1,3 title "Which method for which scene: error against CPU seconds (lower is better)"
     set logscale xy
     set grid
     set key bottom left

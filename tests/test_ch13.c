@@ -30,7 +30,9 @@
 #include "13-production/flat.h"
 #include "13-production/path_tracer_wide.h"
 #include "13-production/spawn_avx.h"
+#include "13-production/speed.h"
 #include "13-production/walls.h"
+#include "13-production/wide_trace.h"
 #include "render.h"
 #include "scene_file.h"
 #include "stats.h"
@@ -1348,18 +1350,158 @@ static void test_eight_paths_same_bits_for_threads_and_lanes(void **state)
     assert_memory_equal(one.mean.rgb, two.mean.rgb, sizeof(float) * 3 * 24 * 24);
     assert_memory_equal(one.standard_error.rgb, two.standard_error.rgb, sizeof(float) * 3 * 24 * 24);
     assert_memory_equal(one.mean.rgb, lanes.mean.rgb, sizeof(float) * 3 * 24 * 24);
-    /* and what it refuses: another rung, or a scene on chapter 06's BVH */
+    /* what it refuses: another rung; what it takes: a scene on chapter
+     * 06's BVH (traced one ray at a time, wide_trace.h) */
     pt.integrator = PT_MIS;
     assert_false(path_tracer_wide_supported(&pt, NULL, 0));
     pt_scene lecture;
     pt_scene_build_cornell_box(&lecture);
     path_tracer on_bvh = tracer(&lecture, PT_LECTURE, RR_FIXED);
-    assert_false(path_tracer_wide_supported(&on_bvh, NULL, 0));
+    assert_true(path_tracer_wide_supported(&on_bvh, NULL, 0));
+    assert_string_equal(wide_scene_tracers_for(&lecture).all.name, "one ray at a time");
     estimate_image_free(&one);
     estimate_image_free(&two);
     estimate_image_free(&lanes);
     pt_scene_free(&lecture);
     pt_scene_free(&sc);
+}
+
+
+/* ---- every scene chapter 09 renders ---------------------------------------------
+ * The same comparison on what the renderer once refused: a mesh larger than
+ * the flat set (the 4-wide BVH's streams), spheres of glass and a GGX
+ * metal, a mirror, a point light and the environment, and the Sobol
+ * sampler. Each scene's twins change one thing in the eight-path render
+ * only -- an albedo, a light's intensity, a term dropped -- and each must
+ * be caught. */
+enum { EVERY_SCENE_CHECKS = 5, MESH_TRIANGLES = 2000 };
+
+/* The box's room, a mirror sphere and a glossy one, a point light, and an
+ * environment that comes in through the open front. */
+static void build_feature_scene(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
+    pt_scene_add_cornell_room(sc, white, red, green, light);
+    pt_scene_add_sphere(sc, vec3_make(370, 120, 350), 120, pt_scene_add_material(sc, pt_mirror(vec3_splat(0.9f))),
+                        false);
+    pt_scene_add_sphere(sc, vec3_make(170, 90, 200), 90,
+                        pt_scene_add_material(sc, pt_glossy(vec3_make(0.9f, 0.6f, 0.3f), 0.2f)), false);
+    pt_scene_add_point_light(sc, vec3_make(278, 400, 150), vec3_splat(8e4f));
+    sc->environment = vec3_splat(2.0f);
+    pt_scene_finish(sc);
+}
+
+/* Scene `scene` (0: the box with a torus, 1: chapter 09's materials, 2:
+ * the feature scene), with its twin `twin` (0: none). */
+static void build_every_scene(pt_scene *sc, int scene, int twin)
+{
+    if (scene == 0)
+        production_scene_box_with_torus(sc, MESH_TRIANGLES);
+    else if (scene == 1)
+        pt_scene_build_cornell_box_materials(sc);
+    else
+        build_feature_scene(sc);
+    for (int m = 0; m < sc->material_count; m++) {
+        pt_material *mat = &sc->materials[m];
+        bool wrong = (scene == 0 && twin == 1) || (scene == 1 && twin == 1 && mat->kind == BSDF_GLASS) ||
+                     (scene == 1 && twin == 2 && mat->kind == BSDF_GLOSSY) ||
+                     (scene == 2 && twin == 3 && mat->kind == BSDF_MIRROR);
+        if (wrong) /* the spheres and the metal block cover a few of the 144 pixels: a larger error */
+            mat->albedo = vec3_scale(mat->albedo, scene == 0 ? 0.85f : 0.5f);
+    }
+    if (scene == 2 && twin == 1)
+        sc->point_lights[0].intensity = vec3_scale(sc->point_lights[0].intensity, 0.5f);
+    if (scene == 2 && twin == 2)
+        sc->environment = vec3_splat(0.0f);
+}
+
+static const char *const EVERY_SCENE_NAMES[] = {"box with a 2000-triangle torus", "glass and GGX metal",
+                                                 "mirror, glossy sphere, point light, environment"};
+static const char *const EVERY_SCENE_TWINS[3][4] = {{NULL, "every albedo 15 % low"},
+                                                    {NULL, "glass tint halved", "GGX F0 halved"},
+                                                    {NULL, "point light halved", "environment dropped",
+                                                     "mirror albedo halved"}};
+
+/* The eight-path render of scene `scene` (twin `twin`) on the production
+ * structures against chapter 09's lecture rung on chapter 06's BVH. */
+static image_check every_scene_check(int scene, int twin, pt_russian_roulette rr, pt_sampler sampler, uint64_t seed)
+{
+    pt_scene wide_sc, lecture_sc;
+    build_every_scene(&wide_sc, scene, twin);
+    use_production(&wide_sc, true);
+    build_every_scene(&lecture_sc, scene, 0);
+    path_tracer w = tracer(&wide_sc, PT_LECTURE, rr), l = tracer(&lecture_sc, PT_LECTURE, rr);
+    w.sampler = l.sampler = sampler;
+    if (rr == RR_THROUGHPUT)
+        w.rr_start_depth = l.rr_start_depth = RR_START_PBRT;
+    image_check c = wide_against_chapter_09(&w, &l, seed);
+    pt_scene_free(&wide_sc);
+    pt_scene_free(&lecture_sc);
+    return c;
+}
+
+static void test_eight_paths_agree_with_chapter_09_on_every_scene(void **state)
+{
+    (void)state;
+    pt_scene mesh;
+    build_every_scene(&mesh, 0, 0);
+    use_production(&mesh, true);
+    assert_true(mesh.triangles.count > 64 && bvh4_is(walls_all(mesh.bvh)));
+    assert_string_equal(wide_scene_tracers_for(&mesh).all.name, "the 4-wide BVH, each lane's ray walking it alone");
+    pt_scene_free(&mesh);
+    for (int scene = 0; scene < 3; scene++)
+        assert_image_check(every_scene_check(scene, 0, RR_FIXED, PT_SAMPLER_RANDOM, 171 + 2 * (uint64_t)scene),
+                           EVERY_SCENE_CHECKS, EVERY_SCENE_NAMES[scene]);
+    assert_image_check(every_scene_check(0, 0, RR_THROUGHPUT, PT_SAMPLER_RANDOM, 181), EVERY_SCENE_CHECKS,
+                       "box with a torus, --rr throughput");
+    assert_image_check(every_scene_check(2, 0, RR_FIXED, PT_SAMPLER_SOBOL, 183), EVERY_SCENE_CHECKS,
+                       "feature scene, --sampler sobol");
+    /* the twins, each caught */
+    for (int scene = 0; scene < 3; scene++)
+        for (int twin = 1; twin < 4 && EVERY_SCENE_TWINS[scene][twin] != NULL; twin++) {
+            image_check c = every_scene_check(scene, twin, RR_FIXED, PT_SAMPLER_RANDOM, 191 + 8 * (uint64_t)scene);
+            print_message("twin, %s, %s: p = %.3g (image mean z = %.1f)\n", EVERY_SCENE_NAMES[scene],
+                          EVERY_SCENE_TWINS[scene][twin], c.p, c.z);
+            assert_true(c.p < image_check_alpha(EVERY_SCENE_CHECKS));
+        }
+}
+
+/* The same image, bit for bit, on 1 and 2 threads, on the scenes above,
+ * with either sampler; and with the walls off (walls.h: exact). */
+static void test_eight_paths_same_bits_for_threads_on_every_scene(void **state)
+{
+    (void)state;
+    for (int scene = 0; scene < 3; scene++)
+        for (int sampler = 0; sampler < 2; sampler++) {
+            pt_scene sc;
+            build_every_scene(&sc, scene, 0);
+            use_production(&sc, true);
+            camera cam = pt_scene_camera(&sc, 20, 20);
+            path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+            pt.sampler = (pt_sampler)sampler;
+            estimate_image one, two;
+            assert_true(render_estimate_wide(&pt, &cam, 4, test_seed(97), 1, &one));
+            assert_true(render_estimate_wide(&pt, &cam, 4, test_seed(97), 2, &two));
+            assert_memory_equal(one.mean.rgb, two.mean.rgb, sizeof(float) * 3 * 20 * 20);
+            assert_memory_equal(one.standard_error.rgb, two.standard_error.rgb, sizeof(float) * 3 * 20 * 20);
+            assert_true(counters_total_rays(&one.counters) == counters_total_rays(&two.counters));
+            /* the walls answer every shadow ray as all the triangles would:
+             * without them, the same image */
+            assert_true(walls_found(sc.bvh));
+            use_production(&sc, false);
+            estimate_image no_walls;
+            assert_true(render_estimate_wide(&pt, &cam, 4, test_seed(97), 2, &no_walls));
+            assert_null(wide_scene_tracers_for(&sc).walls);
+            assert_memory_equal(one.mean.rgb, no_walls.mean.rgb, sizeof(float) * 3 * 20 * 20);
+            estimate_image_free(&no_walls);
+            estimate_image_free(&one);
+            estimate_image_free(&two);
+            pt_scene_free(&sc);
+        }
 }
 
 /* ---- spawn_avx.h: ray.h's offsets, eight lanes at a time -----------------
@@ -1693,16 +1835,16 @@ static void leak_through_pt_scene(leak_tally *t, const char *name, pt_scene *sc,
     leak_add(t, entry, true, c->n, any);
 }
 
-/* The eight-path renderer's two calls (path_tracer_wide.c): the closest
- * hits of eight rays on the scene's flat set, made into hit records as its
- * hit_record_lane() does, and eight shadow rays (no walls in a closed
- * mesh seen from outside: every one goes to all the triangles). */
-static void leak_through_eight_paths(leak_tally *t, const pt_scene *sc, const leak_case *c)
+/* The eight-path renderer's two calls (path_tracer_wide.c, through
+ * wide_trace.h): the closest hits of eight rays on the scene's flat set or
+ * 4-wide BVH, made into hit records as its hit_record_lane() does, and
+ * eight shadow rays (no walls in a closed mesh seen from outside: every
+ * one goes to all the triangles). */
+static void leak_through_tracer(leak_tally *t, const char *name, const pt_scene *sc, const wide_tracer *all,
+                                const leak_case *c)
 {
-    const accel *all = walls_all(sc->bvh);
     long closest = 0, any = 0;
     ray_counters counters = {0};
-    assert_false(walls_found(sc->bvh));
     for (int i = 0; i < c->n; i += FLAT_LANES) {
         int lanes = c->n - i < FLAT_LANES ? c->n - i : FLAT_LANES, active = (1 << lanes) - 1;
         flat_rays8 rays = {0}, segments = {0};
@@ -1711,8 +1853,8 @@ static void leak_through_eight_paths(leak_tally *t, const pt_scene *sc, const le
             flat_rays8_set(&segments, k, leak_segment(c->rays[i + k]));
         }
         flat_hits8 hits;
-        int hit = flat_closest_hit8_raw(all, &rays, active, &hits, &counters);
-        int blocked = flat_any_hit8_raw(all, &segments, active, &counters);
+        int hit = all->closest_hit8(all->context, &rays, active, &hits, &counters);
+        int blocked = all->any_hit8(all->context, &segments, active, &counters);
         for (int k = 0; k < lanes; k++) {
             hit_record record;
             bool found = (hit >> k) & 1;
@@ -1723,8 +1865,27 @@ static void leak_through_eight_paths(leak_tally *t, const pt_scene *sc, const le
             any += !((blocked >> k) & 1);
         }
     }
-    leak_add(t, "ch13 eight-path renderer: first hit a front face", true, c->n, closest);
-    leak_add(t, "ch13 eight-path renderer: shadow ray blocked", true, c->n, any);
+    char entry[LEAK_NAME_SIZE];
+    snprintf(entry, sizeof entry, "ch13 eight paths, %.24s: first hit a front face", name);
+    leak_add(t, entry, true, c->n, closest);
+    snprintf(entry, sizeof entry, "ch13 eight paths, %.24s: shadow ray blocked", name);
+    leak_add(t, entry, true, c->n, any);
+}
+
+/* The renderer's trace step (wide_trace.h): the flat set's kernels or the
+ * 4-wide BVH's walks, whichever the scene's size picks, and the BVH's
+ * streams, which it may be asked for. */
+static void leak_through_eight_paths(leak_tally *t, const pt_scene *sc, const leak_case *c)
+{
+    wide_scene_tracers trace = wide_scene_tracers_for(sc);
+    assert_false(walls_found(sc->bvh));
+    assert_null(trace.walls);
+    const accel *all = walls_all(sc->bvh);
+    leak_through_tracer(t, flat_is(all) ? "flat set" : "4-wide BVH", sc, &trace.all, c);
+    if (bvh4_is(all)) {
+        wide_tracer streams = wide_tracer_streams(all);
+        leak_through_tracer(t, "4-wide BVH streams", sc, &streams, c);
+    }
 }
 
 /* Every entry point on one case. */
@@ -1797,8 +1958,7 @@ static void leak_trace_case(const leak_case *c, leak_tally *t)
     }
     pt_scene_use_accel(&sc, production_scene_accel, &sc);
     leak_through_pt_scene(t, "ch13 scene, production structure", &sc, c);
-    if (flat_is(walls_all(sc.bvh))) /* at most 64 triangles: what the eight-path renderer runs on */
-        leak_through_eight_paths(t, &sc, c);
+    leak_through_eight_paths(t, &sc, c); /* the flat set (at most 64 triangles) or the 4-wide BVH's streams */
     pt_scene_free(&sc);
 
     /* Chapter 10's moving mesh (through chapter 06's BVH, the ray moved into
@@ -2103,6 +2263,8 @@ int main(void)
         cmocka_unit_test(test_packets_along_the_walls_match_single_rays),
         cmocka_unit_test(test_eight_paths_agree_with_chapter_09),
         cmocka_unit_test(test_eight_paths_same_bits_for_threads_and_lanes),
+        cmocka_unit_test(test_eight_paths_agree_with_chapter_09_on_every_scene),
+        cmocka_unit_test(test_eight_paths_same_bits_for_threads_on_every_scene),
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
         cmocka_unit_test(test_fast_sincos_turns_is_within_a_few_ulps),
         cmocka_unit_test(test_lanes_light_sample_is_chapter_09s),

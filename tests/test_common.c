@@ -17,6 +17,7 @@
 #include "cli.h"
 #include "counters.h"
 #include "image.h"
+#include "program.h"
 #include "progressive.h"
 #include "ray.h"
 #include "render.h"
@@ -288,6 +289,49 @@ static void test_render_counts_every_camera_ray(void **state)
     assert_int_equal(c.camera_rays, 37 * 23 * 3);
     assert_int_equal(c.shadow_rays, 37 * 23 * 3); /* per-thread counters were all added */
     image_free(&img);
+}
+
+/* The pilot before a long render (common/program.c): 64 pixels at the
+ * full spp on an 8 x 8 grid over the whole image, none for small images. */
+static int pilot_calls;
+static float pilot_left, pilot_right, pilot_top, pilot_bottom;
+
+static vec3 pilot_counting_radiance(const void *scene, ray r, pcg32 *rng, ray_counters *counters)
+{
+    (void)scene;
+    (void)rng;
+    (void)counters;
+    pilot_calls++;
+    pilot_left = fminf(pilot_left, r.direction.x / -r.direction.z);
+    pilot_right = fmaxf(pilot_right, r.direction.x / -r.direction.z);
+    pilot_bottom = fminf(pilot_bottom, r.direction.y / -r.direction.z);
+    pilot_top = fmaxf(pilot_top, r.direction.y / -r.direction.z);
+    return vec3_splat(1.0f);
+}
+
+static void test_pilot_samples_the_whole_image_at_full_spp(void **state)
+{
+    (void)state;
+    /* 90 degrees: the image plane at z = -1 spans -1..1 both ways. */
+    camera big = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 90.0f, 256, 256);
+    render_job job = {.cam = &big, .spp = 5, .seed = 1, .threads = 1, .quiet = true,
+                      .radiance = pilot_counting_radiance};
+    pilot_calls = 0;
+    pilot_left = pilot_bottom = 1e9f;
+    pilot_right = pilot_top = -1e9f;
+    assert_true(program_pilot_seconds(&job) >= 0.0);
+    assert_int_equal(pilot_calls, 64 * 5);
+    /* The grid's outer cells are centred 1/16 of the image in from each
+     * edge: 7/8 of the way out from the middle. */
+    assert_float_equal(pilot_left, -0.875f, 0.01f);
+    assert_float_equal(pilot_right, 0.875f, 0.01f);
+    assert_float_equal(pilot_bottom, -0.875f, 0.01f);
+    assert_float_equal(pilot_top, 0.875f, 0.01f);
+    camera small = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 90.0f, 127, 128);
+    job.cam = &small;
+    pilot_calls = 0;
+    assert_true(program_pilot_seconds(&job) == 0.0);
+    assert_int_equal(pilot_calls, 0);
 }
 
 static vec3 sometimes_nan_radiance(const void *scene, ray r, pcg32 *rng, ray_counters *counters)
@@ -828,6 +872,7 @@ int main(void)
         cmocka_unit_test(test_spawn_offsets_towards_the_direction),
         cmocka_unit_test(test_render_is_bit_identical_for_any_thread_count),
         cmocka_unit_test(test_render_counts_every_camera_ray),
+        cmocka_unit_test(test_pilot_samples_the_whole_image_at_full_spp),
         cmocka_unit_test(test_render_drops_and_counts_nan_samples),
         cmocka_unit_test(test_one_sample_goes_through_the_pixel_centre),
         cmocka_unit_test(test_progressive_stops_at_once_without_noise),

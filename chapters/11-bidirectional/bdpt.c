@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "09-path-tracing/bsdf.h"
+#include "program.h"
 #include "render.h"
 
 bdpt bdpt_defaults(const pt_scene *scene, const camera *cam)
@@ -434,6 +435,29 @@ vec3 bdpt_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *counters)
     return radiance;
 }
 
+/* The job both the render and its pilot run: every camera sample through
+ * bdpt_radiance, with b's film for the splats. */
+static render_job bdpt_job(const bdpt *b, int spp, uint64_t seed, int threads, bool quiet, image *standard_error)
+{
+    render_job job = {.cam = b->cam, .spp = spp, .seed = seed, .threads = threads, .quiet = quiet,
+                      .label = "bidirectional", .radiance = bdpt_radiance, .scene = b,
+                      .standard_error = standard_error, .jitter = true};
+    return job;
+}
+
+double bdpt_pilot_seconds(const bdpt *b, int spp, uint64_t seed)
+{
+    splat_film scratch;
+    if (!splat_film_init(&scratch, b->cam->width, b->cam->height))
+        return 0.0;
+    bdpt with_film = *b;
+    with_film.film = &scratch;
+    render_job job = bdpt_job(&with_film, spp, seed, 1, true, NULL);
+    double seconds = program_pilot_seconds(&job);
+    splat_film_free(&scratch);
+    return seconds;
+}
+
 bool bdpt_render(const bdpt *b, int spp, uint64_t seed, int threads, bool quiet, estimate_image *out)
 {
     const camera *cam = b->cam;
@@ -444,9 +468,7 @@ bool bdpt_render(const bdpt *b, int spp, uint64_t seed, int threads, bool quiet,
     with_film.film = &film;
     out->mean = image_make(cam->width, cam->height);
     out->standard_error = image_make(cam->width, cam->height);
-    render_job job = {.cam = cam, .spp = spp, .seed = seed, .threads = threads, .quiet = quiet,
-                      .label = "bidirectional", .radiance = bdpt_radiance, .scene = &with_film,
-                      .standard_error = &out->standard_error, .jitter = true};
+    render_job job = bdpt_job(&with_film, spp, seed, threads, quiet, &out->standard_error);
     render_stats stats;
     render_image(&job, &out->mean, &stats);
     /* Light tracing's share: one light path per camera sample, so each

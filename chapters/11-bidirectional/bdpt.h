@@ -5,7 +5,7 @@
  * Usage:
  *   bdpt b = bdpt_defaults(&scene, &cam);      (scene from chapter 09)
  *   if (!bdpt_supports(&scene, err, sizeof err)) ... refuse the scene
- *   estimate_image e; bdpt_render(&b, spp, seed, threads, &e, &counters);
+ *   estimate_image e; bdpt_render(&b, spp, seed, threads, quiet, &e);
  *
  * A full path x_0 x_1 ... x_{n-1} runs from a point on a light (x_0) to the
  * eye (x_{n-1}). The light subpath y_0 .. y_{s-1} is its first s vertices,
@@ -93,6 +93,11 @@ vec3 bdpt_radiance(const void *ctx, ray r, pcg32 *rng, ray_counters *counters);
  * standard error is that of the camera part (the splats' is not per pixel).
  * Same image for any thread count. False if memory ran out. */
 bool bdpt_render(const bdpt *b, int spp, uint64_t seed, int threads, bool quiet, estimate_image *out);
+
+/* How long bdpt_render would take on one thread, from a pilot of a few
+ * pixels (program_pilot_seconds; their splats land on a film of their own
+ * and are thrown away). 0 for small images or if memory ran out. */
+double bdpt_pilot_seconds(const bdpt *b, int spp, uint64_t seed);
 
 /* ---- the pieces, exposed for the tests ---------------------------------- */
 

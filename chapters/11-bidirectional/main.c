@@ -194,6 +194,10 @@ static int render(const cli_options *opts, const char *program, const pt_scene *
         pt.integrator = PT_MIS;
         pt.russian_roulette = RR_THROUGHPUT;
         pt.max_depth = max_depth;
+        render_job pilot = {.cam = &cam, .spp = opts->spp, .seed = opts->seed, .radiance = path_trace_radiance,
+                            .scene = &pt, .sample = path_tracer_sample_fn(&pt), .jitter = true};
+        if (!opts->quiet)
+            program_warn_if_long(opts, program, program_pilot_seconds(&pilot));
         e = render_estimate(&pt, &cam, opts->spp, opts->seed, opts->threads);
     } else {
         bdpt b = bdpt_defaults(sc, &cam);
@@ -202,6 +206,8 @@ static int render(const cli_options *opts, const char *program, const pt_scene *
         b.only_s = only_s;
         b.only_t = only_t;
         b.unweighted = f->unweighted;
+        if (!opts->quiet)
+            program_warn_if_long(opts, program, bdpt_pilot_seconds(&b, opts->spp, opts->seed));
         if (!bdpt_render(&b, opts->spp, opts->seed, opts->threads, opts->quiet, &e)) {
             fprintf(stderr, "%s: out of memory\n", program);
             return 1;

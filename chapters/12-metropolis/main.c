@@ -130,6 +130,14 @@ static int render_mlt(const cli_options *opts, const char *program, const mlt_fl
     o.threads = opts->threads;
     o.start = (mlt_start)f->start.index;
     o.quiet = opts->quiet;
+    /* Each mutation is one path through the path tracer, so a pilot of
+     * the path tracer at as many samples per pixel as there are mutations
+     * per pixel says roughly how long the chains will run (the bootstrap
+     * and the splats come on top). */
+    render_job pilot = {.cam = cam, .spp = opts->spp, .seed = opts->seed, .radiance = path_trace_radiance,
+                        .scene = pt, .sample = path_tracer_sample_fn(pt), .jitter = true};
+    if (!opts->quiet)
+        program_warn_if_long(opts, program, program_pilot_seconds(&pilot));
     image img = image_make(cam->width, cam->height);
     mlt_result r;
     int status = 0;

@@ -152,6 +152,9 @@ typedef struct {
  * build time in stats includes both. */
 accel *bvh4_build(const triangle_set *set, bvh_split split);
 
+/* Was `a` built by bvh4_build()? */
+bool bvh4_is(const accel *a);
+
 /* Switch the kernel of a built bvh4; returns false (and changes nothing)
  * for BVH4_KERNEL_SSE when it is not compiled in. The default is SSE where
  * compiled in. */
@@ -179,6 +182,20 @@ void bvh4_closest_hit_stream(const accel *a, const ray *rays, int count, hit_rec
                              ray_counters *counters);
 /* The same for any hit: hit_found[i] is accel_any_hit() of rays[i]. */
 void bvh4_any_hit_stream(const accel *a, const ray *rays, int count, bool *hit_found, ray_counters *counters);
+
+/* The closest hits of a stream before their hit records are made: the
+ * triangle's index in the set (-1: no hit), t and the barycentrics b1, b2,
+ * from which triangle_set_fill_hit() makes what bvh4_closest_hit_stream()
+ * gives, bit for bit. For a caller that makes its own records (chapter
+ * 13's eight-path renderer, wide_trace.h). */
+typedef struct {
+    int index;
+    float t, b1, b2;
+} bvh4_raw_hit;
+void bvh4_closest_hit_stream_raw(const accel *a, const ray *rays, int count, bvh4_raw_hit *hits, bool *hit_found,
+                                 ray_counters *counters);
+/* The same for one ray, walked alone. */
+void bvh4_closest_hit_raw(const accel *a, ray r, bvh4_raw_hit *hit, ray_counters *counters);
 
 /* The traversal's stack: each node pushes at most BVH4_WIDTH - 1 entries,
  * and the wide tree is no deeper than the binary one plus the levels that split

@@ -608,7 +608,8 @@ static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
  * node has arrived. Each ray does exactly what it would alone, in the same
  * order: the same hits, bit for bit. */
 static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
-                                  bool stop_at_first, bool sse, bool watertight, ray_counters *counters)
+                                  bvh4_found *raw, bool stop_at_first, bool sse, bool watertight,
+                                  ray_counters *counters)
 {
     bvh4_traversal lanes[BVH4_STREAM_LANES];
     int ray_of[BVH4_STREAM_LANES]; /* the ray each lane walks, -1: none left */
@@ -656,7 +657,9 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
             }
             int i = ray_of[k];
             hit_found[i] = w->found.lane >= 0;
-            if (!stop_at_first && hit_found[i]) {
+            if (raw != NULL) /* the caller makes its own records */
+                raw[i] = w->found;
+            else if (!stop_at_first && hit_found[i]) {
                 if (waiting_count == BVH4_STREAM_LANES) {
                     int j = waiting[waiting_oldest].ray;
                     finish_closest(b, &waiting[waiting_oldest].found, &rays[j], &hits[j]);
@@ -683,7 +686,7 @@ static ALWAYS_INLINE void stream4(const bvh4 *b, const ray *rays, int count, hit
 /* The kernel and the triangle test chosen once per stream, so stream4() is
  * compiled with them fixed. */
 static void stream4_with_kernel(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
-                                bool stop_at_first, ray_counters *counters)
+                                bvh4_found *raw, bool stop_at_first, ray_counters *counters)
 {
     const bvh4 *b = (const bvh4 *)a;
     bool watertight = a->triangle_test == TRIANGLE_TEST_WATERTIGHT;
@@ -691,30 +694,62 @@ static void stream4_with_kernel(const accel *a, const ray *rays, int count, hit_
     if (b->kernel == BVH4_KERNEL_SSE) {
         if (stop_at_first) {
             if (watertight)
-                stream4(b, rays, count, hits, hit_found, true, true, true, counters);
+                stream4(b, rays, count, hits, hit_found, NULL, true, true, true, counters);
             else
-                stream4(b, rays, count, hits, hit_found, true, true, false, counters);
+                stream4(b, rays, count, hits, hit_found, NULL, true, true, false, counters);
         } else {
-            if (watertight)
-                stream4(b, rays, count, hits, hit_found, false, true, true, counters);
+            if (raw != NULL)
+                stream4(b, rays, count, hits, hit_found, raw, false, true, watertight, counters);
+            else if (watertight)
+                stream4(b, rays, count, hits, hit_found, NULL, false, true, true, counters);
             else
-                stream4(b, rays, count, hits, hit_found, false, true, false, counters);
+                stream4(b, rays, count, hits, hit_found, NULL, false, true, false, counters);
         }
         return;
     }
 #endif
-    stream4(b, rays, count, hits, hit_found, stop_at_first, false, watertight, counters);
+    stream4(b, rays, count, hits, hit_found, raw, stop_at_first, false, watertight, counters);
 }
 
 void bvh4_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
                              ray_counters *counters)
 {
-    stream4_with_kernel(a, rays, count, hits, hit_found, false, counters);
+    stream4_with_kernel(a, rays, count, hits, hit_found, NULL, false, counters);
 }
 
 void bvh4_any_hit_stream(const accel *a, const ray *rays, int count, bool *hit_found, ray_counters *counters)
 {
-    stream4_with_kernel(a, rays, count, NULL, hit_found, true, counters);
+    stream4_with_kernel(a, rays, count, NULL, hit_found, NULL, true, counters);
+}
+
+void bvh4_closest_hit_raw(const accel *a, ray r, bvh4_raw_hit *hit, ray_counters *counters)
+{
+    const bvh4 *b = (const bvh4 *)a;
+    bvh4_found found = traverse4_with(a, &r, false, b->kernel == BVH4_KERNEL_SSE, counters);
+    hit->index = found.lane < 0 ? -1 : bvh4_lane_triangle(b->packets[found.lane / 4].index[found.lane % 4]);
+    hit->t = found.t;
+    hit->b1 = found.b1;
+    hit->b2 = found.b2;
+}
+
+void bvh4_closest_hit_stream_raw(const accel *a, const ray *rays, int count, bvh4_raw_hit *hits, bool *hit_found,
+                                 ray_counters *counters)
+{
+    enum { CHUNK = 64 };
+    const bvh4 *b = (const bvh4 *)a;
+    bvh4_found found[CHUNK];
+    for (int first = 0; first < count; first += CHUNK) {
+        int n = count - first < CHUNK ? count - first : CHUNK;
+        stream4_with_kernel(a, rays + first, n, NULL, hit_found + first, found, false, counters);
+        for (int i = 0; i < n; i++) {
+            bvh4_raw_hit *h = &hits[first + i];
+            h->index = found[i].lane < 0 ? -1
+                                         : bvh4_lane_triangle(b->packets[found[i].lane / 4].index[found[i].lane % 4]);
+            h->t = found[i].t;
+            h->b1 = found[i].b1;
+            h->b2 = found[i].b2;
+        }
+    }
 }
 
 static void bvh4_destroy(accel *a)
@@ -729,6 +764,8 @@ static const accel_ops bvh4_ops_scalar = {closest_hit_scalar, any_hit_scalar, bv
 #if BVH4_HAVE_SSE
 static const accel_ops bvh4_ops_sse = {closest_hit_sse, any_hit_sse, bvh4_destroy, bvh4_use_triangle_test};
 #endif
+
+bool bvh4_is(const accel *a) { return a != NULL && a->ops->destroy == bvh4_destroy; }
 
 const accel_ops *bvh4_default_ops(void)
 {

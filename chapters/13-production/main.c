@@ -6,6 +6,8 @@
 
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
+#include "13-production/bvh4.h"
+#include "13-production/flat.h"
 #include "13-production/path_tracer_wide.h"
 #include "13-production/speed.h"
 #include "13-production/walls.h"
@@ -16,10 +18,10 @@
 #include "mpi_split.h"
 
 typedef struct {
-    cli_choice builtin, walls, rr;
+    cli_choice builtin, walls, rr, sampler;
     const char *obj, *bench_csv;
-    bool bench, one_path;
-    int rr_start;
+    bool bench, bench_scenes, one_path;
+    int rr_start, torus;
     camera_override view; /* --eye, --target, --fov */
 } production_flags;
 
@@ -30,6 +32,10 @@ static int render_eight_paths(const cli_options *opts, const path_tracer *pt, co
 {
     char err[1024], counters_path[4096];
     estimate_image e;
+    /* the warning program_render() gives before a long render, from a
+     * pilot of 64 pixels, for images as large as it pilots */
+    if (!opts->quiet && (long)cam->width * cam->height >= 16384)
+        program_warn_if_long(opts, "13-production", render_estimate_wide_pilot(pt, cam, opts->spp, opts->seed, 64));
     render_estimate_wide(pt, cam, opts->spp, opts->seed, opts->threads, &e);
     counters_path_for_image(opts->out, counters_path, sizeof counters_path);
     int status = 0;
@@ -47,18 +53,54 @@ static int render_eight_paths(const cli_options *opts, const path_tracer *pt, co
     return status;
 }
 
+/* Which structures the scene's rays go through, and why (not --quiet). */
+static void report_structures(const pt_scene *sc, bool walls_asked)
+{
+    const accel *all = walls_all(sc->bvh);
+    if (sc->triangles.count == 0)
+        printf("13-production: no triangles (spheres only)\n");
+    else if (flat_is(all))
+        printf("13-production: %d triangles: the flat set (at most 64: every triangle tested, eight rays per AVX "
+               "instruction)\n", sc->triangles.count);
+    else if (bvh4_is(all))
+        printf("13-production: %d triangles: the 4-wide BVH (more than the 64 the flat set holds), each lane's ray "
+               "walking it alone\n", sc->triangles.count);
+    if (!walls_asked)
+        printf("13-production: walls off (--walls off)\n");
+    else if (walls_found(sc->bvh))
+        printf("13-production: walls: %d triangles with the whole scene in front of them; shadow rays between "
+               "them skip them\n", walls_triangle_count(sc->bvh));
+    else
+        printf("13-production: walls off: no triangle has the whole scene in front of it\n");
+}
+
+/* The scene the flags name: a scene file, an OBJ file, the box with a
+ * torus, or a built-in. */
+static bool load_scene(cli_options *opts, const production_flags *f, pt_scene *sc, scene_desc *desc, bool *from_file,
+                       char *err, size_t err_size)
+{
+    *from_file = program_load_scene(opts, "13-production", desc);
+    if (opts->quiet)
+        pt_scene_report_materials(NULL);
+    if (*from_file)
+        return pt_scene_from_desc(sc, desc, "13-production", err, err_size);
+    if (f->obj != NULL)
+        return pt_scene_load_obj(sc, f->obj, err, err_size);
+    if (f->torus > 0) {
+        production_scene_box_with_torus(sc, f->torus);
+        return true;
+    }
+    return pt_scene_build_builtin(sc, cli_choice_name(&f->builtin));
+}
+
 /* One image of the scene the flags name, on the production structures. */
 static int render(cli_options *opts, const production_flags *f)
 {
     pt_scene sc;
     char err[1024];
     scene_desc desc;
-    bool from_file = program_load_scene(opts, "13-production", &desc);
-    if (opts->quiet)
-        pt_scene_report_materials(NULL);
-    if (from_file ? !pt_scene_from_desc(&sc, &desc, "13-production", err, sizeof err)
-                  : f->obj != NULL ? !pt_scene_load_obj(&sc, f->obj, err, sizeof err)
-                                   : !pt_scene_build_builtin(&sc, cli_choice_name(&f->builtin))) {
+    bool from_file;
+    if (!load_scene(opts, f, &sc, &desc, &from_file, err, sizeof err)) {
         fprintf(stderr, "13-production: %s\n", err);
         scene_desc_free(&desc);
         return 1;
@@ -78,10 +120,14 @@ static int render(cli_options *opts, const production_flags *f)
     pt.effects = effects_decide(&e, EFFECT_ALL);
     pt.russian_roulette = (pt_russian_roulette)f->rr.index;
     pt.rr_start_depth = f->rr_start;
+    pt.sampler = (pt_sampler)f->sampler.index;
     camera cam = pt_scene_camera(&sc, opts->width, opts->height);
     char why[160];
     int status;
     run_record_note("russian_roulette", pt_russian_roulette_name(pt.russian_roulette));
+    run_record_note("sampler", PT_SAMPLER_NAMES[pt.sampler]);
+    if (!opts->quiet && !opts->explain)
+        report_structures(&sc, walls);
     bool wide = !f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why);
     if (wide && opts->resume != NULL)
         fprintf(stderr, "13-production: --resume %s: eight paths at a time keep no checkpoints (--one-path does)\n",
@@ -97,7 +143,8 @@ static int render(cli_options *opts, const production_flags *f)
         if (!f->one_path && !opts->quiet && !opts->explain)
             printf("13-production: one path at a time (eight at a time: %s)\n", why);
         run_record_note("integrator", "lecture, one path at a time");
-        status = program_render(opts, "13-production", path_trace_radiance, &pt, &cam, NULL);
+        status = program_render_sampled(opts, "13-production", path_trace_radiance, path_tracer_sample_fn(&pt), &pt,
+                                        &cam, NULL);
     }
     pt_scene_free(&sc);
     return status;
@@ -107,33 +154,46 @@ int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch13.exr", 512, 512, 16);
     production_flags f = {{PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {ON_OFF, NULL, 0},
-                          {PT_ROULETTE_NAMES, NULL, RR_FIXED}, NULL, NULL, false, false, 3, CAMERA_NOT_OVERRIDDEN};
+                          {PT_ROULETTE_NAMES, NULL, RR_FIXED}, {PT_SAMPLER_NAMES, NULL, PT_SAMPLER_RANDOM}, NULL, NULL,
+                          false, false, false, 3, 0, CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--builtin", CLI_CHOICE, &f.builtin, NULL, "a scene of chapter 09 (default cornell)", 0, 0},
         {"--obj", CLI_STRING, &f.obj, "FILE", "render an OBJ file with its MTL materials instead", 0, 0},
+        {"--torus", CLI_INT, &f.torus, "N", "the Cornell box's room with a diffuse torus of about N triangles in it",
+         8, 100000000},
         CLI_CAMERA_FLAGS(f.view),
         {"--walls", CLI_CHOICE, &f.walls, NULL, "on (default): shadow rays inside a room skip its walls", 0, 0},
         {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed (P_RR 0.8, default), throughput, albedo or off", 0,
          0},
         {"--rr-start", CLI_INT, &f.rr_start, "N", "--rr throughput or albedo: the first bounce it may end", 0, 1000},
+        {"--sampler", CLI_CHOICE, &f.sampler, NULL, "random (default): independent numbers; sobol: each pixel's "
+                                                  "samples the points of a scrambled Sobol sequence (chapter 09)", 0, 0},
         {"--one-path", CLI_BOOL, &f.one_path, NULL, "one path at a time even where eight at a time could run", 0, 0},
         {"--bench", CLI_BOOL, &f.bench, NULL, "the table of what each step buys, on the Cornell box (a square of "
                                               "--width pixels, --spp samples; best of 5)", 0, 0},
         {"--bench-csv", CLI_STRING, &f.bench_csv, "FILE", "with --bench: also write the table as CSV", 0, 0},
+        {"--bench-scenes", CLI_BOOL, &f.bench_scenes, NULL, "s per million samples on 1 thread, 8 paths, one path "
+                                                            "and chapter 09's MIS, on the box and with 10k and "
+                                                            "100k-triangle tori (--width, --spp; best of 3)", 0, 0},
         CLI_CHECKPOINT_FLAGS(opts),
     };
     cli_spec spec = {"13-production",
-                     "What production renderers do: chapter 09's lecture path tracer on the flat set or the\n"
-                     "4-wide BVH, shadow rays that skip a room's walls, eight paths at a time where the scene\n"
-                     "allows (at most 64 diffuse triangles, no spheres or point lights). --bench measures each step.",
+                     "What production renderers do: chapter 09's lecture path tracer, eight paths at a time, on\n"
+                     "any scene chapter 09 renders (meshes, spheres, every material, area and point lights,\n"
+                     "the environment): the flat set for at most 64 triangles, the 4-wide BVH above, shadow\n"
+                     "rays that skip a room's walls where it has them; it says which. --bench measures each step.",
                      extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision, one path at a time)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
-    if (f.bench && mpi_split_refuse("13-production", "--bench"))
+    if ((f.bench || f.bench_scenes) && mpi_split_refuse("13-production", "--bench"))
         return 2;
     opts.jitter = true;
     if (f.bench_csv != NULL && !f.bench) {
         fprintf(stderr, "13-production: --bench-csv %s: only with --bench\ntry --help\n", f.bench_csv);
         return 2;
+    }
+    if (f.bench_scenes) {
+        production_speed_scenes(opts.width, opts.spp, 3);
+        return 0;
     }
     if (!f.bench)
         return render(&opts, &f);

@@ -10,8 +10,10 @@
 #include "13-production/fast_sincos.h"
 #include "13-production/flat.h"
 #include "13-production/walls.h"
+#include "13-production/wide_trace.h"
 #include "08-monte-carlo/sampling.h"
 #include "09-path-tracing/bsdf.h"
+#include "09-path-tracing/sobol_sampler.h"
 #include "explain.h"
 #include "memory.h"
 #include "stats.h"
@@ -30,24 +32,38 @@ enum { LANES = FLAT_LANES };
 static bool use_avx = true;
 void path_tracer_wide_use_avx(bool on) { use_avx = on; }
 
+static bool wide_cpu_has_avx2(void)
+{
+#if WIDE_HAVE_AVX
+    return __builtin_cpu_supports("avx2");
+#else
+    return false;
+#endif
+}
+
 bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_size)
 {
-    const pt_scene *sc = pt->scene;
     const char *reason = NULL;
     if (pt->integrator != PT_LECTURE)
         reason = "only the lecture rung";
     else if (explain_on())
         reason = "--explain follows one path";
-    else if (sc->sphere_count > 0 || sc->point_light_count > 0)
-        reason = "triangles and area lights only (no spheres, no point lights)";
-    else if (sc->triangles.count == 0 || !walls_is(sc->bvh) || !flat_is(walls_all(sc->bvh)))
-        reason = "the scene's triangles are not a flat set (more than 64; pt_scene_use_accel(production_scene_accel))";
-    for (int k = 0; k < sc->material_count && reason == NULL; k++)
-        if (sc->materials[k].kind != BSDF_DIFFUSE)
-            reason = "diffuse materials only";
+    else if (pt->scene->triangles.count > 0 && pt->scene->bvh == NULL)
+        reason = "the scene's triangles are in no structure (pt_scene_finish)";
     if (reason != NULL && why != NULL)
         snprintf(why, why_size, "%s", reason);
     return reason == NULL;
+}
+
+wide_scene_tracers wide_scene_tracers_for(const pt_scene *sc)
+{
+    wide_scene_tracers t;
+    const accel *a = sc->bvh;
+    bool walls = a != NULL && walls_is(a);
+    t.all = wide_tracer_for(walls ? walls_all(a) : a);
+    t.walls = walls && walls_found(a) ? a : NULL;
+    t.occluders = wide_tracer_for(t.walls != NULL ? walls_occluders(a) : NULL);
+    return t;
 }
 
 /* The eight lanes' paths and vertices, structure of arrays, so that the
@@ -91,15 +107,22 @@ typedef struct {
     bool waiting;
     int waiting_unsettled;
     vec3 waiting_radiance;
+    /* --sampler sobol: the sample's point (its rng is the lane's) */
+    sobol_sampler sobol;
+    /* Does the emission the next ray meets count (at the camera, and after
+     * a mirror or glass: no light sample at that vertex counted it)? */
+    bool emission_counts;
 } lane;
 
 /* Shadow rays waiting to be traced, eight by eight, and what each brings
  * if it gets through: entry q is lane q % 8 of rays[q / 8]. Fewer than 8
- * wait between steps, and a step adds at most 8. */
+ * wait between steps, and a step adds at most 8 for the light samples and
+ * 8 per point light: capacity entries, a multiple of 8 (queue_make). */
 typedef struct {
-    flat_rays8 rays[2];
-    vec3 contribution[2 * LANES];
-    int lane[2 * LANES], sample_id[2 * LANES];
+    flat_rays8 *rays;
+    vec3 *contribution;
+    int *lane, *sample_id;
+    int capacity;
 } shadow_queue;
 
 typedef struct {
@@ -109,13 +132,14 @@ typedef struct {
     uint64_t seed;
     image *mean, *standard_error;
     int y, next_x; /* the row, and its next pixel not yet given to a lane */
+    int x_end;     /* the row's end (0: the image's width) */
     ray_counters *counters;
     lane *lanes;
     vertex_lanes *vertex; /* render_row's */
     shadow_queue queue;
     int queued;
     int camera; /* the lanes whose next ray (vertex_lanes ray) is a camera ray */
-    bool occluders_flat; /* the scene has walls, and its occluders are a flat set */
+    const wide_scene_tracers *trace; /* the triangles' structures, eight rays at a time */
     bool avx; /* light_math_avx and bounce_math_avx, where the processor has AVX2 */
     /* pt_scene_emitter_pdf_area() of each material, worked out once: a
      * division in double at every light sample was 5 % of the time */
@@ -123,17 +147,30 @@ typedef struct {
 } row_job;
 
 
+/* The lane's next number, from where chapter 09's path tracer takes it
+ * (path_tracer.h, --sampler): the pixel's stream, or the sample's point of
+ * the pixel's scrambled Sobol sequence. */
+static inline float lane_float(lane *l, const path_tracer *pt)
+{
+    return pt->sampler == PT_SAMPLER_SOBOL ? sobol_sampler_next(&l->sobol) : pcg32_float(&l->rng);
+}
+
 /* A lane's next camera sample, drawn as render_pixel() draws it (jitter
  * within the pixel: two numbers). */
 static void start_sample(lane *l, row_job *job)
 {
-    float px = (float)l->x + pcg32_float(&l->rng), py = (float)l->y + pcg32_float(&l->rng);
+    if (job->pt->sampler == PT_SAMPLER_SOBOL) /* path_trace_sobol_sample(): point sample_id of the pixel's sequence */
+        l->sobol = sobol_sampler_start(job->seed, (uint64_t)l->y * (uint64_t)job->cam->width + (uint64_t)l->x,
+                                       (uint32_t)(job->spp - l->samples_left), &l->rng);
+    float px = (float)l->x + lane_float(l, job->pt);
+    float py = (float)l->y + lane_float(l, job->pt);
     int k = (int)(l - job->lanes);
     flat_rays8_set(&job->vertex->ray, k, camera_ray(job->cam, px, py));
     job->counters->camera_rays++;
     job->camera |= 1 << k;
     l->depth = 0;
     l->radiance = vec3_splat(0.0f);
+    l->emission_counts = true;
     for (int c = 0; c < 3; c++)
         job->vertex->throughput[c][k] = 1.0f;
 }
@@ -141,7 +178,7 @@ static void start_sample(lane *l, row_job *job)
 /* The lane's next pixel of the row, or idle. */
 static void start_pixel(lane *l, row_job *job)
 {
-    if (job->next_x >= job->cam->width) {
+    if (job->next_x >= (job->x_end > 0 ? job->x_end : job->cam->width)) {
         l->x = -1;
         return;
     }
@@ -169,6 +206,21 @@ static void settle(lane *l, vec3 s, row_job *job)
     }
 }
 
+/* Does a sphere of the scene lie on lane k's segment? (pt_scene_occluded's
+ * spheres, lane by lane: a room holds few.) */
+static bool spheres_block_lane(const pt_scene *sc, const flat_rays8 *rays, int k, ray_counters *counters)
+{
+    ray r = flat_rays8_get(rays, k);
+    hit_record ignored;
+    for (int i = 0; i < sc->sphere_count; i++) {
+        sphere shape = {sc->spheres[i].center, sc->spheres[i].radius};
+        counters->primitive_tests++;
+        if (sphere_intersect(&shape, r, &ignored))
+            return true;
+    }
+    return false;
+}
+
 /* Trace the first n queued shadow rays (8, or all if fewer) as one packet, and give
  * each that gets through its contribution, to the sample it belongs to:
  * the lane's current one, or the one before, which is settled once its
@@ -176,6 +228,7 @@ static void settle(lane *l, vec3 s, row_job *job)
 static void trace_queued(row_job *job, int n)
 {
     const pt_scene *sc = job->pt->scene;
+    const wide_scene_tracers *trace = job->trace;
     shadow_queue *queue = &job->queue;
     if (n <= 0)
         return;
@@ -183,13 +236,17 @@ static void trace_queued(row_job *job, int n)
      * inside the walls is tested against the occluders alone. */
     const int active = (1 << n) - 1;
     int blocked;
-    if (job->occluders_flat && walls_segments8_inside(sc->bvh, &queue->rays[0], active) == active) {
-        const accel *occluders = walls_occluders(sc->bvh);
+    if (trace->walls != NULL && walls_segments8_inside(trace->walls, &queue->rays[0], active) == active) {
         job->counters->shadow_rays_inside_walls += (uint64_t)n;
-        blocked = occluders != NULL ? flat_any_hit8_raw(occluders, &queue->rays[0], active, job->counters) : 0;
+        blocked = trace->occluders.any_hit8(trace->occluders.context, &queue->rays[0], active, job->counters);
     } else {
-        blocked = flat_any_hit8_raw(walls_all(sc->bvh), &queue->rays[0], active, job->counters);
+        blocked = trace->all.any_hit8(trace->all.context, &queue->rays[0], active, job->counters);
     }
+    if (sc->sphere_count > 0)
+        for (int left = active & ~blocked; left != 0; left &= left - 1) {
+            int q = __builtin_ctz((unsigned)left);
+            blocked |= (int)spheres_block_lane(sc, &queue->rays[0], q, job->counters) << q;
+        }
     for (int q = 0; q < n; q++) {
         lane *l = &job->lanes[queue->lane[q]];
         bool through = !((blocked >> q) & 1);
@@ -206,14 +263,25 @@ static void trace_queued(row_job *job, int n)
             l->waiting = false;
         }
     }
-    /* n is 8, or all of the queue */
+    /* n is 8, or all of the queue: what is left moves up a whole packet */
     job->queued -= n;
     if (job->queued > 0) {
-        queue->rays[0] = queue->rays[1];
+        memmove(queue->rays, queue->rays + 1, (size_t)((job->queued + LANES - 1) / LANES) * sizeof queue->rays[0]);
         memmove(queue->contribution, queue->contribution + n, (size_t)job->queued * sizeof queue->contribution[0]);
         memmove(queue->lane, queue->lane + n, (size_t)job->queued * sizeof queue->lane[0]);
         memmove(queue->sample_id, queue->sample_id + n, (size_t)job->queued * sizeof queue->sample_id[0]);
     }
+}
+
+/* Lane k's shadow ray at the end of the queue, with what it brings. */
+static void queue_push(row_job *job, int k, ray shadow, vec3 contribution)
+{
+    int q = job->queued++;
+    flat_rays8_set(&job->queue.rays[q / LANES], q % LANES, shadow);
+    job->queue.contribution[q] = contribution;
+    job->queue.lane[q] = k;
+    job->queue.sample_id[q] = job->lanes[k].sample_id;
+    job->lanes[k].unsettled++;
 }
 
 /* Settle the lane's waiting sample: its shadow rays were queued before
@@ -273,11 +341,12 @@ static void lanes_set(float v[3][LANES], int k, vec3 x)
 
 /* Lane k's random numbers for its light sample, and the point they pick:
  * false if there is no light to sample. */
-static bool pick_light(lane *l, const pt_scene *sc, const float *pdf_area, vertex_lanes *L, int k)
+static bool pick_light(lane *l, const path_tracer *pt, const float *pdf_area, vertex_lanes *L, int k)
 {
+    const pt_scene *sc = pt->scene;
     vec3 x_light, n_light;
     int light_material;
-    float u_pick = pcg32_float(&l->rng), u1 = pcg32_float(&l->rng), u2 = pcg32_float(&l->rng);
+    float u_pick = lane_float(l, pt), u1 = lane_float(l, pt), u2 = lane_float(l, pt);
     if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &L->x_error[k], &n_light, &light_material))
         return false;
     lanes_set(L->x_light, k, x_light);
@@ -377,17 +446,18 @@ SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes)
 /* The roulette and the two numbers of the next direction, after the light
  * sample, drawn as shade() draws them: the lane's bit if the path may go on
  * (bounce_math then decides whether its f cos / pdf is black). */
-static int roll_bounce(lane *l, const path_tracer *pt, vertex_lanes *L, int k)
+static int roll_bounce(lane *l, const path_tracer *pt, vertex_lanes *L, int k, bsdf_kind kind)
 {
-    if (l->depth + 2 > pt->max_depth || !(pt->effects & EFFECT_INDIRECT))
+    /* path_goes_on(): a glossy surface passes on glossy light, a diffuse one indirect light */
+    if (l->depth + 2 > pt->max_depth || !(pt->effects & (kind == BSDF_GLOSSY ? EFFECT_GLOSSY : EFFECT_INDIRECT)))
         return 0;
     float p_rr = 1.0f;
     vec3 albedo = vec3_make(L->albedo[0][k], L->albedo[1][k], L->albedo[2][k]);
     vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
-    if (path_tracer_roulette(pt, l->depth, throughput, albedo, &p_rr) && pcg32_float(&l->rng) >= p_rr)
+    if (path_tracer_roulette(pt, l->depth, throughput, albedo, &p_rr) && lane_float(l, pt) >= p_rr)
         return 0;
-    L->u_y[k] = pcg32_float(&l->rng); /* shade()'s order */
-    L->u_x[k] = pcg32_float(&l->rng);
+    L->u_y[k] = lane_float(l, pt); /* shade()'s order */
+    L->u_x[k] = lane_float(l, pt);
     L->rr_scale[k] = 1.0f / p_rr;
     return 1 << k;
 }
@@ -497,6 +567,154 @@ SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
 }
 #endif
 
+/* ---- the other materials, one lane at a time --------------------------------------
+ * Glossy surfaces, mirrors and glass, and point lights, through chapter
+ * 09's BSDFs (bsdf_eval, bsdf_sample): the lanes on them are few in most
+ * scenes, and their arithmetic is the book's, not a copy. */
+
+#define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
+
+/* shade()'s light sample at a glossy vertex: sample_direct_light's
+ * arithmetic with bsdf_eval(); the lane's bit if it adds light. */
+static int light_math_surface_lane(vertex_lanes *L, int k, const pt_material *m)
+{
+    vec3 to_light = vec3_sub(AT(x_light), AT(p));
+    float distance2 = vec3_length_squared(to_light);
+    vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
+    vec3 n = AT(n);
+    float cos_theta = vec3_dot(n, wi), cos_theta_light = -vec3_dot(AT(n_light), wi);
+    if (!(cos_theta_light > 0.0f && cos_theta > 0.0f))
+        return 0;
+    vec3 f = bsdf_eval(m, n, AT(wo), wi);
+    if (vec3_is_black(f))
+        return 0;
+    float pdf_light = distance2 * L->pdf_area[k] / cos_theta_light; /* per steradian */
+    lanes_set(L->contribution, k, vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light)));
+    ray shadow = ray_spawn_to(AT(p), L->p_error[k], AT(ng), AT(x_light), L->x_error[k], AT(n_light));
+    lanes_set(L->shadow_origin, k, shadow.origin);
+    lanes_set(L->shadow_direction, k, shadow.direction);
+    L->shadow_t_min[k] = shadow.t_min;
+    L->shadow_t_max[k] = shadow.t_max;
+    return 1 << k;
+}
+
+/* The next ray of a lane, kept aside while bounce_math_avx writes all
+ * eight lanes. */
+typedef struct {
+    ray next;
+    vec3 throughput, wo;
+} lane_bounce;
+
+/* shade()'s bounce at a glossy vertex: wi uniform on the hemisphere
+ * (chapter 08's sample_uniform_hemisphere), f cos / pdf from bsdf_eval();
+ * false if that is black. */
+static bool bounce_surface_lane(const vertex_lanes *L, int k, const pt_material *m, lane_bounce *out)
+{
+    vec3 n = AT(n);
+    vec3 local = sample_uniform_hemisphere(vec2_make(L->u_x[k], L->u_y[k]));
+    vec3 wi = frame_to_world(n, local);
+    vec3 weight = vec3_scale(bsdf_eval(m, n, AT(wo), wi), local.z / uniform_hemisphere_pdf());
+    if (vec3_is_black(weight))
+        return false;
+    out->next = ray_spawn(AT(p), L->p_error[k], AT(ng), wi);
+    out->throughput = vec3_scale(vec3_mul(AT(throughput), weight), L->rr_scale[k]);
+    out->wo = vec3_neg(wi);
+    return true;
+}
+
+/* shade_delta(): a mirror or glass picks the direction (bsdf_sample), from
+ * the roulette's number and three more, in its order; the emission the ray
+ * meets then counts. False if the path ends here. */
+static bool bounce_delta_lane(lane *l, const path_tracer *pt, const vertex_lanes *L, int k, const pt_material *m,
+                              bool front, lane_bounce *out, ray_counters *counters)
+{
+    if (l->depth + 2 > pt->max_depth)
+        return false;
+    float p_rr = 1.0f;
+    if (path_tracer_roulette(pt, l->depth, AT(throughput), m->albedo, &p_rr) && !(lane_float(l, pt) < p_rr))
+        return false;
+    float u_y = lane_float(l, pt), u_x = lane_float(l, pt), u_lobe = lane_float(l, pt);
+    bsdf_sample_result s;
+    if (!bsdf_sample(m, AT(n), AT(wo), vec2_make(u_x, u_y), u_lobe, front, &s) ||
+        !(pt->effects & (s.is_transmission ? EFFECT_REFRACTION : EFFECT_REFLECTION)))
+        return false;
+    if (s.is_transmission)
+        counters->refraction_rays++;
+    else
+        counters->reflection_rays++;
+    out->next = ray_spawn(AT(p), L->p_error[k], AT(ng), s.wi);
+    out->throughput = vec3_mul(AT(throughput), vec3_scale(s.weight, 1.0f / p_rr));
+    out->wo = vec3_neg(s.wi);
+    return true;
+}
+
+/* point_lights() of chapter 09 for lane k: each point light's
+ * f I cos(theta) / r^2, times the throughput, its shadow ray queued (or,
+ * without shadows, added at once). */
+static void point_lights_lane(row_job *job, const vertex_lanes *L, int k, const pt_material *m)
+{
+    const pt_scene *sc = job->pt->scene;
+    vec3 p = AT(p), n = AT(n), wo = AT(wo), throughput = AT(throughput);
+    for (int i = 0; i < sc->point_light_count; i++) {
+        const pt_point_light *light = &sc->point_lights[i];
+        vec3 to_light = vec3_sub(light->position, p);
+        float distance2 = vec3_length_squared(to_light);
+        vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
+        float cos_theta = vec3_dot(n, wi);
+        vec3 f = cos_theta > 0.0f ? bsdf_eval(m, n, wo, wi) : vec3_splat(0.0f);
+        if (vec3_is_black(f))
+            continue;
+        vec3 contribution = vec3_mul(throughput, vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2));
+        if (!(job->pt->effects & EFFECT_SHADOWS)) {
+            job->lanes[k].radiance = vec3_add(job->lanes[k].radiance, contribution);
+            continue;
+        }
+        /* nothing to stop short of at a point light: error and normal 0 */
+        ray shadow = ray_spawn_to(p, L->p_error[k], AT(ng), light->position, 0.0f, vec3_splat(0.0f));
+        job->counters->shadow_rays++;
+        queue_push(job, k, shadow, contribution);
+    }
+}
+
+/* pt_scene_intersect()'s spheres for lane k, after its triangles: a sphere
+ * nearer than the triangle hit (t_max, or the ray's own) replaces it. */
+static bool sphere_hit_lane(const pt_scene *sc, const flat_rays8 *rays, int k, float t_max, hit_record *hit,
+                            ray_counters *counters)
+{
+    ray r = flat_rays8_get(rays, k);
+    r.t_max = t_max;
+    bool found = false;
+    for (int i = 0; i < sc->sphere_count; i++) {
+        const pt_sphere *s = &sc->spheres[i];
+        sphere shape = {s->center, s->radius};
+        counters->primitive_tests++;
+        if (sphere_intersect(&shape, r, hit)) {
+            found = true;
+            r.t_max = hit->t;
+            hit->shape_id = -1 - i;
+            hit->material_id = s->material;
+            if (s->inside_out) /* the front is the inside */
+                hit->front_face = !hit->front_face;
+        }
+    }
+    return found;
+}
+
+/* A full hit record into lane k's arrays (a sphere's, or a triangle's
+ * made lane by lane). */
+static int hit_record_set(const pt_scene *sc, const hit_record *hit, int k, vertex_lanes *L, int material[LANES])
+{
+    lanes_set(L->p, k, hit->point);
+    L->p_error[k] = hit->point_error;
+    lanes_set(L->ng, k, hit->normal_geometric);
+    lanes_set(L->n, k, hit->normal_shading);
+    lanes_set(L->albedo, k, sc->materials[hit->material_id].albedo);
+    material[k] = hit->material_id;
+    return hit->front_face << k;
+}
+
+#undef AT
+
 /* ---- the hit records -----------------------------------------------------------
  * What triangle_set_fill_hit() makes of a lane's hit, as far as shading
  * needs it: the point (from the barycentrics) and its error bound, the
@@ -509,13 +727,7 @@ static int hit_record_lane(const pt_scene *sc, const flat_hits8 *hits, int k, ve
     hit_record hit;
     triangle_set_fill_hit(&sc->triangles, hits->index[k], flat_rays8_get(&L->ray, k), hits->t[k], hits->b1[k],
                           hits->b2[k], &hit);
-    lanes_set(L->p, k, hit.point);
-    L->p_error[k] = hit.point_error;
-    lanes_set(L->ng, k, hit.normal_geometric);
-    lanes_set(L->n, k, hit.normal_shading);
-    lanes_set(L->albedo, k, sc->materials[hit.material_id].albedo);
-    material[k] = hit.material_id;
-    return hit.front_face << k;
+    return hit_record_set(sc, &hit, k, L, material);
 }
 
 #if WIDE_HAVE_AVX
@@ -576,6 +788,133 @@ SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const flat_hits8 *hi
 }
 #endif
 
+/* The first hits of the active lanes: the triangles' (through the
+ * tracer), then the spheres' lane by lane; the hit records in the lanes'
+ * arrays, the materials, and the bits of the lanes hit on their front
+ * (*front). Returns the bits of the lanes hit. */
+static int closest_hits(row_job *job, vertex_lanes *L, int active, int material[LANES], int *front)
+{
+    const pt_scene *sc = job->pt->scene;
+    const wide_tracer *all = &job->trace->all;
+    flat_hits8 hits;
+    int hit_lanes = sc->triangles.count > 0 ? all->closest_hit8(all->context, &L->ray, active, &hits, job->counters) : 0;
+    int sphere_lanes = 0;
+    hit_record sphere_hits[LANES];
+    if (sc->sphere_count > 0)
+        for (int left = active; left != 0; left &= left - 1) {
+            int k = __builtin_ctz((unsigned)left);
+            float t_max = (hit_lanes >> k) & 1 ? hits.t[k] : L->ray.t_max[k];
+            sphere_lanes |= (int)sphere_hit_lane(sc, &L->ray, k, t_max, &sphere_hits[k], job->counters) << k;
+        }
+    int triangle_lanes = hit_lanes & ~sphere_lanes;
+    *front = 0;
+#if WIDE_HAVE_AVX
+    if (triangle_lanes != 0 && job->avx && !sc->triangles.vertex_normals)
+        *front = hit_records_avx(sc, &hits, triangle_lanes, L, material); /* (writes every lane: first) */
+    else
+#endif
+        for (int left = triangle_lanes; left != 0; left &= left - 1)
+            *front |= hit_record_lane(sc, &hits, __builtin_ctz((unsigned)left), L, material);
+    for (int left = sphere_lanes; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        *front |= hit_record_set(sc, &sphere_hits[k], k, L, material);
+    }
+    return hit_lanes | sphere_lanes;
+}
+
+/* What the rays found that needs no light sample, and what the lanes hit:
+ * the environment for the lanes that left the scene; the emission at the
+ * first hit (camera lanes) and after a mirror or glass; the lanes' bits by
+ * material (*diffuse, *glossy, *delta). */
+static void light_found(row_job *job, vertex_lanes *L, int active, int hit_lanes, int front,
+                        const int material[LANES], int *diffuse, int *glossy, int *delta)
+{
+    const pt_scene *sc = job->pt->scene;
+    lane *lanes = job->lanes;
+    /* Lane by lane, lowest first, only the lanes each part concerns:
+     * looping over all eight and asking each would branch on random
+     * answers. */
+    for (int left = active & ~hit_lanes; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left); /* left the scene: the environment */
+        vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
+        lanes[k].radiance = vec3_add(lanes[k].radiance, vec3_mul(throughput, sc->environment));
+    }
+    for (int left = job->camera & hit_lanes; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left); /* what the eye sees directly: the emission at the first hit */
+        lanes[k].radiance = (front >> k) & 1 ? sc->materials[material[k]].emission : vec3_splat(0.0f);
+        vec3 direction = vec3_make(L->ray.direction[0][k], L->ray.direction[1][k], L->ray.direction[2][k]);
+        lanes_set(L->wo, k, vec3_normalize(vec3_neg(direction)));
+        lanes[k].emission_counts = false;
+    }
+    job->camera &= ~active;
+    *diffuse = *glossy = *delta = 0;
+    for (int left = hit_lanes; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        const pt_material *m = &sc->materials[material[k]];
+        *diffuse |= (m->kind == BSDF_DIFFUSE) << k;
+        *glossy |= (m->kind == BSDF_GLOSSY) << k;
+        *delta |= bsdf_is_delta(m) << k;
+        if (lanes[k].emission_counts && ((front >> k) & 1)) { /* seen through a mirror or glass */
+            vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
+            lanes[k].radiance = vec3_add(lanes[k].radiance, vec3_mul(throughput, m->emission));
+        }
+        lanes[k].emission_counts = false;
+    }
+}
+
+/* Each lit lane's shadow ray joins the queue. Every surface lane writes its
+ * entry at the end of the queue, and only a lit one moves the end on: no
+ * branch on whether the light sample counted. Without shadows every light
+ * sample counts at once. */
+static void queue_light_samples(row_job *job, const vertex_lanes *L, int surface, int lit)
+{
+    lane *lanes = job->lanes;
+    const int shadows = job->pt->effects & EFFECT_SHADOWS ? lit : 0;
+    for (int left = surface; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left), q = job->queued, is_lit = (shadows >> k) & 1;
+        flat_rays8 *shadow = &job->queue.rays[q / LANES];
+        for (int c = 0; c < 3; c++) {
+            shadow->origin[c][q % LANES] = L->shadow_origin[c][k];
+            shadow->direction[c][q % LANES] = L->shadow_direction[c][k];
+        }
+        shadow->t_min[q % LANES] = L->shadow_t_min[k]; /* ray_spawn_to's */
+        shadow->t_max[q % LANES] = L->shadow_t_max[k];
+        job->queue.contribution[q] = vec3_make(L->contribution[0][k], L->contribution[1][k], L->contribution[2][k]);
+        job->queue.lane[q] = k;
+        job->queue.sample_id[q] = lanes[k].sample_id;
+        job->queued += is_lit;
+        lanes[k].unsettled += is_lit;
+    }
+    job->counters->shadow_rays += (uint64_t)__builtin_popcount((unsigned)shadows);
+    for (int left = lit & ~shadows; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        lanes[k].radiance = vec3_add(lanes[k].radiance,
+                                     vec3_make(L->contribution[0][k], L->contribution[1][k], L->contribution[2][k]));
+    }
+}
+
+/* The glossy lanes' bounces (of `glossy`, those the roulette let go on)
+ * and the mirrors' and glass's, kept aside: bounce_math_avx writes all
+ * eight lanes. Returns the lanes that go on. */
+static int bounces_aside(row_job *job, const vertex_lanes *L, int glossy, int delta, int front,
+                         const int material[LANES], lane_bounce aside[LANES])
+{
+    const pt_material *materials = job->pt->scene->materials;
+    int on = 0;
+    for (int left = glossy; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        on |= (int)bounce_surface_lane(L, k, &materials[material[k]], &aside[k]) << k;
+    }
+    job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)on);
+    for (int left = delta; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        on |= (int)bounce_delta_lane(&job->lanes[k], job->pt, L, k, &materials[material[k]], (front >> k) & 1,
+                                     &aside[k], job->counters)
+              << k;
+    }
+    return on;
+}
+
 /* One row of the image, eight pixels at a time. */
 static void render_row(row_job *job)
 {
@@ -594,100 +933,70 @@ static void render_row(row_job *job)
             active |= (lanes[k].x >= 0) << k;
         if (active == 0)
             return; /* every pixel written, so no shadow ray waits */
-        flat_hits8 hits;
-        int hit_lanes = flat_closest_hit8_raw(walls_all(sc->bvh), &L.ray, active, &hits, job->counters);
-        int material[LANES], front = 0, picked = 0;
-#if WIDE_HAVE_AVX
-        if (hit_lanes != 0 && job->avx && !sc->triangles.vertex_normals)
-            front = hit_records_avx(sc, &hits, hit_lanes, &L, material);
-        else
-#endif
-            for (int k = 0; k < LANES; k++)
-                if ((hit_lanes >> k) & 1)
-                    front |= hit_record_lane(sc, &hits, k, &L, material);
-        /* Lane by lane, lowest first, only the lanes each part concerns:
-         * looping over all eight and asking each would branch on random
-         * answers. */
-        for (int left = active & ~hit_lanes; left != 0; left &= left - 1) {
-            int k = __builtin_ctz((unsigned)left); /* left the scene: the environment */
-            vec3 throughput = vec3_make(L.throughput[0][k], L.throughput[1][k], L.throughput[2][k]);
-            lanes[k].radiance = vec3_add(lanes[k].radiance, vec3_mul(throughput, sc->environment));
-        }
-        for (int left = job->camera & hit_lanes; left != 0; left &= left - 1) {
-            int k = __builtin_ctz((unsigned)left); /* what the eye sees directly: the emission at the first hit */
-            lanes[k].radiance = (front >> k) & 1 ? sc->materials[material[k]].emission : vec3_splat(0.0f);
-            vec3 direction = vec3_make(L.ray.direction[0][k], L.ray.direction[1][k], L.ray.direction[2][k]);
-            lanes_set(L.wo, k, vec3_normalize(vec3_neg(direction)));
-        }
-        job->camera &= ~active;
-        /* Each lane's random numbers, in shade()'s order: the point on the
-         * light, then the roulette and the next direction. The last do not
-         * depend on the light sample, so they are drawn before its
-         * arithmetic, and the light's and the bounce's arithmetic run back
-         * to back, where the processor overlaps their long chains of
-         * divisions and square roots. */
+        int material[LANES], front = 0, picked = 0, diffuse, glossy, delta;
+        int hit_lanes = closest_hits(job, &L, active, material, &front);
+        light_found(job, &L, active, hit_lanes, front, material, &diffuse, &glossy, &delta);
+        /* Diffuse lanes take the AVX route; glossy ones, mirrors and glass
+         * chapter 09's BSDFs lane by lane. Each lane's random numbers, in
+         * shade()'s order: the point on the light, then the roulette and
+         * the next direction. The last do not depend on the light sample,
+         * so they are drawn before its arithmetic, and the light's and the
+         * bounce's arithmetic run back to back, where the processor
+         * overlaps their long chains of divisions and square roots.
+         * Mirrors and glass draw theirs in bounce_delta_lane. */
+        const int surface = diffuse | glossy;
         int lit = 0, bounce = 0;
-        for (int left = hit_lanes; left != 0; left &= left - 1) {
+        for (int left = surface; left != 0; left &= left - 1) {
             int k = __builtin_ctz((unsigned)left);
-            if (lanes[k].depth + 1 <= pt->max_depth && pick_light(&lanes[k], sc, job->pdf_area, &L, k))
+            if (lanes[k].depth + 1 <= pt->max_depth && pick_light(&lanes[k], pt, job->pdf_area, &L, k))
                 picked |= 1 << k;
-            bounce |= roll_bounce(&lanes[k], pt, &L, k);
+            bounce |= roll_bounce(&lanes[k], pt, &L, k, sc->materials[material[k]].kind);
         }
 #if WIDE_HAVE_AVX
-        if (picked != 0 && job->avx)
-            lit = light_math_avx(&L, picked);
+        if ((picked & diffuse) != 0 && job->avx)
+            lit = light_math_avx(&L, picked & diffuse); /* (writes every lane: first) */
         else
 #endif
-            for (int k = 0; k < LANES; k++)
-                if ((picked >> k) & 1)
-                    lit |= light_math_lane(&L, k);
-        /* (after the light's: it reads wo and throughput, which the bounce
-         * replaces with the next vertex's) */
+            for (int left = picked & diffuse; left != 0; left &= left - 1)
+                lit |= light_math_lane(&L, __builtin_ctz((unsigned)left));
+        for (int left = picked & glossy; left != 0; left &= left - 1) {
+            int k = __builtin_ctz((unsigned)left);
+            lit |= light_math_surface_lane(&L, k, &sc->materials[material[k]]);
+        }
+        lane_bounce aside[LANES];
+        int aside_on = bounces_aside(job, &L, bounce & glossy, delta, front, material, aside);
+        queue_light_samples(job, &L, surface, lit);
+        if (sc->point_light_count > 0) /* lights without area: before the bounce replaces wo and throughput */
+            for (int left = surface; left != 0; left &= left - 1) {
+                int k = __builtin_ctz((unsigned)left);
+                point_lights_lane(job, &L, k, &sc->materials[material[k]]);
+            }
 #if WIDE_HAVE_AVX
-        if (bounce != 0 && job->avx)
-            bounce = bounce_math_avx(&L, bounce);
+        if ((bounce & diffuse) != 0 && job->avx)
+            bounce = bounce_math_avx(&L, bounce & diffuse);
         else
 #endif
         {
             int lanes_on = 0;
-            for (int k = 0; k < LANES; k++)
-                if ((bounce >> k) & 1)
-                    lanes_on |= bounce_math_lane(&L, k);
+            for (int left = bounce & diffuse; left != 0; left &= left - 1)
+                lanes_on |= bounce_math_lane(&L, __builtin_ctz((unsigned)left));
             bounce = lanes_on;
         }
-        /* Each lit lane's shadow ray joins the queue. Every hit lane writes
-         * its entry at the end of the queue, and only a lit one moves the
-         * end on (fewer than 8 wait, so 16 entries hold them all): no
-         * branch on whether the light sample counted. */
-        const int shadows = pt->effects & EFFECT_SHADOWS ? lit : 0;
-        for (int left = hit_lanes; left != 0; left &= left - 1) {
-            int k = __builtin_ctz((unsigned)left), q = job->queued, is_lit = (shadows >> k) & 1;
-            flat_rays8 *shadow = &job->queue.rays[q / LANES];
-            for (int c = 0; c < 3; c++) {
-                shadow->origin[c][q % LANES] = L.shadow_origin[c][k];
-                shadow->direction[c][q % LANES] = L.shadow_direction[c][k];
-            }
-            shadow->t_min[q % LANES] = L.shadow_t_min[k]; /* ray_spawn_to's */
-            shadow->t_max[q % LANES] = L.shadow_t_max[k];
-            job->queue.contribution[q] = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
-            job->queue.lane[q] = k;
-            job->queue.sample_id[q] = lanes[k].sample_id;
-            job->queued += is_lit;
-            lanes[k].unsettled += is_lit;
-        }
-        job->counters->shadow_rays += (uint64_t)__builtin_popcount((unsigned)shadows);
-        for (int left = lit & ~shadows; left != 0; left &= left - 1) { /* no shadows: every light sample counts */
+        job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)bounce);
+        for (int left = aside_on; left != 0; left &= left - 1) { /* the lanes kept aside, back */
             int k = __builtin_ctz((unsigned)left);
-            vec3 contribution = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
-            lanes[k].radiance = vec3_add(lanes[k].radiance, contribution);
+            flat_rays8_set(&L.ray, k, aside[k].next);
+            lanes_set(L.throughput, k, aside[k].throughput);
+            lanes_set(L.wo, k, aside[k].wo);
+            lanes[k].emission_counts = (delta >> k) & 1;
         }
+        bounce |= aside_on;
         /* The shadow rays wait until there are eight: a light sample that
          * faces away needs none, so one step's would fill a packet a little
          * over half, and cost as much as a full one. */
         while (job->queued >= LANES)
             trace_queued(job, LANES);
-        /* the next ray, from this vertex (bounce_math wrote it), or the path ends */
-        job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)bounce);
+        /* the next ray, from this vertex, or the path ends */
         for (int k = 0; k < LANES; k++)
             lanes[k].depth += (bounce >> k) & 1;
         for (int left = active & ~bounce; left != 0; left &= left - 1)
@@ -695,8 +1004,34 @@ static void render_row(row_job *job)
     }
 }
 
-bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int threads,
-                          estimate_image *out)
+/* Room for the shadow rays of a row (shadow_queue). */
+static shadow_queue queue_make(const pt_scene *sc)
+{
+    shadow_queue q;
+    q.capacity = LANES * (2 + sc->point_light_count);
+    /* the packets as the kernels load them: 32-byte aligned */
+    size_t bytes = (size_t)(q.capacity / LANES) * sizeof *q.rays;
+    q.rays = aligned_alloc(_Alignof(flat_rays8), bytes);
+    if (q.rays == NULL) {
+        fprintf(stderr, "out of memory (%zu bytes for shadow rays)\n", bytes);
+        exit(1);
+    }
+    q.contribution = memory_allocate((size_t)q.capacity, sizeof *q.contribution);
+    q.lane = memory_allocate((size_t)q.capacity, sizeof *q.lane);
+    q.sample_id = memory_allocate((size_t)q.capacity, sizeof *q.sample_id);
+    return q;
+}
+
+static void queue_free(shadow_queue *q)
+{
+    free(q->rays);
+    free(q->contribution);
+    free(q->lane);
+    free(q->sample_id);
+}
+
+bool render_estimate_wide_traced(const path_tracer *pt, const wide_scene_tracers *trace, const camera *cam, int spp,
+                                 uint64_t seed, int threads, estimate_image *out)
 {
     if (!path_tracer_wide_supported(pt, NULL, 0) || spp < 1)
         return false;
@@ -707,29 +1042,26 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
     memset(&e.counters, 0, sizeof e.counters);
     if (threads <= 0)
         threads = omp_get_max_threads();
-#if WIDE_HAVE_AVX
-    const bool avx = use_avx && __builtin_cpu_supports("avx2");
-#else
-    const bool avx = false;
-#endif
-    float *pdf_area = memory_allocate((size_t)(pt->scene->material_count > 0 ? pt->scene->material_count : 1),
-                                      sizeof(float));
-    for (int k = 0; k < pt->scene->material_count; k++)
-        pdf_area[k] = pt_scene_emitter_pdf_area(pt->scene, k);
+    const bool avx = use_avx && wide_cpu_has_avx2();
     const pt_scene *sc = pt->scene;
-    const accel *occluders = walls_occluders(sc->bvh);
-    const bool occluders_flat = walls_found(sc->bvh) && (occluders == NULL || flat_is(occluders));
+    float *pdf_area = memory_allocate((size_t)(sc->material_count > 0 ? sc->material_count : 1), sizeof(float));
+    for (int k = 0; k < sc->material_count && sc->emitter_count > 0; k++)
+        pdf_area[k] = pt_scene_emitter_pdf_area(sc, k);
     double start = timer_seconds();
+    /* Each row is one job, its pixels' streams its own: the same image
+     * for any number of threads and any order of rows. */
 #pragma omp parallel num_threads(threads)
     {
         ray_counters mine = {0};
+        shadow_queue queue = queue_make(sc);
 #pragma omp for schedule(dynamic, 1)
         for (int y = 0; y < cam->height; y++) {
             row_job job = {.pt = pt, .cam = cam, .spp = spp, .seed = seed, .mean = &e.mean,
-                           .standard_error = &e.standard_error, .y = y, .counters = &mine,
-                           .occluders_flat = occluders_flat, .avx = avx, .pdf_area = pdf_area};
+                           .standard_error = &e.standard_error, .y = y, .counters = &mine, .queue = queue,
+                           .trace = trace, .avx = avx, .pdf_area = pdf_area};
             render_row(&job);
         }
+        queue_free(&queue);
 #pragma omp critical(render_wide_counters)
         counters_add(&e.counters, &mine);
     }
@@ -737,6 +1069,53 @@ bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uin
     free(pdf_area);
     *out = e;
     return true;
+}
+
+bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int threads,
+                          estimate_image *out)
+{
+    wide_scene_tracers trace = wide_scene_tracers_for(pt->scene);
+    return render_estimate_wide_traced(pt, &trace, cam, spp, seed, threads, out);
+}
+
+double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int pixels)
+{
+    if (!path_tracer_wide_supported(pt, NULL, 0) || spp < 1 || pixels < LANES)
+        return 0.0;
+    /* Runs of eight neighbouring pixels (one packet of lanes) spread over
+     * the image, at the full spp, on one thread, into images of their own:
+     * the render's own rows, cut short. */
+    wide_scene_tracers trace = wide_scene_tracers_for(pt->scene);
+    image mean = image_make(cam->width, cam->height), standard_error = image_make(cam->width, cam->height);
+    float *pdf_area = memory_allocate((size_t)(pt->scene->material_count > 0 ? pt->scene->material_count : 1),
+                                      sizeof(float));
+    for (int k = 0; k < pt->scene->material_count && pt->scene->emitter_count > 0; k++)
+        pdf_area[k] = pt_scene_emitter_pdf_area(pt->scene, k);
+    shadow_queue queue = queue_make(pt->scene);
+    ray_counters ignored = {0};
+    long total = (long)cam->width * cam->height;
+    int runs = pixels / LANES, done = 0;
+    double start = timer_seconds();
+    for (int r = 0; r < runs; r++) {
+        /* run r in row (r + 1/2) h / runs, across the width by the golden
+         * ratio's multiples: never all down one column (an image's edge is
+         * often the empty background, far cheaper than the middle) */
+        double across = fmod(0.6180339887498949 * (r + 0.5), 1.0);
+        int y = (int)(((double)r + 0.5) * cam->height / runs);
+        int x = (int)(across * (cam->width > LANES ? cam->width - LANES : 0));
+        row_job job = {.pt = pt, .cam = cam, .spp = spp, .seed = seed, .mean = &mean, .standard_error = &standard_error,
+                       .y = y, .next_x = x, .x_end = x + LANES < cam->width ? x + LANES : cam->width,
+                       .counters = &ignored, .queue = queue, .trace = &trace, .avx = use_avx && wide_cpu_has_avx2(),
+                       .pdf_area = pdf_area};
+        done += job.x_end - x;
+        render_row(&job);
+    }
+    double seconds = timer_seconds() - start;
+    queue_free(&queue);
+    free(pdf_area);
+    image_free(&mean);
+    image_free(&standard_error);
+    return done > 0 ? seconds / done * (double)total : 0.0;
 }
 
 int path_tracer_wide_light_math(const wide_light_vertex *v, int count, vec3 contribution[8])

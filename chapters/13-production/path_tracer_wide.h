@@ -3,27 +3,33 @@
  * One path is a chain: each bounce waits for the ray before it, and the
  * processor has little to do while it waits. Eight paths -- eight pixels,
  * each with its own random numbers, its samples one after another -- are
- * eight chains side by side: their rays are traced together, eight per AVX
- * instruction (chapter 06's flat_closest_hit8_raw and flat_any_hit8_raw,
- * shadow rays queued until there are eight, and tested against the
- * occluders alone when all eight lie inside the walls), so are the light
- * sample's and the
- * bounce's arithmetic and the two rays' offsets (AVX2, where the processor
- * has it; lane by lane, with the same bits, where not), and the rest of the
- * shading, one path at a time, gives the processor eight independent things
- * to do instead of one. A lane whose path ends
- * starts its pixel's next sample; a lane whose pixel is done takes the next
- * pixel.
+ * eight chains side by side: their rays are traced together, eight at a
+ * time (wide_trace.h: the flat set's AVX kernels for a few dozen
+ * triangles, the 4-wide BVH's streams for meshes; shadow rays queued until
+ * there are eight, and tested against the occluders alone when all eight
+ * lie inside the walls), so are the diffuse lanes' light sample and bounce
+ * (AVX2, where the processor has it; lane by lane, with the same bits,
+ * where not) and the two rays' offsets. Lanes on glossy surfaces, mirrors
+ * and glass, point lights and spheres are done one lane at a time with
+ * chapter 09's BSDFs (bsdf_eval, bsdf_sample). A lane whose path ends
+ * starts its pixel's next sample; a lane whose pixel is done takes the
+ * next pixel.
  *
- * Each pixel draws the same random numbers in the same order as
- * path_trace_radiance() and makes the same decisions (the same rays, hits,
- * light samples and roulette), so its samples are the lecture rung's but for
- * rounding: the sum along a path is added from the camera out instead of
- * from the last bounce back (the recursion), which moves the last bits.
+ * Each pixel draws the same numbers in the same order as
+ * path_trace_radiance() -- from its random stream, or with --sampler sobol
+ * from its scrambled Sobol points as path_trace_sobol_sample() -- and makes
+ * the same decisions (the same rays, hits, light samples and roulette), so
+ * its samples are the lecture rung's but for rounding: the sum along a
+ * path is added from the camera out instead of from the last bounce back
+ * (the recursion), and the diffuse bounce's azimuth comes from a
+ * polynomial (fast_sincos.h). One exception: a path whose f cos / pdf is
+ * exactly black ends here, where the recursion goes on and draws numbers
+ * for nothing; the image's distribution is the same.
  *
- * For the lecture rung (any Russian roulette) on a scene the flat set holds (at most 64
- * triangles: chapter 09's Cornell box), diffuse materials only, no spheres
- * and no point lights; path_tracer_wide_supported() says why not otherwise.
+ * Every scene chapter 09 renders with the lecture rung: triangles in any
+ * structure (the production one, walls.h, or any of chapter 03's
+ * interface), spheres, all materials, area and point lights, the
+ * environment; any Russian roulette. Not another rung, not --explain.
  *
  * Usage:
  *   estimate_image e;
@@ -37,16 +43,38 @@
 
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
+#include "13-production/wide_trace.h"
 
 /* Can pt render eight paths at a time? If not, why (into why, if not NULL). */
 bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_size);
 
+/* What the renderer traces the scene's triangles with: every triangle
+ * (closest hits, and shadow rays not inside the walls), and, where the
+ * scene's structure found walls (walls.h), the occluders that shadow rays
+ * inside them meet, and the walls to check them against (NULL: none). */
+typedef struct {
+    wide_tracer all, occluders;
+    const accel *walls;
+} wide_scene_tracers;
+
+/* The tracers of the scene's own structure (sc->bvh): wide_tracer_for()
+ * of it, or of the walls_accel's two structures. */
+wide_scene_tracers wide_scene_tracers_for(const pt_scene *sc);
+
 /* render_estimate(), eight paths at a time: the same per-pixel streams, the
- * same counters but for primitive_tests (every triangle for every ray, in
- * a packet that runs until all its rays are answered). False, and *out
- * untouched, if not supported. */
+ * same counters but for primitive_tests and box_tests (each structure
+ * counts its own way). False, and *out untouched, if not supported. */
 bool render_estimate_wide(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int threads,
                           estimate_image *out);
+/* The same with the triangles traced by `trace` (another library's
+ * kernels, for a benchmark; wide_trace.h). */
+bool render_estimate_wide_traced(const path_tracer *pt, const wide_scene_tracers *trace, const camera *cam, int spp,
+                                 uint64_t seed, int threads, estimate_image *out);
+
+/* How long the render would take on one thread, in seconds, from a pilot:
+ * about `pixels` pixels spread over the image (runs of eight), rendered at
+ * the full spp and thrown away. 0 if not supported. */
+double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int spp, uint64_t seed, int pixels);
 
 /* The lanes' arithmetic (light sample, bounce, ray offsets) eight lanes
  * per AVX instruction (true, the default, where the processor has AVX2) or

@@ -209,3 +209,75 @@ bool production_speed(int size, int spp, int repeats, const char *csv_path, char
     pt_scene_free(&sc);
     return csv == NULL || experiment_csv_close(csv, csv_path, err, err_size);
 }
+
+/* ---- scenes larger than the flat set ------------------------------------------------ */
+
+void production_scene_box_with_torus(pt_scene *sc, int triangles)
+{
+    pt_scene_init(sc);
+    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
+    pt_scene_add_cornell_room(sc, white, red, green, light);
+    /* 2 u v = triangles with u = 2 v: v = sqrt(triangles / 4) */
+    int v = (int)lround(sqrt((double)(triangles > 8 ? triangles : 8) / 4.0)), u = 2 * v;
+    mesh torus;
+    mesh_init(&torus);
+    mesh_torus(&torus, vec3_make(278.0f, 200.0f, 300.0f), vec3_normalize(vec3_make(0.3f, 1.0f, -0.4f)), 150.0f, 60.0f,
+               u, v, -1);
+    for (int f = 0; f < torus.face_count; f++)
+        pt_scene_add_triangle(sc, mesh_vertex(&torus, f, 0), mesh_vertex(&torus, f, 1), mesh_vertex(&torus, f, 2),
+                              white);
+    mesh_free(&torus);
+    pt_scene_finish(sc);
+}
+
+/* One case's best of `repeats`, 1 thread: seconds per million samples. */
+static void time_case(const path_tracer *pt, const camera *cam, int spp, int repeats, bool wide, double *wall,
+                      double *cpu)
+{
+    double million_samples = (double)cam->width * (double)cam->height * (double)spp * 1e-6;
+    *wall = *cpu = INFINITY;
+    for (int r = 0; r < repeats; r++) {
+        double cpu_start = experiment_cpu_seconds();
+        estimate_image e;
+        if (!wide || !render_estimate_wide(pt, cam, spp, 1, 1, &e))
+            e = render_estimate(pt, cam, spp, 1, 1);
+        *cpu = fmin(*cpu, (experiment_cpu_seconds() - cpu_start) / million_samples);
+        *wall = fmin(*wall, e.seconds / million_samples);
+        estimate_image_free(&e);
+    }
+}
+
+void production_speed_scenes(int size, int spp, int repeats)
+{
+    static const struct {
+        const char *label;
+        int triangles; /* 0: the Cornell box */
+    } scenes[] = {{"Cornell box", 0}, {"box + 10k torus", 10000}, {"box + 100k torus", 100000}};
+    printf("seconds per million camera samples, %dx%d, %d spp, 1 thread, max depth %d, best of %d (wall, CPU)\n",
+           size, size, spp, SPEED_MAX_DEPTH, repeats);
+    printf("%-18s %9s %18s %18s %18s\n", "scene", "triangles", "8 paths", "--one-path", "ch09 mis, ch06 bvh");
+    for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++) {
+        pt_scene sc;
+        if (scenes[i].triangles == 0)
+            pt_scene_build_cornell_box(&sc);
+        else
+            production_scene_box_with_torus(&sc, scenes[i].triangles);
+        camera cam = pt_scene_camera(&sc, size, size);
+        double wall[3], cpu[3];
+        path_tracer pt = path_tracer_defaults(&sc);
+        pt.max_depth = SPEED_MAX_DEPTH;
+        pt.integrator = PT_MIS; /* chapter 09's best rung, on its own BVH */
+        time_case(&pt, &cam, spp, repeats, false, &wall[2], &cpu[2]);
+        pt_scene_use_accel(&sc, production_scene_accel, &sc);
+        pt.integrator = PT_LECTURE;
+        time_case(&pt, &cam, spp, repeats, true, &wall[0], &cpu[0]);
+        time_case(&pt, &cam, spp, repeats, false, &wall[1], &cpu[1]);
+        printf("%-18s %9d %8.3f %8.3f  %8.3f %8.3f  %8.3f %8.3f\n", scenes[i].label, sc.triangles.count, wall[0],
+               cpu[0], wall[1], cpu[1], wall[2], cpu[2]);
+        fflush(stdout);
+        pt_scene_free(&sc);
+    }
+}

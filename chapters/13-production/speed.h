@@ -41,4 +41,18 @@ int production_speed_scene(pt_scene *sc, const char *label, int size, int spp, i
  * watertight test and on Moller-Trumbore, taking turns. */
 bool production_speed(int size, int spp, int repeats, const char *csv_path, char *err, size_t err_size);
 
+/* The Cornell box's room (its walls and light, no blocks) with a diffuse
+ * torus of about `triangles` triangles standing in it (2 u v of them,
+ * u = 2 v): a scene larger than the flat set holds, whose size the
+ * caller chooses (the benchmark's 10k and 100k meshes). Finished
+ * (pt_scene_finish), on chapter 06's BVH. */
+void production_scene_box_with_torus(pt_scene *sc, int triangles);
+
+/* Seconds per million camera samples on 1 thread, wall and CPU, best of
+ * `repeats`, on the Cornell box and the box with tori of 10k and 100k
+ * triangles: eight paths at a time (the lecture rung, production
+ * structures), one path at a time on the same structures (--one-path),
+ * and chapter 09's MIS rung on chapter 06's BVH. Printed. */
+void production_speed_scenes(int size, int spp, int repeats);
+
 #endif

@@ -104,6 +104,12 @@ void mpi_split_gather_rows(void *rows, size_t row_bytes, int rows_count)
     free(offsets);
 }
 
+void mpi_split_barrier(void)
+{
+    if (split_ranks > 1)
+        MPI_Barrier(MPI_COMM_WORLD);
+}
+
 void mpi_split_sum_counters(ray_counters *c)
 {
     if (split_ranks == 1)
@@ -135,6 +141,7 @@ void mpi_split_gather_rows(void *rows, size_t row_bytes, int rows_count)
     (void)row_bytes;
     (void)rows_count;
 }
+void mpi_split_barrier(void) {}
 void mpi_split_sum_counters(ray_counters *c) { (void)c; }
 void mpi_split_broadcast(void *data, size_t bytes)
 {

@@ -49,6 +49,9 @@ bool mpi_split_available(void);
  * the rows it owns filled in; afterwards every rank's buffer holds every
  * row. Rank order is fixed and nothing is added, so the result is exact. */
 void mpi_split_gather_rows(void *rows, size_t row_bytes, int rows_count);
+/* Waits until every rank is here (for timing the gather apart from the
+ * wait for the slowest rank). */
+void mpi_split_barrier(void);
 /* Sums every rank's counters into every rank's (exact: integers). */
 void mpi_split_sum_counters(ray_counters *c);
 /* Rank 0's value of a byte buffer, on every rank (a decision only rank 0

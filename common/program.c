@@ -98,13 +98,15 @@ static void note_ranks(const render_stats *stats)
     run_record_note("mpi_ranks", text);
     snprintf(text, sizeof text, "%.6f", stats->gather_seconds);
     run_record_note("mpi_gather_seconds", text);
+    snprintf(text, sizeof text, "%.6f", stats->wait_seconds);
+    run_record_note("mpi_wait_seconds", text);
 }
 
 void program_print_ranks(const render_stats *stats)
 {
     if (mpi_split_ranks() > 1)
-        printf("split over %d MPI ranks: handing rows between them took %.3f s, %.2f%% of the render\n",
-               mpi_split_ranks(), stats->gather_seconds,
+        printf("split over %d MPI ranks: rank 0 waited %.3f s for the slowest; handing rows between them took "
+               "%.3f s, %.2f%% of the render\n", mpi_split_ranks(), stats->wait_seconds, stats->gather_seconds,
                stats->seconds > 0.0 ? 100.0 * stats->gather_seconds / stats->seconds : 0.0);
 }
 

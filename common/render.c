@@ -117,11 +117,15 @@ static int owned_rows(int height)
 
 /* After the ranks rendered their rows: every rank gets every row of the
  * image (and of its standard error), and every rank's counters. */
-static double gather_image(const render_job *job, image *out, ray_counters *total)
+static double gather_image(const render_job *job, image *out, ray_counters *total, double *wait_seconds)
 {
     if (mpi_split_ranks() == 1)
         return 0.0;
+    /* the wait for the slowest rank, apart from handing the rows over */
+    double arrived = timer_seconds();
+    mpi_split_barrier();
     double start = timer_seconds();
+    *wait_seconds += start - arrived;
     size_t row_bytes = (size_t)out->width * 3 * sizeof(float);
     mpi_split_gather_rows(out->rgb, row_bytes, out->height);
     if (job->standard_error != NULL)
@@ -163,11 +167,12 @@ static void render_whole(const render_job *job, image *out, render_stats *stats)
         counters_add(&total, &mine);
     }
     progress_end(&bar);
-    double gather = gather_image(job, out, &total);
+    double wait = 0.0, gather = gather_image(job, out, &total, &wait);
     if (stats != NULL) {
         stats->seconds = timer_seconds() - start;
         stats->counters = total;
         stats->gather_seconds = gather;
+        stats->wait_seconds = wait;
     }
 }
 
@@ -296,11 +301,13 @@ static void render_in_passes(const render_job *job, image *out, render_stats *st
                     image_set(job->standard_error, x, y, std_error);
             }
     free(states);
-    gather += gather_image(job, out, &total);
+    double wait = 0.0;
+    gather += gather_image(job, out, &total, &wait);
     if (stats != NULL) {
         stats->seconds = before + (timer_seconds() - start);
         stats->counters = total;
         stats->gather_seconds = gather;
+        stats->wait_seconds = wait;
     }
 }
 

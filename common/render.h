@@ -75,6 +75,7 @@ typedef struct {
     double seconds;        /* the render's wall time (with the time before a resume) */
     ray_counters counters; /* of every rank, added */
     double gather_seconds; /* of seconds: handing rows between MPI ranks (0 on one) */
+    double wait_seconds;   /* of seconds: this rank waiting for the slowest before that */
 } render_stats;
 
 /* One pixel's render in progress: its random stream where the next sample

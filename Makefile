@@ -14,7 +14,9 @@
 #   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
 #   make mpi         the programs built against OpenMPI, in build/mpi/ (mpirun -np N splits a render)
 #   make test-mpi    1, 2 and 3 MPI ranks make the image one process makes; a killed rank stops the run
-#   make bench       time the acceleration structures beside Embree, and the path tracer, also on Embree's kernels (figures, CSV)
+#   make bench       every benchmark table in one run (quick; FULL=1 full): structures beside Embree, the path tracer
+#                    on the benchmark scenes, also on Embree's kernels, Cycles at equal CPU time where blender is
+#   make bench-cycles  install Debian's blender if missing, then Cycles at equal CPU time alone
 #   make plots       draw every figure (gnuplot) from data the programs write
 #   make docs        the book: one HTML page per chapter, woven by pandoc, in build/docs/
 #   make test-docs   render every page of the book in headless Chromium and check it

@@ -118,7 +118,7 @@ static int program_explain(const cli_options *opts, const char *label, const ren
                 job->cam->width, job->cam->height);
         return 2;
     }
-    printf("%s: the path tree of pixel (%d, %d) of %dx%d, %d sample%s (seed %llu)\n", label, opts->explain_x,
+    printf("%s: how pixel (%d, %d) of %dx%d is computed, %d sample%s (seed %llu)\n", label, opts->explain_x,
            opts->explain_y, job->cam->width, job->cam->height, job->spp, job->spp > 1 ? "s" : "",
            (unsigned long long)job->seed);
     ray_counters counters;

@@ -66,7 +66,12 @@ static void pixel_add_samples(const render_job *job, int x, int y, int first, in
             explain_line(1, "sample radiance %s", explain_vec3(c, sample));
         }
         /* Drop NaN and Inf here, before they are added: one bad sample would
-         * otherwise turn the whole pixel NaN (or white) for good. */
+         * otherwise turn the whole pixel NaN (or white) for good. Dropping
+         * biases the mean: the pixel becomes the mean of the finite samples
+         * alone, as if the dropped ones had had that mean (an Inf stood for
+         * a huge value, a NaN for an unknown one). The counters say how many
+         * (nonfinite_samples_dropped, and a warning after the render); 0 in
+         * every picture of the book, where the bias is therefore nil. */
         if (!vec3_is_finite(sample)) {
             counters->nonfinite_samples++;
             explain_line(1, "NaN or Inf: dropped, not averaged");

@@ -37,6 +37,9 @@ void splat_film_add(splat_film *film, float x, float y, vec3 value, ray_counters
     int px = (int)x, py = (int)y; /* x >= 0: truncation is floor */
     if (px >= film->width || py >= film->height)
         return;
+    /* NaN, Inf or a value too large for the fixed point: dropped and
+     * counted. That biases the pixel towards 0 (its sum is divided by the
+     * count of all samples, the dropped too); the counters report how many. */
     if (!splat_value_ok(value.x) || !splat_value_ok(value.y) || !splat_value_ok(value.z)) {
         if (counters != NULL)
             counters->nonfinite_samples++;

@@ -547,7 +547,9 @@ local function check_coverage()
           end
         end
         for _, fig in ipairs(figs) do
-          if not figure_command(fig) then
+          if fig:match("^docs/diagrams/[^/]+%.svg$") then
+            if not file_exists(fig) then fail(at, concept .. ": no diagram " .. fig) end
+          elseif not figure_command(fig) then
             fail(at, concept .. ": no command makes the figure " .. fig)
           elseif not file_exists(M.build .. "/" .. fig) then
             fail(at, concept .. ": the figure " .. M.build .. "/" .. fig .. " has not been made")
@@ -584,25 +586,42 @@ local function find_excerpt(file, name)
 end
 
 local coverage_file = nil -- the file cell of the row being woven
+local thumbnailed = {}    -- the figures already shown as a thumbnail
+
+-- A name in a narrow cell, breakable only after "/" and "_" (never
+-- mid-word): <code> with <wbr> there.
+local function breakable_code(t)
+  local html = t:gsub("&", "&amp;"):gsub("<", "&lt;"):gsub(">", "&gt;")
+  html = html:gsub("([/_])", "%1<wbr>")
+  return pandoc.RawInline("html", "<code>" .. html .. "</code>")
+end
 
 -- In the coverage page, files become links to the source, figures
--- thumbnails, and functions links to the chapter page that shows them.
+-- thumbnails (each figure once: where it comes again, its name links to
+-- it), and functions links to the chapter page that shows them.
 local function weave_coverage_cell_code(code)
   local t = code.text
   if coverage_file and t:match("^[%a_][%w_]*$") then
     local target = find_excerpt(coverage_file, t)
-    if target then return made_link({ pandoc.Code(t) }, target) end
+    if target then return made_link({ breakable_code(t) }, target) end
+    return breakable_code(t)
   end
-  if t:match("^out/.+%.png$") or t:match("^plots/.+%.png$") then
-    local name = t:gsub("/", "_")
-    copy_file(M.build .. "/" .. t, M.docs .. "/img/" .. name)
+  local from = nil
+  if t:match("^out/.+%.png$") or t:match("^plots/.+%.png$") then from = M.build .. "/" .. t end
+  if t:match("^docs/diagrams/[^/]+%.svg$") then from = t end
+  if from then
+    local name = t:gsub("^docs/diagrams/", "diagram_"):gsub("/", "_")
+    if thumbnailed[t] then return made_link({ breakable_code(t) }, "img/" .. name) end
+    thumbnailed[t] = true
+    copy_file(from, M.docs .. "/img/" .. name)
     return made_link({ pandoc.Image({ pandoc.Str(t) }, "img/" .. name, "", pandoc.Attr("", { "thumb" })) },
                        "img/" .. name)
   end
   if t:match("^[%w_-]+/.+%.[ch]$") or t:match("^tests/.+%.c$") then
     if not t:match("^tests/") then coverage_file = t end
-    return made_link({ pandoc.Code(t) }, source_link(t))
+    return made_link({ breakable_code(t) }, source_link(t))
   end
+  if M.page == "coverage" and t:match("^[%a_][%w_]*$") then return breakable_code(t) end
   return nil
 end
 
@@ -708,6 +727,29 @@ local function has_image(doc, rel)
   return found
 end
 
+-- A slide's formula is shown as the slide shows it: a display block, full
+-- size, not an inline formula in small type (in the table of slides). A
+-- formula that opens its cell, or has fractions, sums, integrals or
+-- matrices, is one; a symbol inside a sentence of a cell stays inline.
+local function is_built_up(tex)
+  return tex:find("\\frac") or tex:find("\\int") or tex:find("\\sum") or tex:find("\\begin")
+end
+
+local function display_formulas(block)
+  if block.t ~= "Table" then return block end
+  local function displayed(p)
+    for k, inline in ipairs(p.content) do
+      local after = p.content[k + 1]
+      local alone = k == 1 and (not after or (after.t == "Str" and after.text:match("^[;,]")))
+      if inline.t == "Math" and inline.mathtype == "InlineMath" and (alone or is_built_up(inline.text)) then
+        p.content[k] = pandoc.Math("DisplayMath", inline.text)
+      end
+    end
+    return p
+  end
+  return pandoc.walk_block(block, { Plain = displayed, Para = displayed })
+end
+
 local function chapter_head(doc, chapter)
   local section = lecture_section(chapter)
   if #section == 0 then
@@ -725,7 +767,7 @@ local function chapter_head(doc, chapter)
     end
   end
   local blocks = { pandoc.Header(3, { pandoc.Str("The slides this chapter follows") }, pandoc.Attr("slides")) }
-  for _, b in ipairs(slides) do table.insert(blocks, b) end
+  for _, b in ipairs(slides) do table.insert(blocks, display_formulas(b)) end
   for _, b in ipairs(changes_blocks(chapter, changed)) do table.insert(blocks, b) end
   local number = chapter:sub(1, 2)
   if not has_image(doc, "out/ch" .. number .. ".png") then

@@ -1,13 +1,12 @@
-# make bench: the acceleration structures timed beside Embree, and the path
-# tracer, also on Embree's kernels (figures and CSV under build/data/).
+# make bench: the acceleration structures timed beside Embree, the path
+# tracer on the benchmark scenes, also on Embree's kernels, and Cycles at
+# equal CPU time (figures and CSV under build/data/ and build/bench/).
 
-.PHONY: bench bench-deps
+.PHONY: bench bench-deps bench-cycles bench-cycles-deps
 
 # The Embree harness lives in ../shared/anchors (beside this repository); it
 # is built here, never copied in. Embree itself comes from Debian.
 SHARED ?= ../shared
-BENCH_SIZES ?= 1024 10240 102400 1048576
-BENCH_REPS ?= 3
 comma := ,
 empty :=
 space := $(empty) $(empty)
@@ -28,33 +27,38 @@ $(BUILD)/bin/bench_pt_embree: $(BUILD)/obj/tests/bench_pt_embree.o $(ALL_LIBS)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -lembree3 -o $@
 
-# Embree and ours, one after the other, on the same machine in one run; then
-# the path tracer's seconds per million camera samples (chapter 09), and the
-# same path tracer on Embree's kernels. The Embree programs are built only
-# where their sources (EMBREE_HARNESS) and header (EMBREE_HEADER) are; as
-# prerequisites, not by a make inside the recipe, which make -n would run.
+# The benchmark scenes' program (tests/bench_scenes.c): with Embree's rows
+# where its header is, without them (and saying so) where not.
+$(BUILD)/obj/tests/bench_scenes.o: CPPFLAGS += $(if $(EMBREE_HEADER),-DBENCH_EMBREE)
+$(BUILD)/bin/bench_scenes: $(BUILD)/obj/tests/bench_scenes.o $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) $(if $(EMBREE_HEADER),-lembree3) -o $@
+$(BUILD)/bin/bench_equal_time: $(BUILD)/obj/tests/bench_equal_time.o $(ALL_LIBS)
+	@mkdir -p $(dir $@)
+	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
+
+# Every table in one run (tests/bench.sh): the structures against Embree
+# size by size, A B A B; chapter 13's steps and the path tracer on Embree's
+# kernels; the benchmark scenes (chapter 13, the same on Embree, chapter
+# 09's MIS rung, 1 and 2 threads, taking turns); Cycles at equal CPU time
+# where blender is installed. Quick by default (a few minutes on 2 cores),
+# FULL=1 for the full sizes (about an hour). The Embree programs are built
+# only where their sources (EMBREE_HARNESS) and header (EMBREE_HEADER) are;
+# as prerequisites, not by a make inside the recipe, which make -n would run.
 EMBREE_HARNESS := $(wildcard $(SHARED)/anchors/embree_bench.c)
-bench: $(BUILD)/bin/bench_accel $(BUILD)/bin/13-production \
-       $(if $(EMBREE_HARNESS),$(BUILD)/bin/embree_bench) $(if $(EMBREE_HEADER),$(BUILD)/bin/bench_pt_embree)
-	@mkdir -p $(BUILD)/data
-ifneq ($(EMBREE_HARNESS),)
-	@rm -f $(BUILD)/data/embree.txt
-	@for n in $(BENCH_SIZES); do \
-	  $(BUILD)/bin/embree_bench embree $$n medium 1 $(BENCH_REPS) | tee -a $(BUILD)/data/embree.txt; \
-	done
-else
-	@echo "no $(SHARED)/anchors/embree_bench.c: timing without Embree"
-endif
-	$(BUILD)/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS) \
-	  --out $(BUILD)/data/accel.csv --stadium $(BUILD)/data/stadium.csv $(if $(EMBREE_HARNESS),--embree $(BUILD)/data/embree.txt)
-	@printf 'full\t%s\n' "make bench (build/bin/bench_accel --sizes $(subst $(space),$(comma),$(strip $(BENCH_SIZES))) --reps $(BENCH_REPS))" \
-	  > $(BUILD)/data/accel.run
-	$(BUILD)/bin/13-production --bench --width 256 --spp 16 --bench-csv $(BUILD)/data/ch13_speed.csv
-ifneq ($(EMBREE_HEADER),)
-	$(BUILD)/bin/bench_pt_embree --width 256 --spp 16 --data $(BUILD)/data
-else
-	@echo "no Embree header (make bench-deps): the path tracer on Embree skipped"
-endif
+BENCH_PROGRAMS := $(BUILD)/bin/bench_accel $(BUILD)/bin/13-production $(BUILD)/bin/bench_scenes \
+                  $(BUILD)/bin/bench_equal_time $(if $(EMBREE_HARNESS),$(BUILD)/bin/embree_bench) \
+                  $(if $(EMBREE_HEADER),$(BUILD)/bin/bench_pt_embree)
+bench: $(BENCH_PROGRAMS)
+	@sh tests/bench.sh $(BUILD) $(if $(FULL),full,quick) all
+
+# Cycles at equal CPU time alone, after installing Debian's blender if it
+# is missing (the only target that installs it).
+bench-cycles: $(BUILD)/bin/bench_scenes $(BUILD)/bin/bench_equal_time | bench-cycles-deps
+	@sh tests/bench.sh $(BUILD) $(if $(FULL),full,quick) cycles
+
+bench-cycles-deps: deps
+	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="blender"
 
 bench-deps: deps
 	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="libembree-dev"

@@ -26,7 +26,7 @@ DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.tx
 # diagram of it (docs/diagrams/*.svg), or the weave stops.
 # A chapter page prints on at most this many pages of A4 (make test-docs).
 DOC_MAX_PRINTED := 20
-DIAGRAM_CHAPTERS := 01 02 03 04 05 06 07 09
+DIAGRAM_CHAPTERS := 01 02 03 04 05 06 07 08 09 10 11 12
 DOC_ROOT = $(shell realpath -m --relative-to=$(DOCS) .)
 DOC_PANDOC = pandoc --fail-if-warnings --mathml --standalone --template docs/template.html \
   --lua-filter docs/weave.lua -M chapters="$(CHAPTERS)" -M build=$(BUILD) -M docs=$(DOCS) \
@@ -46,7 +46,9 @@ docs: $(DOC_PAGES)
 # shows (the READMEs link them, so that they read with their pictures on any
 # Git host, without a build): each made again from the build's own (the
 # program's picture, or the plot, from the data `make plots` has: quick, or
-# FULL=1), renders shrunk to at most FIGURE_WIDTH pixels wide, plots to PLOT_WIDTH.
+# FULL=1), renders shrunk to at most FIGURE_WIDTH pixels wide, plots and strips
+# of small renders side by side (*_strip.png: their panels are small already)
+# to PLOT_WIDTH.
 # docs/img/SOURCES says where each copy came from and how its data was made.
 FIGURE_WIDTH ?= 320
 PLOT_WIDTH ?= 800
@@ -60,7 +62,9 @@ figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
 	  > docs/img/SOURCES.tmp
 	@for f in $(notdir $(COMMITTED_FIGURES)); do \
 	  if grep -q "^out/$$f " docs/figures.txt; then \
-	    src=out/$$f; width=$(FIGURE_WIDTH); run="rendered (at most $(FIGURE_WIDTH) px wide here)"; \
+	    src=out/$$f; width=$(FIGURE_WIDTH); \
+	    case $$f in *_strip.png) width=$(PLOT_WIDTH);; esac; \
+	    run="rendered (at most $$width px wide here)"; \
 	  else \
 	    src=plots/$$f; width=$(PLOT_WIDTH); n=$$(echo $$f | sed -n 's/^ch\([0-9][0-9]\)_.*/\1/p'); \
 	    rec=accel; [ -z "$$n" ] || rec=ch$$n; \
@@ -89,19 +93,19 @@ $(DOCS)/book.css: docs/book.css | docs-deps
 	cp $< $@
 
 $(DOCS)/%.html: chapters/%/README.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(wildcard $(BUILD)/plots/*.md) $(DOCS)/book.css
-	$(DOC_PANDOC) -f gfm -M page=chapter -M chapter=$* -M files="$(notdir $(wildcard chapters/$*/*.[ch]))" $< -o $@
+	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=chapter -M chapter=$* -M files="$(notdir $(wildcard chapters/$*/*.[ch]))" $< -o $@
 
 # The index shows each chapter's picture: it waits for them (with -j, it
 # was made before them and refused, naming the missing images).
 $(DOCS)/index.html: docs/index.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOCS)/book.css
-	$(DOC_PANDOC) -f gfm -M page=index -M chapter= $< -o $@
+	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=index -M chapter= $< -o $@
 
 # The notes beside the chapters: the scene format and the hard-case catalog.
 $(patsubst %,$(DOCS)/%.html,$(DOC_NOTES)): $(DOCS)/%.html: docs/%.md $(DOC_INPUTS) $(DOCS)/book.css
-	$(DOC_PANDOC) -f gfm -M page=note -M chapter= $< -o $@
+	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=note -M chapter= $< -o $@
 
 $(DOCS)/coverage.html: docs/coverage.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(DOCS)/book.css
-	$(DOC_PANDOC) -f gfm -M page=coverage -M chapter= $< -o $@
+	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=coverage -M chapter= $< -o $@
 
 # The checks fail when they should: a coverage row naming a function that
 # does not exist, an excerpt whose function is gone (each must name its file
@@ -112,7 +116,7 @@ test-docs: docs | docs-deps
 	@mkdir -p $(DOCS_TEST)
 	@for bad in tests/docs/bad_*.md; do \
 	  want=$$(sed -n 's/^<!-- expect: \(.*\) -->$$/\1/p' $$bad); \
-	  if $(DOC_PANDOC) -f gfm -M page=$$(sed -n 's/^<!-- page: \(.*\) -->$$/\1/p' $$bad) \
+	  if $(DOC_PANDOC) -f gfm+tex_math_dollars -M page=$$(sed -n 's/^<!-- page: \(.*\) -->$$/\1/p' $$bad) \
 	       -M chapter=$$(sed -n 's/^<!-- chapter: \(.*\) -->$$/\1/p' $$bad) \
 	       $$bad -o $(DOCS_TEST)/bad.html 2> $(DOCS_TEST)/bad.log; then \
 	    echo "FAIL: $$bad was accepted"; exit 1; fi; \

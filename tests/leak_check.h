@@ -140,6 +140,8 @@ static inline bool leak_enters(const mesh *m, int f, vec3 d)
 static inline int leak_rays_make(const mesh *m, int count, pcg32 *rng, ray *rays)
 {
     int n_faces = m->face_count, n_positions = m->position_count;
+    if (n_faces <= 0 || n_positions <= 0)
+        return 0; /* no edge to aim at (and the sizes below stay positive) */
     /* the faces around each vertex (compressed rows) and each edge's twin */
     int *fan_start = calloc((size_t)n_positions + 1, sizeof *fan_start);
     int *fan = malloc((size_t)n_faces * 3 * sizeof *fan);

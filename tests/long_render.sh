@@ -47,7 +47,7 @@ for entry in "${renders[@]}"; do
     pid=$!
     warned=no
     for _ in $(seq 1 600); do # up to 60 s on a loaded machine
-        if grep -q "warning: this render will take about" "$dir/stderr"; then warned=yes; break; fi
+        if grep -qs "warning: this render will take about" "$dir/stderr"; then warned=yes; break; fi
         kill -0 "$pid" 2>/dev/null || break
         sleep 0.1
     done

@@ -25,6 +25,7 @@
 #include "08-monte-carlo/estimators.h"
 #include "08-monte-carlo/sampling.h"
 #include "effects.h"
+#include "explain.h"
 #include "render.h"
 #include "scene_file.h"
 #include "stats.h"
@@ -808,6 +809,74 @@ static void test_one_sided_emitter(void **state)
     pt_scene_free(&sc);
 }
 
+/* The slide's ray_generation adds shade(p, wo) only, the light reflected
+ * at p, so a lamp seen directly renders black (as in the course's
+ * assignment). The lecture rung adds the emission at the first hit: a lamp
+ * that reflects nothing, seen from the front, is its L_e in every pixel,
+ * where the slide's version would give 0. */
+static void test_lecture_rung_sees_the_lamp_directly(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_init(&sc);
+    int light = pt_scene_add_material(&sc, pt_emitter(vec3_splat(0.0f), vec3_splat(3.0f)));
+    pt_scene_add_quad(&sc, vec3_make(-1, 1, -1), vec3_make(1, 1, -1), vec3_make(1, 1, 1), vec3_make(-1, 1, 1), light);
+    pt_scene_finish(&sc);
+    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+    sc.eye = vec3_make(0, -3, 0.01f);
+    sc.target = vec3_make(0, 1, 0);
+    render_result r = render(&pt, 4, 4, 4, 93, 1);
+    vec3 centre = image_get(&r.mean, 2, 2);
+    assert_close(centre.x, 3.0, 1e-5);
+    assert_close(centre.y, 3.0, 1e-5);
+    render_result_free(&r);
+    pt_scene_free(&sc);
+}
+
+/* What --explain prints for one Cornell box pixel with `integrator`, in a
+ * buffer of `size` bytes. */
+static void explain_pixel(pt_integrator integrator, char *text, size_t size)
+{
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    path_tracer pt = tracer(&sc, integrator, RR_FIXED);
+    camera cam = pt_scene_camera(&sc, 64, 64);
+    render_job job = {.cam = &cam, .spp = 8, .seed = 1, .threads = 1, .quiet = true,
+                      .radiance = path_trace_radiance, .scene = &pt, .jitter = true};
+    FILE *out = tmpfile();
+    assert_non_null(out);
+    ray_counters counters;
+    memset(&counters, 0, sizeof counters);
+    explain_begin(out);
+    render_pixel(&job, 32, 40, &counters, NULL);
+    explain_end();
+    rewind(out);
+    size_t n = fread(text, 1, size - 1, out);
+    text[n] = '\0';
+    fclose(out);
+    pt_scene_free(&sc);
+}
+
+/* --explain shows each rung's own arithmetic: the lecture's light sample in
+ * the slide's area form (pdf_light per unit area, cos theta'), the cosine
+ * rung's per steradian with no MIS weight, MIS's with its weight. The twin:
+ * the MIS rung's text has the weight the others must not print. */
+static void test_explain_shows_each_rungs_light_sample(void **state)
+{
+    (void)state;
+    static char text[1 << 16];
+    explain_pixel(PT_LECTURE, text, sizeof text);
+    assert_non_null(strstr(text, "pdf_light"));
+    assert_non_null(strstr(text, "per unit area"));
+    assert_null(strstr(text, "per sr"));
+    assert_null(strstr(text, "MIS weight"));
+    explain_pixel(PT_COSINE, text, sizeof text);
+    assert_non_null(strstr(text, "per sr"));
+    assert_null(strstr(text, "MIS weight"));
+    explain_pixel(PT_MIS, text, sizeof text);
+    assert_non_null(strstr(text, "MIS weight"));
+}
+
 static void test_ggx_sampling_matches_its_pdf(void **state)
 {
     (void)state;
@@ -1580,6 +1649,98 @@ static void test_target_error_is_reached_not_assumed(void **state)
     pt_scene_free(&sc);
 }
 
+/* ---- exporting a scene to OBJ + MTL (pt_scene_write_obj) ----------------------- */
+
+static bool same_vec3(vec3 a, vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+/* Do two scenes have the same triangles (bit for bit, in order) and does
+ * each face have the same material (GGX's alpha within float rounding:
+ * the MTL stores it as Ns)? If not, why says where they part. */
+static bool scenes_match(const pt_scene *a, const pt_scene *b, char *why, size_t why_size)
+{
+    if (a->geometry.face_count != b->geometry.face_count) {
+        snprintf(why, why_size, "%d triangles against %d", a->geometry.face_count, b->geometry.face_count);
+        return false;
+    }
+    for (int i = 0; i < a->geometry.face_count; i++) {
+        for (int k = 0; k < 3; k++) {
+            vec3 p = mesh_vertex(&a->geometry, i, k), q = mesh_vertex(&b->geometry, i, k);
+            if (p.x != q.x || p.y != q.y || p.z != q.z) {
+                snprintf(why, why_size, "triangle %d corner %d moved", i, k);
+                return false;
+            }
+        }
+        const pt_material *m = &a->materials[a->geometry.faces[i].material];
+        const pt_material *n = &b->materials[b->geometry.faces[i].material];
+        bool same = m->kind == n->kind && same_vec3(m->albedo, n->albedo) && same_vec3(m->emission, n->emission) &&
+                    (m->kind != BSDF_GLASS || m->ior == n->ior) &&
+                    (m->kind != BSDF_GLOSSY || fabsf(m->roughness - n->roughness) <= 1e-6f * m->roughness);
+        if (!same) {
+            snprintf(why, why_size, "triangle %d: material kind %d albedo %g against kind %d albedo %g", i,
+                     (int)m->kind, (double)m->albedo.x, (int)n->kind, (double)n->albedo.x);
+            return false;
+        }
+    }
+    return true;
+}
+
+/* The Cornell room with a block of each exportable material: diffuse
+ * walls, the emitter, a GGX metal and glass. */
+static void build_export_scene(pt_scene *sc, pt_material extra)
+{
+    pt_scene_init(sc);
+    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
+    int metal = pt_scene_add_material(sc, pt_glossy(vec3_make(0.95f, 0.64f, 0.54f), 0.15f));
+    int glass = pt_scene_add_material(sc, extra);
+    pt_scene_add_cornell_room(sc, white, red, green, light);
+    pt_scene_add_quad(sc, vec3_make(100, 10, 100), vec3_make(200, 10, 100), vec3_make(200, 110, 100),
+                      vec3_make(100, 110, 100), metal);
+    pt_scene_add_quad(sc, vec3_make(300, 10, 200), vec3_make(400, 10, 200), vec3_make(400, 110, 200),
+                      vec3_make(300, 110, 200), glass);
+    pt_scene_finish(sc);
+}
+
+static void test_an_exported_scene_reads_back_the_same(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/test_ch09_export.XXXXXX", obj[256], mtl[256], err[1024], why[256];
+    assert_non_null(mkdtemp(dir));
+    snprintf(obj, sizeof obj, "%s/room.obj", dir);
+    snprintf(mtl, sizeof mtl, "%s/room.mtl", dir);
+    pt_scene sc, back;
+    build_export_scene(&sc, pt_glass(1.5f));
+    assert_true(pt_scene_write_obj(&sc, obj, err, sizeof err));
+    pt_scene_report_materials(NULL);
+    assert_true(pt_scene_load_obj(&back, obj, err, sizeof err));
+    bool match = scenes_match(&sc, &back, why, sizeof why);
+    if (!match)
+        print_message("%s\n", why);
+    assert_true(match);
+    /* the twin: one paint changed is seen */
+    sc.materials[0].albedo.x = 0.72f;
+    assert_false(scenes_match(&sc, &back, why, sizeof why));
+    pt_scene_free(&back);
+    pt_scene_free(&sc);
+    unlink(obj);
+    unlink(mtl);
+
+    /* What OBJ cannot hold is refused, and nothing is written. */
+    build_export_scene(&sc, pt_mirror(vec3_splat(1.0f)));
+    assert_false(pt_scene_write_obj(&sc, obj, err, sizeof err));
+    assert_non_null(strstr(err, "mirror"));
+    pt_scene_free(&sc);
+    pt_scene_build_cornell_box_materials(&sc);
+    assert_false(pt_scene_write_obj(&sc, obj, err, sizeof err));
+    assert_non_null(strstr(err, "spheres"));
+    pt_scene_free(&sc);
+    assert_int_equal(access(obj, F_OK), -1);
+    assert_int_equal(access(mtl, F_OK), -1);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1590,6 +1751,8 @@ int main(void)
         cmocka_unit_test(test_an_emitting_mesh_casts_shadows),
         cmocka_unit_test(test_chapter_06s_bvh_is_what_chapter_09_traces),
         cmocka_unit_test(test_furnace_every_pixel_is_one),
+        cmocka_unit_test(test_lecture_rung_sees_the_lamp_directly),
+        cmocka_unit_test(test_explain_shows_each_rungs_light_sample),
         cmocka_unit_test(test_scene_files_render_the_built_in_scenes),
         cmocka_unit_test(test_direct_light_only_equals_depth_one),
         cmocka_unit_test(test_point_light_in_a_sphere_needs_no_shadow_ray),
@@ -1611,6 +1774,7 @@ int main(void)
         cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
         cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),
         cmocka_unit_test(test_objects_too_small_for_their_place_are_named),
+        cmocka_unit_test(test_an_exported_scene_reads_back_the_same),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);
 }

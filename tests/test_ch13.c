@@ -25,6 +25,7 @@
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "10-distribution/motion_scene.h"
+#include "13-production/bench_scenes.h"
 #include "13-production/bvh4.h"
 #include "13-production/fast_sincos.h"
 #include "13-production/flat.h"
@@ -2239,6 +2240,100 @@ static void test_lanes_light_sample_is_chapter_09s(void **state)
     pt_scene_free(&sc);
 }
 
+/* ---- the benchmark scenes (bench_scenes.h) ------------------------------------- */
+
+static int compare_longs(const void *a, const void *b)
+{
+    long x = *(const long *)a, y = *(const long *)b;
+    return (x > y) - (x < y);
+}
+
+/* Is the mesh's part from face `first` on closed and consistently turned:
+ * every directed edge (a, b) met once, and (b, a) once (so a ray that
+ * enters the surface must leave it)? */
+static bool faces_closed(const mesh *m, int first)
+{
+    int n = m->face_count - first;
+    long *edges = malloc(sizeof(long) * 3 * (size_t)n);
+    long vertices = m->position_count;
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            edges[3 * i + k] = (long)m->faces[first + i].position[k] * vertices +
+                               m->faces[first + i].position[(k + 1) % 3];
+    qsort(edges, 3 * (size_t)n, sizeof(long), compare_longs);
+    bool closed = true;
+    for (long e = 0; e < 3L * n && closed; e++) {
+        long reverse = edges[e] % vertices * vertices + edges[e] / vertices;
+        closed = (e == 0 || edges[e - 1] != edges[e]) &&
+                 bsearch(&reverse, edges, 3 * (size_t)n, sizeof(long), compare_longs) != NULL;
+    }
+    free(edges);
+    return closed;
+}
+
+static void test_the_benchmark_scenes_are_what_they_say(void **state)
+{
+    (void)state;
+    const char *names[] = {"cornell", "cornell-10k", "cornell-100k", "glossy-glass"};
+    const int triangles[] = {32, 32 + 10240, 32 + 102400, 22 + 5120};
+    for (int k = 0; k < 4; k++) {
+        pt_scene sc;
+        assert_true(bench_scene_build(&sc, names[k]));
+        assert_int_equal(sc.triangles.count, triangles[k]);
+        assert_int_equal(sc.sphere_count, 0);
+        if (k == 1 || k == 2) {
+            /* the torus (faces 32 on) is closed and above the short block's top, y = 165 */
+            assert_true(faces_closed(&sc.geometry, 32));
+            float lowest = INFINITY;
+            for (int i = 32; i < sc.geometry.face_count; i++)
+                for (int c = 0; c < 3; c++)
+                    lowest = fminf(lowest, mesh_vertex(&sc.geometry, i, c).y);
+            assert_true(lowest > 165.0f);
+        }
+        pt_scene_free(&sc);
+    }
+    /* the twin of the closedness check: one triangle gone opens the torus */
+    pt_scene sc;
+    assert_true(bench_scene_build(&sc, "cornell-10k"));
+    sc.geometry.face_count--;
+    assert_false(faces_closed(&sc.geometry, 32));
+    sc.geometry.face_count++;
+    assert_false(bench_scene_build(&sc, "no-such-scene")); /* sc untouched */
+
+    /* What make bench writes loads back as the same triangles and paints. */
+    char dir[] = "/tmp/test_ch13_bench.XXXXXX", path[256], err[1024];
+    assert_non_null(mkdtemp(dir));
+    assert_true(bench_scene_write(dir, "cornell-10k", err, sizeof err));
+    snprintf(path, sizeof path, "%s/cornell-10k.scene", dir);
+    scene_desc desc;
+    scene_desc_init(&desc);
+    pt_scene back;
+    pt_scene_report_materials(NULL);
+    assert_true(scene_desc_load(&desc, path, err, sizeof err));
+    assert_true(pt_scene_from_desc(&back, &desc, "test", err, sizeof err));
+    assert_int_equal(back.triangles.count, sc.triangles.count);
+    for (int i = 0; i < sc.geometry.face_count; i++) {
+        for (int c = 0; c < 3; c++) {
+            vec3 p = mesh_vertex(&sc.geometry, i, c), q = mesh_vertex(&back.geometry, i, c);
+            assert_true(p.x == q.x && p.y == q.y && p.z == q.z);
+        }
+        vec3 a = sc.materials[sc.geometry.faces[i].material].albedo;
+        vec3 b = back.materials[back.geometry.faces[i].material].albedo;
+        assert_true(a.x == b.x && a.y == b.y && a.z == b.z);
+    }
+    assert_true(back.eye.z == sc.eye.z && back.vertical_fov_degrees == sc.vertical_fov_degrees);
+    assert_int_equal(back.emitter_count, sc.emitter_count);
+    scene_desc_free(&desc);
+    pt_scene_free(&back);
+    pt_scene_free(&sc);
+    const char *files[] = {"cornell-10k.scene", "cornell-10k.obj", "cornell-10k.mtl"};
+    for (int k = 0; k < 3; k++) {
+        snprintf(path, sizeof path, "%s/%s", dir, files[k]);
+        unlink(path);
+    }
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -2270,6 +2365,7 @@ int main(void)
         cmocka_unit_test(test_lanes_light_sample_is_chapter_09s),
         cmocka_unit_test(test_no_ray_leaks_through_a_closed_mesh_anywhere),
         cmocka_unit_test(test_moller_trumbore_leaks_through_every_entry_point),
+        cmocka_unit_test(test_the_benchmark_scenes_are_what_they_say),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -141,7 +141,16 @@ bool bsdf_sample(const pt_material *m, vec3 n, vec3 wo, vec2 u, float u_lobe, bo
     case BSDF_GLASS: {
         /* Reflect with probability R (exact Fresnel, chapter 02), else
          * refract: f cos / pdf is then 1 either way, so glass neither gains
-         * nor loses energy. */
+         * nor loses energy.
+         * The refracted weight leaves out (eta_i / eta_t)^2, the factor by
+         * which radiance itself changes across the surface (pbrt applies it
+         * to paths that carry radiance, not to those that carry importance).
+         * What the project transports is basic radiance L / eta^2, which a
+         * refraction leaves unchanged and which equals radiance in air
+         * (eta = 1), where every camera and light of the book sits: a path
+         * from the eye to a light leaves each closed glass object as often
+         * as it enters it, and the factors it would carry cancel. A light
+         * or a camera inside glass, or an open glass surface, would need it. */
         float eta_i = entering ? 1.0f : m->ior, eta_t = entering ? m->ior : 1.0f;
         float cos_o = vec3_dot(n, wo);
         float reflectance = fresnel_dielectric(cos_o, eta_i, eta_t);

@@ -184,10 +184,12 @@ static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, ve
     float weight = with_mis ? power_heuristic(pdf_light, bsdf_pdf(m, n, wo, wi)) : 1.0f;
     vec3 contribution = vec3_scale(vec3_mul(x.emission, f), cos_theta / pdf_light * weight);
     if (explain_on()) {
-        char xb[64], cb[64];
-        explain_line(explain_depth, "light sample at %s: visible, pdf %.4g per sr, cos %.4g%s%.3g, adds %s",
-                     explain_vec3(xb, x.point), (double)pdf_light, (double)cos_theta,
-                     with_mis ? ", MIS weight " : "", with_mis ? (double)weight : 0.0, explain_vec3(cb, contribution));
+        char xb[64], cb[64], wb[32] = "";
+        if (with_mis) /* the weight only where MIS weighs: the other rungs use none */
+            snprintf(wb, sizeof wb, ", MIS weight %.3g", (double)weight);
+        explain_line(explain_depth, "light sample at %s: visible, pdf %.4g per sr, cos %.4g%s, adds %s",
+                     explain_vec3(xb, x.point), (double)pdf_light, (double)cos_theta, wb,
+                     explain_vec3(cb, contribution));
     }
     return vec3_add(radiance, contribution);
 }
@@ -263,6 +265,18 @@ static void explain_shade(const path_tracer *pt, int depth, const char *what, ve
         explain_line(2 * depth + 3, "left the scene: the environment");
 }
 
+/* --explain: the lecture's light sample in the slide's area form. */
+static void explain_light_sample(int depth, const pt_light_sample *x, float cos_theta, float cos_theta_x,
+                                 float distance2, vec3 l_x)
+{
+    if (!explain_on())
+        return;
+    char xb[64], cb[64];
+    explain_line(2 * depth + 2, "light sample at x' = %s: visible, cos theta %.4g, cos theta' %.4g, |x' - p|^2 %.4g, "
+                 "pdf_light %.4g per unit area, adds %s", explain_vec3(xb, x->point), (double)cos_theta,
+                 (double)cos_theta_x, (double)distance2, (double)x->pdf_light, explain_vec3(cb, l_x));
+}
+
 static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth, vec3 throughput, pt_random *rng,
                   ray_counters *counters);
 
@@ -331,9 +345,14 @@ static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth
         vec3 ws = vec3_scale(to_light, 1.0f / sqrtf(distance2));
         float cos_theta = vec3_dot(n, ws), cos_theta_x = -vec3_dot(x.normal, ws);
         /* if the ray from p to x' is not blocked in the middle: L_i f_r cos(theta) cos(theta') / |x' - p|^2 / pdf */
-        if (cos_theta > 0.0f && cos_theta_x > 0.0f && light_visible(pt, p, &x, counters))
-            l_dir = vec3_add(l_dir, vec3_scale(vec3_mul(x.emission, bsdf_eval(m, n, wo, ws)),
-                                               cos_theta * cos_theta_x / distance2 / x.pdf_light));
+        if (cos_theta > 0.0f && cos_theta_x > 0.0f && light_visible(pt, p, &x, counters)) {
+            vec3 l_x = vec3_scale(vec3_mul(x.emission, bsdf_eval(m, n, wo, ws)),
+                                  cos_theta * cos_theta_x / distance2 / x.pdf_light);
+            l_dir = vec3_add(l_dir, l_x);
+            explain_light_sample(depth, &x, cos_theta, cos_theta_x, distance2, l_x);
+        } else {
+            explain_line(2 * depth + 2, "light sample: faces away, lies below the surface or is blocked: adds 0");
+        }
     }
     /* Contribution from other reflectors: Russian roulette with P_RR */
     float p_rr = path_goes_on(pt, m, depth, throughput, rng);
@@ -349,9 +368,9 @@ static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth
     counters->indirect_rays++;
     hit_record q;
     bool hit = pt_scene_intersect(sc, r, &q, counters);
+    explain_shade(pt, depth, "L_dir", l_dir, r, &q, hit);
     vec3 l_q = hit ? shade(pt, &q, vec3_neg(wi), depth + 1, vec3_mul(throughput, f_cos_pdf), rng, counters)
                    : sc->environment; /* a ray that leaves the scene brings the environment */
-    explain_shade(pt, depth, "L_dir", l_dir, r, &q, hit);
     return vec3_add(l_dir, vec3_mul(l_q, f_cos_pdf));
 }
 
@@ -447,7 +466,8 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_co
         /* The next direction: from the BSDF (MIS, and always for delta
          * surfaces), or cosine-weighted on the hemisphere. */
         bsdf_sample_result s;
-        /* in a written order, GCC's (see shade() below) */
+        /* u_y first, then u_x, as shade() above draws them (each declarator
+     * is sequenced), so that every rung reads a path's numbers alike */
         float u_y = pt_random_float(rng), u_x = pt_random_float(rng);
         vec2 u = vec2_make(u_x, u_y);
         if (mis || delta) {

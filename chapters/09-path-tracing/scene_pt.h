@@ -265,6 +265,14 @@ void pt_scene_report_materials(FILE *out);
 /* An OBJ file's triangles with its MTL materials (pt_material_from_mtl),
  * and a camera from its bounds. False with err on failure. */
 bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_size);
+/* The reverse: the scene's triangles as an OBJ file and its materials as
+ * the MTL file beside it (the OBJ's name with .mtl), written so that
+ * pt_scene_load_obj reads back the same triangles, bit for bit, and the
+ * same materials (glossy: alpha within a float's rounding). For another
+ * renderer to render the same scene (make bench-cycles). False with err,
+ * and nothing written, for what OBJ cannot hold: spheres, point lights, an
+ * environment, perfect mirrors, tinted glass. */
+bool pt_scene_write_obj(const pt_scene *sc, const char *obj_path, char *err, size_t err_size);
 
 /* The scene of a scene file (scene_file.h; scene_pt_file.c): diffuse,
  * glossy, mirror, glass and emissive materials, point and area lights (an

@@ -68,13 +68,15 @@ bool bdpt_supports(const pt_scene *sc, char *err, size_t err_size)
 }
 
 /* ---- the pinhole camera as a sensor -------------------------------------------
- * The camera draws a point uniformly on the image plane at distance 1 (area
- * A = 4 half_width half_height). A patch dA of the plane at angle theta from
- * the axis lies at distance 1 / cos(theta) and faces the eye at angle theta,
- * so it spans dw = dA cos^3(theta): per unit solid angle the density is
- * 1 / (A cos^3 theta). The importance W_e that makes a pixel's value the
- * average radiance over its area is then 1 / (A_pixel cos^4 theta), and
- * W_e cos(theta) / pdf = 1: a camera ray carries weight 1. */
+ * The image plane lies at distance 1 (area A = 4 half_width half_height,
+ * each pixel A_pixel = A / (width height)). A patch dA of the plane at angle
+ * theta from the axis lies at distance 1 / cos(theta) and faces the eye at
+ * angle theta, so it spans dw = dA cos^3(theta). A camera sample of a pixel
+ * is uniform on that pixel: per unit solid angle its density is
+ * 1 / (A_pixel cos^3 theta). The importance W_e that makes a pixel's value
+ * the average radiance over its area is 1 / (A_pixel cos^4 theta) on the
+ * pixel, 0 elsewhere, so W_e cos(theta) / pdf = 1: a camera ray carries
+ * weight 1. */
 bool bdpt_camera_project(const camera *cam, vec3 point, float *px, float *py)
 {
     vec3 d = vec3_sub(point, cam->eye);
@@ -366,8 +368,10 @@ static void connect_to_camera(const bdpt *b, const bdpt_vertex *light, int s, co
     float cos_eye = -vec3_dot(b->cam->forward, d) / distance;
     if (b->fault == BDPT_FAULT_NO_LIGHT_COSINE)
         cos_y = 1.0f;
-    /* G W_e = cos_y cos_eye / d^2 / (A cos_eye^4), per light path; the film
-     * is divided by the camera samples per pixel when resolved (bdpt_render) */
+    /* G W_e = cos_y cos_eye / d^2 / (A_pixel cos_eye^4), averaged over the
+     * spp x width x height light paths; since A_pixel x width x height = A,
+     * that is cos_y / (d^2 A cos_eye^3) here and the film divided by spp
+     * when resolved (bdpt_render) */
     float importance = cos_y / (distance2 * image_plane_area(b->cam) * cos_eye * cos_eye * cos_eye);
     if (!(importance > 0.0f) || !visible(b, y, eye, counters))
         return;

@@ -138,6 +138,8 @@ mlt_path mlt_path_evaluate(const path_tracer *pt, const camera *cam, mlt_sampler
     pt_random random = {.rng = NULL, .next = sampler_next_callback, .state = s};
     p.radiance = path_trace_radiance_from(pt, r, &random, counters);
     p.f = vec3_luminance(p.radiance);
+    /* A NaN or Inf path counts as 0 (and is counted): a bias towards 0
+     * the counters' nonfinite_samples_dropped measures. */
     if (!isfinite(p.f) || !isfinite(p.radiance.x) || !isfinite(p.radiance.y) || !isfinite(p.radiance.z) ||
         p.f < 0.0) {
         counters->nonfinite_samples++;

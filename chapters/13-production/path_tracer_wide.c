@@ -193,8 +193,9 @@ static void start_pixel(lane *l, row_job *job)
     start_sample(l, job);
 }
 
-/* A sample's radiance into its pixel's mean (NaN and Inf dropped, as
- * render_pixel() does). */
+/* A sample's radiance into its pixel's mean (NaN and Inf dropped and
+ * counted, as render_pixel() does, with the same bias: the pixel is the
+ * mean of its finite samples). */
 static void settle(lane *l, vec3 s, row_job *job)
 {
     if (vec3_is_finite(s)) {

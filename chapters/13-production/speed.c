@@ -8,6 +8,7 @@
 
 #include "06-bvh/bvh.h"
 #include "09-path-tracing/experiments.h"
+#include "13-production/bench_scenes.h"
 #include "13-production/path_tracer_wide.h"
 #include "13-production/walls.h"
 
@@ -252,19 +253,14 @@ static void time_case(const path_tracer *pt, const camera *cam, int spp, int rep
 
 void production_speed_scenes(int size, int spp, int repeats)
 {
-    static const struct {
-        const char *label;
-        int triangles; /* 0: the Cornell box */
-    } scenes[] = {{"Cornell box", 0}, {"box + 10k torus", 10000}, {"box + 100k torus", 100000}};
+    /* The benchmark set's (bench_scenes.h), which `make bench` also times. */
+    static const char *const scenes[] = {"cornell", "cornell-10k", "cornell-100k", "glossy-glass"};
     printf("seconds per million camera samples, %dx%d, %d spp, 1 thread, max depth %d, best of %d (wall, CPU)\n",
            size, size, spp, SPEED_MAX_DEPTH, repeats);
     printf("%-18s %9s %18s %18s %18s\n", "scene", "triangles", "8 paths", "--one-path", "ch09 mis, ch06 bvh");
     for (size_t i = 0; i < sizeof scenes / sizeof scenes[0]; i++) {
         pt_scene sc;
-        if (scenes[i].triangles == 0)
-            pt_scene_build_cornell_box(&sc);
-        else
-            production_scene_box_with_torus(&sc, scenes[i].triangles);
+        bench_scene_build(&sc, scenes[i]);
         camera cam = pt_scene_camera(&sc, size, size);
         double wall[3], cpu[3];
         path_tracer pt = path_tracer_defaults(&sc);
@@ -275,7 +271,7 @@ void production_speed_scenes(int size, int spp, int repeats)
         pt.integrator = PT_LECTURE;
         time_case(&pt, &cam, spp, repeats, true, &wall[0], &cpu[0]);
         time_case(&pt, &cam, spp, repeats, false, &wall[1], &cpu[1]);
-        printf("%-18s %9d %8.3f %8.3f  %8.3f %8.3f  %8.3f %8.3f\n", scenes[i].label, sc.triangles.count, wall[0],
+        printf("%-18s %9d %8.3f %8.3f  %8.3f %8.3f  %8.3f %8.3f\n", scenes[i], sc.triangles.count, wall[0],
                cpu[0], wall[1], cpu[1], wall[2], cpu[2]);
         fflush(stdout);
         pt_scene_free(&sc);

@@ -1,0 +1,139 @@
+/* bench_scenes.c -- the benchmark's scenes (bench_scenes.h). */
+#include "13-production/bench_scenes.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "atomic_file.h"
+
+const char *const BENCH_SCENE_NAMES[] = {"cornell", "cornell-10k", "cornell-100k", "cornell-1m", "glossy-glass", NULL};
+const char *const BENCH_SCENE_NOTES[] = {
+    "chapter 09's Cornell box, 32 triangles",
+    "the box with a bumpy torus of 10,240 triangles",
+    "the box with a bumpy torus of 102,400 triangles",
+    "the box with a bumpy torus of 1,048,576 triangles",
+    "a GGX copper block and a glass ball of 5,120 triangles",
+    NULL};
+
+/* The torus's grid, U x V, for each mesh size: 2 U V triangles, the sizes
+ * of the Embree harness's tori field (10,240, 102,400, 1,048,576). */
+static const int TORUS_GRID[3][2] = {{128, 40}, {320, 160}, {1024, 512}};
+
+void bench_bumpy_torus(mesh *m, vec3 c, float major, float r0, int u, int v, int material)
+{
+    int base = m->position_count;
+    for (int i = 0; i < u; i++) {
+        float theta = 2.0f * (float)PI * (float)i / (float)u;
+        for (int j = 0; j < v; j++) {
+            float phi = 2.0f * (float)PI * (float)j / (float)v;
+            /* five bumps around, three across the tube, and a finer ripple */
+            float r = r0 * (1.0f + 0.2f * sinf(5.0f * theta) * cosf(3.0f * phi) +
+                            0.06f * sinf(17.0f * theta + 2.0f * phi));
+            float ring = major + r * cosf(phi);
+            mesh_add_position(m, vec3_make(c.x + ring * cosf(theta), c.y + r * sinf(phi), c.z + ring * sinf(theta)));
+        }
+    }
+    for (int i = 0; i < u; i++)
+        for (int j = 0; j < v; j++) {
+            int a = base + i * v + j, b = base + ((i + 1) % u) * v + j;
+            int d = base + ((i + 1) % u) * v + (j + 1) % v, e = base + i * v + (j + 1) % v;
+            mesh_add_triangle(m, a, e, d, material);
+            mesh_add_triangle(m, a, d, b, material);
+        }
+}
+
+/* dst: src's materials, triangles and camera, without its spheres, not
+ * finished (so that more can be added). */
+static void copy_triangles(pt_scene *dst, const pt_scene *src)
+{
+    pt_scene_init(dst);
+    for (int i = 0; i < src->material_count; i++)
+        pt_scene_add_material(dst, src->materials[i]);
+    const mesh *g = &src->geometry;
+    for (int i = 0; i < g->face_count; i++)
+        pt_scene_add_triangle(dst, mesh_vertex(g, i, 0), mesh_vertex(g, i, 1), mesh_vertex(g, i, 2),
+                              g->faces[i].material);
+    dst->eye = src->eye;
+    dst->target = src->target;
+    dst->up = src->up;
+    dst->vertical_fov_degrees = src->vertical_fov_degrees;
+    dst->environment = src->environment;
+}
+
+/* The box with the torus resting just above the short block's top
+ * (y = 165, centred near x 186, z 169). Material 0 is the box's white. */
+static void build_torus_box(pt_scene *sc, int size_index)
+{
+    pt_scene box;
+    pt_scene_build_cornell_box(&box);
+    copy_triangles(sc, &box);
+    pt_scene_free(&box);
+    const float r0 = 22.0f;
+    vec3 centre = vec3_make(186.0f, 165.0f + 1.3f * r0 + 2.0f, 169.0f);
+    bench_bumpy_torus(&sc->geometry, centre, 62.0f, r0, TORUS_GRID[size_index][0], TORUS_GRID[size_index][1], 0);
+    pt_scene_finish(sc);
+}
+
+/* Chapter 09's materials scene with its glass sphere made of triangles:
+ * an icosphere subdivided 4 times (5,120 flat triangles) of the same
+ * centre, radius and material. */
+static void build_glossy_glass(pt_scene *sc)
+{
+    pt_scene src;
+    pt_scene_build_cornell_box_materials(&src);
+    copy_triangles(sc, &src);
+    for (int i = 0; i < src.sphere_count; i++)
+        mesh_icosphere(&sc->geometry, src.spheres[i].center, src.spheres[i].radius, 4, src.spheres[i].material);
+    pt_scene_free(&src);
+    pt_scene_finish(sc);
+}
+
+bool bench_scene_build(pt_scene *sc, const char *name)
+{
+    if (strcmp(name, "cornell") == 0)
+        pt_scene_build_cornell_box(sc);
+    else if (strcmp(name, "cornell-10k") == 0)
+        build_torus_box(sc, 0);
+    else if (strcmp(name, "cornell-100k") == 0)
+        build_torus_box(sc, 1);
+    else if (strcmp(name, "cornell-1m") == 0)
+        build_torus_box(sc, 2);
+    else if (strcmp(name, "glossy-glass") == 0)
+        build_glossy_glass(sc);
+    else
+        return false;
+    return true;
+}
+
+bool bench_scene_write(const char *dir, const char *name, char *err, size_t err_size)
+{
+    pt_scene sc;
+    if (!bench_scene_build(&sc, name)) {
+        snprintf(err, err_size, "no benchmark scene '%s'", name);
+        return false;
+    }
+    const char *note = "";
+    for (int i = 0; BENCH_SCENE_NAMES[i] != NULL; i++)
+        if (strcmp(BENCH_SCENE_NAMES[i], name) == 0)
+            note = BENCH_SCENE_NOTES[i];
+    char obj_path[4096];
+    snprintf(obj_path, sizeof obj_path, "%s/%s.obj", dir, name);
+    bool ok = pt_scene_write_obj(&sc, obj_path, err, err_size);
+    char scene_name[512];
+    snprintf(scene_name, sizeof scene_name, "%s.scene", name);
+    atomic_file f;
+    if (ok && (ok = atomic_file_open_in(&f, dir, scene_name, err, err_size))) {
+        fprintf(f.stream,
+                "# The benchmark scene '%s' (chapters/13-production/bench_scenes.c): %s.\n"
+                "# Written by make bench; its triangles and materials are %s.obj and %s.mtl.\n"
+                "camera eye %.9g %.9g %.9g target %.9g %.9g %.9g up %.9g %.9g %.9g fov %.9g\n"
+                "mesh path \"%s.obj\"\n",
+                name, note, name, name, (double)sc.eye.x, (double)sc.eye.y, (double)sc.eye.z,
+                (double)sc.target.x, (double)sc.target.y, (double)sc.target.z, (double)sc.up.x, (double)sc.up.y,
+                (double)sc.up.z, (double)sc.vertical_fov_degrees, name);
+        ok = atomic_file_commit(&f, err, err_size);
+    }
+    pt_scene_free(&sc);
+    return ok;
+}

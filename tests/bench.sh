@@ -1,0 +1,143 @@
+#!/bin/sh
+# bench.sh BUILD [quick|full] [all|cycles] -- make bench: every table in one run.
+#
+#   1. the acceleration structures against Embree's (the harness
+#      ../shared/anchors/embree_bench.c), size by size, Embree then ours,
+#      twice over (A B A B), each ours-table with the ratios to the Embree
+#      run just before it
+#   2. chapter 13's table of what each step buys, on the Cornell box, and
+#      the same renderer on Embree's kernels (bench_pt_embree)
+#   3. the benchmark scenes (bench_scenes --speed): chapter 13's renderer,
+#      the same on Embree's kernels, chapter 09's MIS rung; s/M wall and
+#      CPU, Mrays/s, 1 and 2 threads, cases taking turns, best of N
+#   4. Cycles at equal CPU time (tests/bench_cycles.py, bench_equal_time),
+#      where blender is installed: ours, Cycles, MIS at each spp in turn
+#
+# quick (the default): small images, few repeats, the 1M-triangle mesh in
+# the speed table only: a few minutes on 2 cores. full (make bench
+# FULL=1): every size, larger images, more repeats, every scene in the
+# Cycles comparison: about an hour. `cycles` runs part 4 alone
+# (make bench-cycles). Everything lands in BUILD/bench/ and BUILD/data/.
+set -u
+BUILD=${1:?usage: bench.sh BUILD [quick|full] [all|cycles]}
+MODE=${2:-quick}
+PARTS=${3:-all}
+BIN=$BUILD/bin
+OUT=$BUILD/bench
+DATA=$BUILD/data
+mkdir -p "$OUT/scenes" "$OUT/runs" "$OUT/ref" "$DATA" "$BUILD/out"
+
+if [ "$MODE" = full ]; then
+    ACCEL_SIZES="1024 10240 102400 1048576" ACCEL_ARGS="--reps 3"
+    TABLE_ARGS="--width 256 --spp 16" EMBREE_PT_ARGS="--width 256 --spp 16 --reps 5"
+    SPEED_ARGS="--width 256 --spp 16 --reps 5"
+    CYCLES_SCENES="cornell cornell-10k cornell-100k cornell-1m glossy-glass"
+    CYCLES_WIDTH=128 REFERENCE_SPP=8192 CYCLES_SPP="16 64 256" OURS_EXTRA_SPP="1024" SEEDS="1 2"
+else
+    ACCEL_SIZES="10240 102400" ACCEL_ARGS="--reps 1 --only bvh4-sah,bvh4-stream"
+    TABLE_ARGS="--width 96 --spp 8" EMBREE_PT_ARGS="--width 64 --spp 8 --reps 3"
+    SPEED_ARGS="--width 96 --spp 8 --reps 3"
+    CYCLES_SCENES="cornell-10k glossy-glass"
+    CYCLES_WIDTH=64 REFERENCE_SPP=1024 CYCLES_SPP="16 64" OURS_EXTRA_SPP="256" SEEDS="1"
+fi
+
+echo "== make bench ($MODE): $(nproc) processors, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+START=$(date +%s)
+
+# The scene set, written once (the 1M mesh takes a few seconds).
+for s in cornell cornell-10k cornell-100k cornell-1m glossy-glass; do
+    [ -f "$OUT/scenes/$s.scene" ] && [ "$OUT/scenes/$s.scene" -nt "$BIN/bench_scenes" ] ||
+        "$BIN/bench_scenes" --write "$OUT/scenes" --scenes "$s" || exit 1
+done
+
+if [ "$PARTS" = all ]; then
+    echo
+    echo "== 1. acceleration structures against Embree (rtcIntersect1), size by size, A B A B"
+    if [ -x "$BIN/embree_bench" ]; then
+        for n in $ACCEL_SIZES; do
+            for rep in 1 2; do
+                "$BIN/embree_bench" embree "$n" medium 1 3 | tee "$OUT/embree-$n-$rep.txt"
+                stadium=""
+                [ "$MODE" = full ] && [ "$rep" = 2 ] && [ "$n" = 1024 ] && stadium="--stadium $DATA/stadium.csv"
+                # shellcheck disable=SC2086
+                "$BIN/bench_accel" --sizes "$n" $ACCEL_ARGS --embree "$OUT/embree-$n-$rep.txt" \
+                    --out "$OUT/accel-$n-$rep.csv" $stadium || exit 1
+            done
+        done
+        if [ "$MODE" = full ]; then # the second pass's figures, for make plots
+            first=1
+            for n in $ACCEL_SIZES; do
+                if [ $first = 1 ]; then cat "$OUT/accel-$n-2.csv"; first=0; else tail -n +2 "$OUT/accel-$n-2.csv"; fi
+            done > "$DATA/accel.csv.tmp" && mv "$DATA/accel.csv.tmp" "$DATA/accel.csv"
+            printf 'full\t%s\n' "make bench FULL=1 (build/bin/bench_accel --sizes N $ACCEL_ARGS, after Embree's run)" \
+                > "$DATA/accel.run"
+        fi
+    else
+        echo "no Embree harness (../shared/anchors/embree_bench.c, or SHARED=DIR): structures timed without it"
+        # shellcheck disable=SC2086
+        "$BIN/bench_accel" --sizes "$(echo $ACCEL_SIZES | tr ' ' ,)" $ACCEL_ARGS || exit 1
+    fi
+
+    echo
+    echo "== 2. chapter 13's steps on the Cornell box, and on Embree's kernels"
+    # shellcheck disable=SC2086
+    "$BIN/13-production" --bench $TABLE_ARGS --bench-csv "$DATA/ch13_speed.csv" || exit 1
+    if [ -x "$BIN/bench_pt_embree" ]; then
+        # shellcheck disable=SC2086
+        "$BIN/bench_pt_embree" $EMBREE_PT_ARGS --data "$DATA" || exit 1
+    else
+        echo "no Embree header (make bench-deps): the path tracer on Embree skipped"
+    fi
+
+    echo
+    echo "== 3. the benchmark scenes: chapter 13, the same on Embree, chapter 09's MIS rung"
+    # shellcheck disable=SC2086
+    "$BIN/bench_scenes" --speed "$OUT/scenes" $SPEED_ARGS --csv "$DATA/bench_scenes.csv" || exit 1
+fi
+
+echo
+echo "== 4. Cycles at equal CPU time ($CYCLES_WIDTH x $CYCLES_WIDTH, 2 threads; reference: chapter 09 mis, $REFERENCE_SPP spp)"
+if ! command -v blender > /dev/null 2>&1; then
+    echo "no blender: the Cycles comparison skipped (make bench-cycles installs Debian's blender and runs it)"
+else
+    blender --version 2> /dev/null | head -1
+    MANIFEST=$OUT/runs-$MODE.csv
+    : > "$MANIFEST"
+    for s in $CYCLES_SCENES; do
+        scene=$OUT/scenes/$s.scene
+        ref=$OUT/ref/$s-$CYCLES_WIDTH-$REFERENCE_SPP.exr
+        [ -f "$ref" ] || "$BIN/bench_scenes" --reference "$scene" --spp "$REFERENCE_SPP" --width "$CYCLES_WIDTH" \
+            --threads 2 --out "$ref" || exit 1
+        ln -sf "$(basename "$ref")" "$OUT/ref/$s.exr"
+        ln -sf "$(basename "$ref" .exr)-stderr.exr" "$OUT/ref/$s-stderr.exr"
+        # ours, Cycles, MIS, in turn at each sample count and seed (A B C A B C ...)
+        for spp in $CYCLES_SPP; do
+            for seed in $SEEDS; do
+                for r in ch13 cycles ch09-mis; do
+                    img=$OUT/runs/$s-$r-$spp-$seed.exr
+                    if [ $r = cycles ]; then
+                        blender -b --factory-startup -P tests/bench_cycles.py -- --scene "$scene" --spp "$spp" \
+                            --width "$CYCLES_WIDTH" --threads 2 --seed "$seed" --out "$img" --manifest "$MANIFEST" \
+                            2>&1 | grep '^bench_cycles.py' || { echo "blender failed on $s"; exit 1; }
+                    else
+                        "$BIN/bench_scenes" --render "$scene" --renderer $r --spp "$spp" --width "$CYCLES_WIDTH" \
+                            --threads 2 --seed "$seed" --out "$img" --manifest "$MANIFEST" || exit 1
+                    fi
+                done
+            done
+        done
+        # ours is faster per sample: more samples, so that its curve reaches Cycles' CPU times
+        for spp in $OURS_EXTRA_SPP; do
+            for seed in $SEEDS; do
+                "$BIN/bench_scenes" --render "$scene" --renderer ch13 --spp "$spp" --width "$CYCLES_WIDTH" \
+                    --threads 2 --seed "$seed" --out "$OUT/runs/$s-ch13-$spp-$seed.exr" --manifest "$MANIFEST" || exit 1
+            done
+        done
+    done
+    "$BIN/bench_equal_time" --manifest "$MANIFEST" --references "$OUT/ref" --csv "$DATA/bench_equal_time.csv" || exit 1
+fi
+
+echo
+echo "== make bench ($MODE) took $(($(date +%s) - START)) s of wall time; load average now $(cut -d' ' -f1-3 /proc/loadavg)"
+times > "$OUT/times.txt" # (in this shell: in a pipeline it would time a subshell)
+echo "CPU time of everything it ran (user, system): $(tail -1 "$OUT/times.txt")"

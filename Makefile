@@ -12,6 +12,8 @@
 #   make test-bvh4   the wide BVH's suite with 4 children per node instead of 8
 #   make valgrind    one small render of each chapter program under valgrind
 #   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
+#   make mpi         the programs built against OpenMPI, in build/mpi/ (mpirun -np N splits a render)
+#   make test-mpi    1, 2 and 3 MPI ranks make the image one process makes; a killed rank stops the run
 #   make bench       every benchmark table in one run (quick; FULL=1 full): structures beside Embree, the path tracer
 #                    on the benchmark scenes, also on Embree's kernels, Cycles at equal CPU time where blender is
 #   make bench-cycles  install Debian's blender if missing, then Cycles at equal CPU time alone
@@ -25,6 +27,7 @@
 #   mk/config.mk     flags, Debian packages (make deps)
 #   mk/chapters.mk   common/, and per chapter: library, program, suite, chNN, test-chNN
 #   mk/tests.mk      make test, sanitize, test-seeds, fp-contract-leaks, test-bvh4, valgrind, fuzz
+#   mk/mpi.mk        make mpi, mpi-deps, test-mpi
 #   mk/bench.mk      make bench
 #   mk/plots.mk      make plots
 #   mk/docs.mk       make docs, test-docs
@@ -38,6 +41,7 @@
 include mk/config.mk
 include mk/chapters.mk
 include mk/tests.mk
+include mk/mpi.mk
 include mk/bench.mk
 include mk/plots.mk
 include mk/docs.mk

@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,6 +12,55 @@
 /* Makes temporary names unique between threads of this process; the pid
  * separates processes, O_EXCL catches anything else. */
 static atomic_uint temp_counter;
+
+/* ---- a signal in the middle of a write ----------------------------------------
+ * SIGINT, SIGTERM or SIGHUP while a file is being written (a long render's
+ * checkpoint, stopped by Ctrl-C or by mpirun stopping the ranks) would
+ * leave its temporary file beside the target. The handler removes every
+ * temporary file in flight, then lets the signal end the process as it
+ * would have. It is installed at the first write, for the signals whose
+ * action is still the default (a program's own handler, or a signal that
+ * is ignored, as SIGINT is for a background job, stays as it is). */
+enum { IN_FLIGHT_SLOTS = 16 };
+static char *_Atomic in_flight[IN_FLIGHT_SLOTS];
+static atomic_flag handlers_installed = ATOMIC_FLAG_INIT;
+static const int CLEANUP_SIGNALS[] = {SIGINT, SIGTERM, SIGHUP};
+
+static void remove_in_flight(int sig)
+{
+    for (int k = 0; k < IN_FLIGHT_SLOTS; k++) {
+        char *temp = atomic_load(&in_flight[k]);
+        if (temp != NULL)
+            unlink(temp); /* async-signal-safe */
+    }
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+static void install_handlers(void)
+{
+    if (atomic_flag_test_and_set(&handlers_installed))
+        return;
+    for (size_t k = 0; k < sizeof CLEANUP_SIGNALS / sizeof CLEANUP_SIGNALS[0]; k++) {
+        struct sigaction old, action;
+        if (sigaction(CLEANUP_SIGNALS[k], NULL, &old) != 0 || old.sa_handler != SIG_DFL)
+            continue;
+        memset(&action, 0, sizeof action);
+        action.sa_handler = remove_in_flight;
+        sigemptyset(&action.sa_mask);
+        sigaction(CLEANUP_SIGNALS[k], &action, NULL);
+    }
+}
+
+/* While a temporary file exists its name is in a slot (if one is free). */
+static void track(char *temp, bool on)
+{
+    for (int k = 0; k < IN_FLIGHT_SLOTS; k++) {
+        char *expected = on ? NULL : temp;
+        if (atomic_compare_exchange_strong(&in_flight[k], &expected, on ? temp : NULL))
+            return;
+    }
+}
 
 /* err may be NULL (or empty) for callers that do not want the message. */
 static void set_error(char *err, size_t err_size, const char *path, int failure)
@@ -21,6 +71,8 @@ static void set_error(char *err, size_t err_size, const char *path, int failure)
 
 static void release(atomic_file *f)
 {
+    if (f->temp_path != NULL)
+        track(f->temp_path, false);
     free(f->path);
     free(f->temp_path);
     f->path = f->temp_path = NULL;
@@ -49,7 +101,10 @@ bool atomic_file_open(atomic_file *f, const char *path, char *err, size_t err_si
     f->stream = NULL;
     f->path = strdup(path);
     f->temp_path = malloc(size);
+    install_handlers();
     int fd = f->path != NULL && f->temp_path != NULL ? create_temp(f, size) : (errno = ENOMEM, -1);
+    if (fd >= 0)
+        track(f->temp_path, true);
     if (fd >= 0 && (f->stream = fdopen(fd, "w")) == NULL) {
         int failure = errno;
         close(fd);

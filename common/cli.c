@@ -1,8 +1,10 @@
 /* cli.c -- one parser for every chapter program's flags (see cli.h). */
 #include "cli.h"
 
+#include "checkpoint.h"
 #include "counters.h"
 #include "input_file.h"
+#include "mpi_split.h"
 #include "run_record.h"
 
 #include <errno.h>
@@ -35,6 +37,7 @@ cli_options cli_defaults(const char *out, int width, int height, int spp)
     o.exposure = 0.0f;
     o.quiet = false;
     o.max_input_mb = INPUT_DEFAULT_MESH_MB;
+    o.checkpoint_every = 60.0f;
     return o;
 }
 
@@ -424,6 +427,38 @@ void cli_print_help(const cli_spec *spec, const cli_options *d)
     }
 }
 
+/* A program that offers --resume: where its checkpoints go (by default
+ * beside the image; with --resume, over the file resumed), which no input
+ * may be; and the file resumed must not be one the run writes either. */
+static void protect_checkpoint(const cli_spec *spec, cli_options *opts)
+{
+    static char default_path[PATH_MAX];
+    char err[512];
+    const size_t err_size = sizeof err;
+    opts->checkpoint_offered = find_extra(spec, "--resume", false) != NULL;
+    if (!opts->checkpoint_offered)
+        return;
+    if (opts->resume != NULL)
+        input_file_check_not_output(opts->resume);
+    if (opts->checkpoint != NULL) { /* its directory must be there and writable, as --out's */
+        char dir[PATH_MAX];
+        const char *slash = strrchr(opts->checkpoint, '/');
+        snprintf(dir, sizeof dir, "%.*s", slash == NULL ? 1 : slash == opts->checkpoint ? 1 : (int)(slash - opts->checkpoint),
+                 slash == NULL ? "." : opts->checkpoint);
+        if (!check_directory("--checkpoint", opts->checkpoint, dir, err, err_size)) {
+            fprintf(stderr, "%s: %s\n(try '%s --help')\n", spec->program, err, spec->program);
+            exit(2);
+        }
+    }
+    if (opts->checkpoint == NULL && opts->resume != NULL) {
+        opts->checkpoint = opts->resume;
+    } else if (opts->checkpoint == NULL) {
+        checkpoint_path_for_image(opts->out, default_path, sizeof default_path);
+        opts->checkpoint = default_path;
+    }
+    input_file_protect(spec->program, "--checkpoint", opts->checkpoint, opts->checkpoint, "");
+}
+
 void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options *opts)
 {
     cli_options defaults = *opts;
@@ -449,10 +484,15 @@ void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options 
     }
     counters_path_for_image(opts->out, sidecar, sizeof sidecar);
     input_file_protect(spec->program, "--out", opts->out, sidecar, "its counters file");
+    protect_checkpoint(spec, opts);
 #ifdef _OPENMP
     if (opts->threads == 0)
         opts->threads = omp_get_max_threads();
 #else
     opts->threads = 1;
 #endif
+    /* Under mpirun: every rank but 0 renders its rows and says nothing. */
+    mpi_split_begin();
+    if (!mpi_split_is_root())
+        opts->quiet = true;
 }

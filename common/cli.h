@@ -50,6 +50,14 @@ typedef struct {
     bool jitter;
     /* Not a flag either: stratified pixel positions (render.h), chapter 10. */
     bool stratify;
+    /* --checkpoint FILE, --checkpoint-every SECONDS, --resume FILE
+     * (CLI_CHECKPOINT_FLAGS; checkpoint.h). In a program that offers them
+     * a long render keeps its state in `checkpoint` (by default the image's
+     * name with .checkpoint) every checkpoint_every seconds (default 60),
+     * removed when the image is written. */
+    const char *checkpoint, *resume;
+    float checkpoint_every;
+    bool checkpoint_offered; /* not a flag: the program lists them */
 } cli_options;
 
 /* CLI_DIR: a directory that must exist and be writable when the flags are
@@ -119,5 +127,16 @@ void cli_print_help(const cli_spec *spec, const cli_options *defaults);
         {"--target", CLI_VEC3, &(o).target, "X,Y,Z", "the point it looks at (default: along the scene camera's view)", \
          -1e7, 1e7},                                                                                                 \
         {"--fov", CLI_FLOAT, &(o).vertical_fov_degrees, "DEGREES", "its vertical field of view", 1.0, 179.0}
+
+/* The flags of a program whose long renders keep checkpoints and resume
+ * (cli_options' checkpoint, checkpoint_every, resume): three entries for
+ * its cli_flag table. */
+#define CLI_CHECKPOINT_FLAGS(opts)                                                                                    \
+    {"--checkpoint", CLI_STRING, &(opts).checkpoint, "FILE", "keep a long render's state here (default: --out's "   \
+                                                             "name with .checkpoint)", 0, 0},                      \
+        {"--checkpoint-every", CLI_FLOAT, &(opts).checkpoint_every, "SECONDS",                                        \
+         "at least this long between two checkpoints (default 60; 0: after every pass)", 0.0, 1e7},                   \
+        {"--resume", CLI_STRING, &(opts).resume, "FILE", "continue the render a checkpoint holds: the same "         \
+                                                         "image, bit for bit, as if never stopped", 0, 0}
 
 #endif

@@ -1,12 +1,15 @@
 #include "program.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "explain.h"
 #include "input_file.h"
+#include "mpi_split.h"
 #include "run_record.h"
 #include "timer.h"
 
@@ -84,6 +87,29 @@ bool program_load_scene(cli_options *opts, const char *label, scene_desc *d)
     return true;
 }
 
+/* Under mpirun: how many ranks, and what handing their rows over cost,
+ * for the record and the report. */
+static void note_ranks(const render_stats *stats)
+{
+    if (mpi_split_ranks() == 1)
+        return;
+    char text[64];
+    snprintf(text, sizeof text, "%d", mpi_split_ranks());
+    run_record_note("mpi_ranks", text);
+    snprintf(text, sizeof text, "%.6f", stats->gather_seconds);
+    run_record_note("mpi_gather_seconds", text);
+    snprintf(text, sizeof text, "%.6f", stats->wait_seconds);
+    run_record_note("mpi_wait_seconds", text);
+}
+
+void program_print_ranks(const render_stats *stats)
+{
+    if (mpi_split_ranks() > 1)
+        printf("split over %d MPI ranks: rank 0 waited %.3f s for the slowest; handing rows between them took "
+               "%.3f s, %.2f%% of the render\n", mpi_split_ranks(), stats->wait_seconds, stats->gather_seconds,
+               stats->seconds > 0.0 ? 100.0 * stats->gather_seconds / stats->seconds : 0.0);
+}
+
 /* --explain X,Y: one pixel, one thread, every step printed. */
 static int program_explain(const cli_options *opts, const char *label, const render_job *job, render_stats *stats_out)
 {
@@ -121,38 +147,124 @@ static int program_explain(const cli_options *opts, const char *label, const ren
  * numbers from its own counters and the pixels' own streams, so the image
  * is untouched. Only renders of more than LONG_RENDER_PIXELS pixels are
  * piloted: smaller ones end before a warning would help. */
-enum { PILOT_PIXELS = 8 * 8, LONG_RENDER_PIXELS = 16384 };
+enum { PILOT_GRID = 8, PILOT_PIXELS = PILOT_GRID * PILOT_GRID, LONG_RENDER_PIXELS = 16384, PROGRESSIVE_PILOT_SPP = 16 };
 static const double LONG_RENDER_SECONDS = 60.0;
+
+/* The pilot: one-thread seconds for the whole image, and through
+ * relative_error (if not NULL) the error its pixels show, measured as
+ * estimate_relative_error measures an image. */
+static double pilot(const render_job *job, double *relative_error)
+{
+    long pixels = (long)job->cam->width * job->cam->height;
+    ray_counters ignored;
+    memset(&ignored, 0, sizeof ignored);
+    double start = timer_seconds(), sum = 0.0;
+    /* An 8 x 8 grid of pixels, each at the centre of its cell: every part
+     * of the picture has its say, the sky and the model alike. */
+    for (int k = 0; k < PILOT_PIXELS; k++) {
+        int x = (int)(((double)(k % PILOT_GRID) + 0.5) * job->cam->width / (double)PILOT_GRID);
+        int y = (int)(((double)(k / PILOT_GRID) + 0.5) * job->cam->height / (double)PILOT_GRID);
+        vec3 se;
+        vec3 m = render_pixel(job, x, y, &ignored, &se);
+        const float mean[3] = {m.x, m.y, m.z}, error[3] = {se.x, se.y, se.z};
+        for (int c = 0; c < 3; c++) /* progressive.c's RELATIVE_ERROR_EPSILON */
+            sum += (double)error[c] * error[c] / ((double)mean[c] * mean[c] + 1e-2);
+    }
+    if (relative_error != NULL)
+        *relative_error = sqrt(sum / (3.0 * PILOT_PIXELS));
+    return (timer_seconds() - start) / PILOT_PIXELS * (double)pixels;
+}
 
 double program_pilot_seconds(const render_job *job)
 {
     long pixels = (long)job->cam->width * job->cam->height;
-    if (pixels < LONG_RENDER_PIXELS)
-        return 0.0;
-    ray_counters ignored;
-    memset(&ignored, 0, sizeof ignored);
-    double start = timer_seconds();
-    /* An 8 x 8 grid of pixels, each at the centre of its cell: every part
-     * of the picture has its say, the sky and the model alike. */
-    for (int k = 0; k < PILOT_PIXELS; k++) {
-        int x = (int)(((double)(k % 8) + 0.5) * job->cam->width / 8.0);
-        int y = (int)(((double)(k / 8) + 0.5) * job->cam->height / 8.0);
-        render_pixel(job, x, y, &ignored, NULL);
-    }
-    return (timer_seconds() - start) / PILOT_PIXELS * (double)pixels;
+    return pixels < LONG_RENDER_PIXELS ? 0.0 : pilot(job, NULL);
 }
 
-void program_warn_if_long(const cli_options *opts, const char *label, double one_thread_seconds)
+/* Every thread of every rank (mpi_split.h) shares the work. */
+static int all_threads(const cli_options *opts)
 {
-    int threads = opts->threads > 0 ? opts->threads : omp_get_max_threads();
+    return (opts->threads > 0 ? opts->threads : omp_get_max_threads()) * mpi_split_ranks();
+}
+
+static void warn_long(const cli_options *opts, const char *label, double one_thread_seconds, const char *advice)
+{
+    int threads = all_threads(opts);
     double estimate = one_thread_seconds / threads;
     if (opts->quiet || estimate <= LONG_RENDER_SECONDS)
         return;
     bool minutes = estimate >= 120.0;
-    fprintf(stderr, "%s: warning: this render will take about %.0f %s on %d threads (from a pilot of %d "
-            "pixels): a smaller --width, --height or --spp first, or a chapter with an acceleration structure "
-            "(06, 09, 13) for a large mesh\n", label, minutes ? estimate / 60.0 : estimate,
-            minutes ? "minutes" : "seconds", threads, PILOT_PIXELS);
+    fprintf(stderr, "%s: warning: this render will take about %.0f %s on %d threads%s (from a pilot of %d "
+            "pixels): %s\n", label, minutes ? estimate / 60.0 : estimate, minutes ? "minutes" : "seconds", threads,
+            mpi_split_ranks() > 1 ? " of all ranks" : "", PILOT_PIXELS, advice);
+}
+
+void program_warn_if_long(const cli_options *opts, const char *label, double one_thread_seconds)
+{
+    warn_long(opts, label, one_thread_seconds,
+              "a smaller --width, --height or --spp first, or a chapter with an acceleration structure (06, 09, 13) "
+              "for a large mesh");
+}
+
+void program_warn_if_long_progressive(const cli_options *opts, const char *label, const render_job *job,
+                                      double seconds, double target_error, long spp_done)
+{
+    long pixels = (long)job->cam->width * job->cam->height;
+    if (opts->quiet || pixels < LONG_RENDER_PIXELS || (seconds > 0.0 && seconds <= LONG_RENDER_SECONDS))
+        return;
+    double one_thread = seconds * all_threads(opts); /* the budget, if that is all */
+    if (target_error > 0.0) {
+        /* The error falls as 1/sqrt(spp): from the pilot's error at its
+         * spp, the passes (doubling from 2) stop at the first power of two
+         * past PILOT_SPP (e / target)^2, and at 16 at least. */
+        render_job at_16 = *job;
+        at_16.spp = PROGRESSIVE_PILOT_SPP;
+        double error = 0.0;
+        double per_spp = pilot(&at_16, &error) / PROGRESSIVE_PILOT_SPP;
+        double needed = PROGRESSIVE_PILOT_SPP * (error / target_error) * (error / target_error);
+        long spp = 16;
+        while ((double)spp < needed && spp < (1L << 40))
+            spp *= 2;
+        double until_target = per_spp * (double)(spp > spp_done ? spp - spp_done : 0);
+        one_thread = seconds > 0.0 && one_thread < until_target ? one_thread : until_target;
+    }
+    warn_long(opts, label, one_thread,
+              target_error > 0.0 ? "a larger --target-error, or a --time-budget, first" : "a smaller --time-budget first");
+}
+
+bool program_checkpointing(const cli_options *opts, const char *label, const char *kind, size_t payload_bytes,
+                           checkpointing *cp, checkpoint *resumed)
+{
+    memset(cp, 0, sizeof *cp);
+    memset(resumed, 0, sizeof *resumed);
+    if (!opts->checkpoint_offered)
+        return true;
+    cp->path = opts->checkpoint;
+    cp->every_seconds = opts->checkpoint_every;
+    cp->id = checkpoint_identity_of(kind, label, opts);
+    cp->quiet = opts->quiet;
+    cp->resuming = opts->resume != NULL;
+    if (!cp->resuming)
+        return true;
+    char err[8192] = "";
+    int ok = !mpi_split_is_root() || checkpoint_read(opts->resume, &cp->id, payload_bytes, resumed, err, sizeof err);
+    if (!mpi_split_broadcast_int(ok)) {
+        if (mpi_split_is_root())
+            fprintf(stderr, "%s: --resume %s\n", label, err);
+        return false;
+    }
+    cp->resume = resumed;
+    if (!opts->quiet)
+        printf("%s: resuming %s: %ld samples per pixel done in %.1f s\n", label, opts->resume, resumed->spp_done,
+               resumed->seconds);
+    return true;
+}
+
+void program_checkpoint_done(const cli_options *opts, const checkpointing *cp)
+{
+    /* The image holds all the checkpoint did: it has served. */
+    if (cp->path != NULL && mpi_split_is_root() && opts->checkpoint_offered)
+        unlink(cp->path);
 }
 
 int program_render(const cli_options *opts, const char *label, radiance_fn radiance, const void *scene,
@@ -175,10 +287,28 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
                       .jitter = opts->jitter,
                       .stratify = opts->stratify,
                       .sample = sample};
-    if (opts->explain)
-        return program_explain(opts, label, &job, stats_out);
-    if (!opts->quiet)
-        program_warn_if_long(opts, label, program_pilot_seconds(&job));
+    if (opts->explain) /* one rank explains */
+        return mpi_split_is_root() ? program_explain(opts, label, &job, stats_out) : 0;
+    checkpointing cp;
+    checkpoint resumed;
+    if (!program_checkpointing(opts, label, "render", (size_t)cam->width * cam->height * sizeof(render_pixel_state),
+                               &cp, &resumed))
+        return 1;
+    /* The pilot warns of a long render, and decides whether it keeps
+     * checkpoints: one that ends before the first would be due runs in one
+     * pass, without every pixel's state (88 bytes a pixel). A resumed
+     * render has only the rest to do. */
+    double one_thread = 0.0;
+    if (mpi_split_is_root() && (!opts->quiet || cp.path != NULL) && !cp.resuming) {
+        one_thread = program_pilot_seconds(&job);
+        program_warn_if_long(opts, label, one_thread);
+    } else if (mpi_split_is_root() && cp.resuming && !opts->quiet) {
+        program_warn_if_long(opts, label,
+                             program_pilot_seconds(&job) * (double)(job.spp - cp.resume->done) / job.spp);
+    }
+    mpi_split_broadcast(&one_thread, sizeof one_thread);
+    if (cp.resuming || (cp.path != NULL && one_thread / all_threads(opts) >= cp.every_seconds))
+        job.checkpoints = &cp;
     image img = image_make(cam->width, cam->height);
     if (img.rgb == NULL) {
         fprintf(stderr, "%s: out of memory for a %dx%d image\n", label, cam->width, cam->height);
@@ -186,6 +316,12 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
     }
     render_stats stats;
     render_image(&job, &img, &stats);
+    checkpoint_free(&resumed);
+    note_ranks(&stats);
+    if (!mpi_split_is_root()) { /* rank 0 writes and reports */
+        image_free(&img);
+        return 0;
+    }
 
     char err[IMAGE_ERROR_SIZE];
     bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err);
@@ -201,9 +337,11 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
         fprintf(stderr, "%s: %s\n", label, err);
         return 1;
     }
+    program_checkpoint_done(opts, &cp);
     if (!opts->quiet) {
         printf("%s: %dx%d, %d spp, %d threads, %.3f s -> %s\n", label, cam->width, cam->height, opts->spp,
                opts->threads, stats.seconds, opts->out);
+        program_print_ranks(&stats);
         counters_print(stdout, &stats.counters, stats.seconds);
         if (noted_accel[0] != '\0')
             printf("rays traced through: %s\n", noted_accel);

@@ -10,6 +10,7 @@
 #ifndef PROGRAM_H
 #define PROGRAM_H
 
+#include "checkpoint.h"
 #include "cli.h"
 #include "effects.h"
 #include "render.h"
@@ -29,6 +30,24 @@ int program_render(const cli_options *opts, const char *label, radiance_fn radia
  * draws). */
 int program_render_sampled(const cli_options *opts, const char *label, radiance_fn radiance, render_sample_fn sample,
                            const void *scene, const camera *cam, render_stats *stats);
+
+/* A program that offers --resume (CLI_CHECKPOINT_FLAGS): fills cp for a
+ * render of `kind` whose state is payload_bytes, and, with --resume, reads
+ * the checkpoint into *resumed (rank 0) for cp->resume. False, after a
+ * message naming the file and what differs, if it cannot be resumed (every
+ * rank returns false). Without the flags, cp keeps no checkpoints. */
+bool program_checkpointing(const cli_options *opts, const char *label, const char *kind, size_t payload_bytes,
+                           checkpointing *cp, checkpoint *resumed);
+/* After the image is written: the checkpoint has served, and goes. */
+void program_checkpoint_done(const cli_options *opts, const checkpointing *cp);
+/* Before a progressive render (--time-budget seconds, --target-error e,
+ * either 0 when not used; spp_done already done by a resumed one): the
+ * same warning as before a plain render of more than a minute, from a
+ * pilot at 16 spp that estimates both the time per sample and the error. */
+void program_warn_if_long_progressive(const cli_options *opts, const char *label, const render_job *job,
+                                      double seconds, double target_error, long spp_done);
+/* Under mpirun, one line: the ranks, and the gather's share of the render. */
+void program_print_ranks(const render_stats *stats);
 
 /* With --scene FILE: loads it into d (exits with status 1 and the parser's
  * "file:line:col: message" on error), applies its image statement to the

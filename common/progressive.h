@@ -18,6 +18,7 @@
 #include <stdio.h>
 
 #include "camera.h"
+#include "checkpoint.h"
 #include "counters.h"
 #include "image.h"
 #include "render.h"
@@ -42,6 +43,12 @@ estimate_image estimate_render(radiance_fn radiance, const void *scene, const ca
 estimate_image estimate_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
                                        const camera *cam, int spp, uint64_t seed, int threads);
 
+/* The same, keeping checkpoints or resuming one (render.h's checkpoints;
+ * NULL: neither). */
+estimate_image estimate_render_checkpointed(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                            const camera *cam, int spp, uint64_t seed, int threads,
+                                            const checkpointing *cp);
+
 /* The error the image's own variance predicts: sqrt of the mean over pixels
  * and channels of standard_error^2 / (mean^2 + eps), a relative RMSE. */
 double estimate_relative_error(const estimate_image *e);
@@ -56,5 +63,16 @@ estimate_image progressive_render(radiance_fn radiance, const void *scene, const
 estimate_image progressive_render_sampled(radiance_fn radiance, render_sample_fn sample, const void *scene,
                                           const camera *cam, uint64_t seed, int threads, double seconds,
                                           double target_error, FILE *log);
+
+/* The same, keeping checkpoints of the passes so far (cp->path, at least
+ * cp->every_seconds apart), or continuing cp->resume; cp NULL: neither.
+ * A resumed render goes on with the next pass, as the uninterrupted one
+ * would have (the same seeds, the same merges): with a target error the
+ * image is the same bit for bit. The time budget counts the seconds
+ * before the interruption too. Under mpirun every pass is split over the
+ * ranks (render.h), and rank 0's clock decides when to stop. */
+estimate_image progressive_render_resumable(radiance_fn radiance, render_sample_fn sample, const void *scene,
+                                            const camera *cam, uint64_t seed, int threads, double seconds,
+                                            double target_error, FILE *log, const checkpointing *cp);
 
 #endif

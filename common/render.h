@@ -28,9 +28,11 @@
 #include <stdbool.h>
 
 #include "camera.h"
+#include "checkpoint.h"
 #include "counters.h"
 #include "image.h"
 #include "rng.h"
+#include "stats.h"
 
 typedef vec3 (*radiance_fn)(const void *scene, ray r, pcg32 *rng, ray_counters *counters);
 
@@ -62,14 +64,31 @@ typedef struct render_job {
     /* Optional: each sample by this function instead (then jitter, stratify
      * and radiance are its own business). */
     render_sample_fn sample;
+    /* Optional: keep checkpoints, or continue one (checkpoint.h). The
+     * render then runs in passes of a few samples per pixel, each pixel
+     * keeping its random stream and its running sums between passes, so
+     * the image is the one a single pass makes, bit for bit. */
+    const checkpointing *checkpoints;
 } render_job;
 
 typedef struct {
-    double seconds;
-    ray_counters counters;
+    double seconds;        /* the render's wall time (with the time before a resume) */
+    ray_counters counters; /* of every rank, added */
+    double gather_seconds; /* of seconds: handing rows between MPI ranks (0 on one) */
+    double wait_seconds;   /* of seconds: this rank waiting for the slowest before that */
 } render_stats;
 
-/* Renders into out (already made at the camera's size). */
+/* One pixel's render in progress: its random stream where the next sample
+ * starts, and the running mean and variance of each channel. What a
+ * checkpoint of a plain render holds, pixel by pixel. */
+typedef struct {
+    pcg32 rng;
+    welford channel[3];
+} render_pixel_state;
+
+/* Renders into out (already made at the camera's size). Under mpirun
+ * (mpi_split.h) every rank renders its rows and then holds the whole
+ * image; the counters are every rank's. */
 void render_image(const render_job *job, image *out, render_stats *stats);
 
 /* The camera ray through (px, py), counted, and shown by --explain as

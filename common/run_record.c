@@ -10,6 +10,8 @@ enum { COMMAND_SIZE = 4096, NOTE_COUNT = 16, NOTE_SIZE = 256 };
 static char command[COMMAND_SIZE];
 static bool recorded;
 static const cli_options *options; /* main()'s, alive for the whole run */
+static int saved_argc;
+static char **saved_argv; /* main()'s, alive for the whole run */
 static char note_keys[NOTE_COUNT][64], note_values[NOTE_COUNT][NOTE_SIZE];
 static int note_count;
 
@@ -44,7 +46,50 @@ void run_record_command(int argc, char **argv, const cli_options *opts)
             n = sizeof command - 1;
     }
     options = opts;
+    saved_argc = argc;
+    saved_argv = argv;
     recorded = true;
+}
+
+/* Flags that do not change the image (where it goes, how many threads,
+ * how long to go on, what is printed), and those the checkpoint names
+ * apart (size, samples, seed, scene: read from the options, which a scene
+ * file may have set). The last two are switches, the rest take a value. */
+static const char *const NOT_IMAGE_FLAGS[] = {
+    "--out", "--threads", "--exposure", "--checkpoint", "--checkpoint-every", "--resume", "--max-input-mb",
+    "--time-budget", "--target-error", "--width", "--height", "--spp", "--seed", "--scene", "--quiet", "-q", NULL};
+enum { NOT_IMAGE_SWITCHES = 2 };
+
+/* The index in NOT_IMAGE_FLAGS of arg ("--out" or "--out=x"), or -1. */
+static int not_image_flag(const char *arg, bool *with_value)
+{
+    for (int k = 0; NOT_IMAGE_FLAGS[k] != NULL; k++) {
+        size_t n = strlen(NOT_IMAGE_FLAGS[k]);
+        if (strncmp(arg, NOT_IMAGE_FLAGS[k], n) == 0 && (arg[n] == '\0' || arg[n] == '=')) {
+            *with_value = arg[n] == '=';
+            return k;
+        }
+    }
+    return -1;
+}
+
+void run_record_image_flags(char *out, size_t size)
+{
+    size_t n = 0;
+    out[0] = '\0';
+    int count = 0;
+    while (NOT_IMAGE_FLAGS[count] != NULL)
+        count++;
+    for (int i = 1; i < saved_argc && n < size; i++) {
+        bool with_value = false;
+        int k = not_image_flag(saved_argv[i], &with_value);
+        if (k >= 0) {
+            if (!with_value && k < count - NOT_IMAGE_SWITCHES)
+                i++; /* and its value */
+            continue;
+        }
+        n += (size_t)snprintf(out + n, size - n, "%s%s", n > 0 ? " " : "", saved_argv[i]);
+    }
 }
 
 void run_record_note(const char *key, const char *value)

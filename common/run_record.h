@@ -21,6 +21,10 @@ extern const char *const PROJECT_VERSION;
 /* opts is main()'s: it is read when the record is written, so what a scene
  * file's image statement set after parsing is recorded too. */
 void run_record_command(int argc, char **argv, const cli_options *opts);
+/* The command line's flags that change the image, as given, less the
+ * size, samples, seed and scene file (checkpoint.h names those apart):
+ * what must be the same for a checkpoint to be resumed. */
+void run_record_image_flags(char *out, size_t size);
 /* A note "key": "value" (a later note of the same key replaces it). */
 void run_record_note(const char *key, const char *value);
 /* The record as JSON members, without braces ("" before anything is

@@ -35,6 +35,17 @@ OPENEXR_LIBS = $(or $(filter -L% -lOpenEXRCore%,$(call pkg_config,OPENEXR_PC_LIB
 STB_LIBS = $(call pkg_config,STB_LIBS,--libs stb)
 CMOCKA_LIBS = $(call pkg_config,CMOCKA_LIBS,--libs cmocka)
 
+# MPI=1 (make mpi, mk/mpi.mk): common/mpi_split.c built against OpenMPI,
+# whose flags come from its pkg-config file, ompi-c (libopenmpi-dev).
+# Without it the same sources build the one-rank version: nothing of MPI
+# is needed by `make`, `make test` or any other target.
+ifdef MPI
+MPI_CFLAGS = $(call pkg_config,MPI_CFLAGS,--cflags ompi-c)
+MPI_LIBS = $(call pkg_config,MPI_LIBS,--libs ompi-c)
+CPPFLAGS += -DRENDER_MPI $(MPI_CFLAGS)
+LDLIBS += $(MPI_LIBS)
+endif
+
 .PHONY: deps
 # Installs what is missing, by Debian package name, and says what it installed.
 # The targets that need more (docs-deps, bench-deps, valgrind-deps, fuzz-deps)

@@ -44,16 +44,29 @@ accel-data: $(BUILD)/bin/bench_accel $(if $(FULL),$(if $(ACCEL_FULL_DONE),,bench
 	fi
 .PHONY: accel-data
 
+# MPIRUN="mpirun -np 4" (or with --hostfile, for several machines): chapter
+# 09's references, the most expensive renders of the book, are rendered by
+# that many ranks of the MPI build (make mpi, mk/mpi.mk), which then leave
+# the measurements to rank 0. Each reference keeps a record of how it was
+# made (NAME-record.txt: size, spp, seed, method, scene hash, version) and
+# is made again when this run would make another, and an interrupted one
+# resumes from its checkpoint. The other chapters run as one process.
+MPIRUN ?=
+MPI_CHAPTERS := 09
+data_split = $(and $(MPIRUN),$(filter $(2),$(MPI_CHAPTERS)))
+data_program = $(if $(data_split),$(MPIRUN) $(BUILD)/mpi/bin/$(1),$(BUILD)/bin/$(1))
+data_shown = $(if $(data_split),$(MPIRUN) build/mpi/bin/$(1),build/bin/$(1))
+
 # $(call data_run,NN-name): the chapter's --data run, its log and its record.
 # A chapter without quick flags (07) always makes its full data.
 data_mode = $(if $(PLOT_QUICK_$(1)),$(PLOT_MODE),full)
-data_run = echo "$(call data_mode,$(2)): $(strip build/bin/$(1) --data build/data $(call plot_flags,$(2)))" && \
-  $(BUILD)/bin/$(1) --quiet --data $(BUILD)/data $(call plot_flags,$(2)) --out $(BUILD)/data/ch$(2).exr \
+data_run = echo "$(call data_mode,$(2)): $(strip $(call data_shown,$(1),$(2)) --data build/data $(call plot_flags,$(2)))" && \
+  $(call data_program,$(1),$(2)) --quiet --data $(BUILD)/data $(call plot_flags,$(2)) --out $(BUILD)/data/ch$(2).exr \
     > $(BUILD)/data/ch$(2).log && \
-  printf '%s\t%s\n' $(call data_mode,$(2)) "$(strip build/bin/$(1) --data build/data $(call plot_flags,$(2)))" \
+  printf '%s\t%s\n' $(call data_mode,$(2)) "$(strip $(call data_shown,$(1),$(2)) --data build/data $(call plot_flags,$(2)))" \
     > $(BUILD)/data/ch$(2).run
 
-plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data)
+plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data) $(if $(MPIRUN),mpi)
 	@mkdir -p $(BUILD)/data
 	@$(foreach c,$(DATA_CHAPTERS),$(call data_run,$(c),$(call chapter_number,$(c))) && ) true
 

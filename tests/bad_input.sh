@@ -185,7 +185,11 @@ for program in "${programs[@]}"; do
         [ -n "$flag" ] || continue
         case $metavar in
         FILE | DIR)
-            fresh_dir; expect_failure "$p $flag missing path" "$dir/missing" -- run --out "$dir/out.exr" $flag "$dir/missing" ;;
+            fresh_dir
+            missing=$dir/missing
+            # a file the program writes (its checkpoint): what is missing is its directory
+            [ "$flag" = --checkpoint ] && missing=$dir/missing/x.checkpoint
+            expect_failure "$p $flag missing path" "$missing" -- run --out "$dir/out.exr" $flag "$missing" ;;
         [A-Z]* | *"|"*)
             fresh_dir; expect_failure "$p $flag without a value" "$flag" -- run --out "$dir/out.exr" $flag
             for bad in abc nan inf -inf "" 1e999; do

@@ -13,6 +13,7 @@
 #include "06-bvh/bvh.h"
 #include "cli.h"
 #include "program.h"
+#include "mpi_split.h"
 
 /* ---- the program -------------------------------------------------------------- */
 
@@ -92,6 +93,8 @@ int main(int argc, char **argv)
                      "production kernels use: chapter 13.)",
                      extras, (int)(sizeof extras / sizeof extras[0]), "its camera ray (the nodes it visits and the triangles it tests)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    if (f.bench && mpi_split_refuse(spec.program, "--bench"))
+        return 2;
     accel_input in;
     int status = accel_input_load(&in, &opts, spec.program, cli_choice_name(&f.mesh), f.obj, f.triangles, 7);
     if (status != 0)

@@ -22,6 +22,7 @@
 #include "scene_file.h"
 #include "timer.h"
 #include "vec3.h"
+#include "mpi_split.h"
 
 static const char *PROGRAM = "07-radiometry";
 
@@ -207,6 +208,8 @@ int main(int argc, char **argv)
                      "closed form against quadrature, and writes no image.",
                      extras, 3, NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    if (mpi_split_refuse(spec.program, "this program (its tables are quadrature, not a render)"))
+        return 2;
     if (opts.explain) {
         fprintf(stderr, "%s: --explain: this chapter traces no rays, so there is no path to explain\n", PROGRAM);
         return 2;

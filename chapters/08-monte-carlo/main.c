@@ -20,6 +20,7 @@
 #include "memory.h"
 #include "progress.h"
 #include "stats.h"
+#include "mpi_split.h"
 
 enum { MAX_LOG2N = 20 };
 
@@ -285,6 +286,8 @@ int main(int argc, char **argv)
                      "shows 256 points of each point set on the square and warped onto the disk.",
                      extras, 4, NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    if (mpi_split_refuse(spec.program, "this program (its measurements are not a render)"))
+        return 2;
     /* The shared flags --scene and --explain have nothing to act on here:
      * this chapter integrates four functions with known integrals, not a
      * scene. Say so rather than ignore them. */

@@ -8,6 +8,10 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "atomic_file.h"
+#include "checkpoint.h"
+#include "mpi_split.h"
+#include "run_record.h"
 #include "timer.h"
 
 /* relMSE's guard against dividing by near-black pixels (as image_relmse). */
@@ -81,21 +85,210 @@ bool experiment_reference_save(const estimate_image *e, const char *path, char *
     return true;
 }
 
+/* ---- how a reference was made ------------------------------------------------------
+ * Beside the pair, NAME-record.txt says how it was made: its size, samples,
+ * seed, method, a hash of the scene it shows and the project's version. A
+ * cached reference whose record is not this run's (another --reference-spp,
+ * a changed scene, another build) is stale and made again. The record is
+ * written last, so a pair whose writing was cut short has none, and is
+ * made again too. */
+
+/* FNV-1a over bytes, added to h. */
+static uint64_t hash_bytes(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+
+static uint64_t hash_floats(uint64_t h, const float *f, size_t n) { return hash_bytes(h, f, n * sizeof *f); }
+static uint64_t hash_vec3(uint64_t h, vec3 v) { return hash_floats(h, (const float[3]){v.x, v.y, v.z}, 3); }
+
+/* What the path tracer sees of the scene, field by field (the structs'
+ * padding bytes are not the scene's): triangles, materials, spheres,
+ * point lights, environment and camera. */
+static uint64_t scene_fingerprint(const pt_scene *sc)
+{
+    uint64_t h = 14695981039346656037ULL;
+    const mesh *m = &sc->geometry;
+    for (int i = 0; i < m->position_count; i++)
+        h = hash_vec3(h, m->positions[i]);
+    for (int i = 0; i < m->face_count; i++) {
+        const int corners[4] = {m->faces[i].position[0], m->faces[i].position[1], m->faces[i].position[2],
+                                m->faces[i].material};
+        h = hash_bytes(h, corners, sizeof corners);
+    }
+    for (int i = 0; i < sc->material_count; i++) {
+        const pt_material *mat = &sc->materials[i];
+        const int kind = (int)mat->kind;
+        h = hash_bytes(h, &kind, sizeof kind);
+        h = hash_floats(hash_vec3(hash_vec3(h, mat->albedo), mat->emission), (const float[2]){mat->roughness, mat->ior}, 2);
+    }
+    for (int i = 0; i < sc->sphere_count; i++) {
+        const pt_sphere *sp = &sc->spheres[i];
+        const int rest[2] = {sp->material, sp->inside_out};
+        h = hash_bytes(hash_floats(hash_vec3(h, sp->center), &sp->radius, 1), rest, sizeof rest);
+    }
+    for (int i = 0; i < sc->point_light_count; i++)
+        h = hash_vec3(hash_vec3(h, sc->point_lights[i].position), sc->point_lights[i].intensity);
+    h = hash_vec3(hash_vec3(hash_vec3(hash_vec3(h, sc->environment), sc->eye), sc->target), sc->up);
+    return hash_floats(h, &sc->vertical_fov_degrees, 1);
+}
+
+static void record_path(const char *path, char *out, size_t size)
+{
+    size_t n = strlen(path);
+    snprintf(out, size, "%.*s-record.txt", (int)(n > 4 ? n - 4 : n), path);
+}
+
+/* This run's record of the reference at `path`, one "key value" a line. */
+static void reference_record(const path_tracer *reference, const camera *cam, int spp, uint64_t seed, char *out,
+                             size_t size)
+{
+    snprintf(out, size,
+             "width %d\nheight %d\nspp %d\nseed %llu\nmethod path tracing, %s, Russian roulette %s, max depth %d, "
+             "%s samples\nscene-hash %016llx\nversion %s\n",
+             cam->width, cam->height, spp, (unsigned long long)seed, pt_integrator_name(reference->integrator),
+             pt_russian_roulette_name(reference->russian_roulette), reference->max_depth,
+             PT_SAMPLER_NAMES[reference->sampler], (unsigned long long)scene_fingerprint(reference->scene),
+             PROJECT_VERSION);
+}
+
+/* Whether the record beside `path` is `expected`; if not, why, in why
+ * ("its spp 1024, now 4096; ..."; "no record"). */
+static bool record_matches(const char *path, const char *expected, char *why, size_t why_size)
+{
+    char stored_path[4200], stored[2048] = "";
+    record_path(path, stored_path, sizeof stored_path);
+    FILE *f = fopen(stored_path, "r");
+    size_t n = f != NULL ? fread(stored, 1, sizeof stored - 1, f) : 0;
+    if (f != NULL)
+        fclose(f);
+    stored[n] = '\0';
+    if (f == NULL) {
+        snprintf(why, why_size, "it has no record of how it was made, %.1000s", stored_path);
+        return false;
+    }
+    if (strcmp(stored, expected) == 0)
+        return true;
+    /* name each line that differs */
+    size_t used = 0;
+    why[0] = '\0';
+    const char *a = stored, *b = expected;
+    while ((*a != '\0' || *b != '\0') && used < why_size) {
+        size_t la = strcspn(a, "\n"), lb = strcspn(b, "\n");
+        if (la != lb || strncmp(a, b, la) != 0) {
+            size_t key = strcspn(b, " \n");
+            used += (size_t)snprintf(why + used, why_size - used, "%sits %.*s, now %.*s", used > 0 ? "; " : "",
+                                     (int)la, a, (int)(lb - (key < lb ? key + 1 : lb)), b + (key < lb ? key + 1 : lb));
+        }
+        a += la + (a[la] == '\n');
+        b += lb + (b[lb] == '\n');
+    }
+    return false;
+}
+
+static bool record_write(const char *path, const char *record, char *err, size_t err_size)
+{
+    char p[4200];
+    record_path(path, p, sizeof p);
+    atomic_file f;
+    if (!atomic_file_open(&f, p, err, err_size))
+        return false;
+    fputs(record, f.stream);
+    return atomic_file_commit(&f, err, err_size);
+}
+
+/* A reference the ranks made together goes on rank 0; the others, which
+ * stop after the references (mpi_split_leave), get a blank one. */
+static void reference_blank(const camera *cam, estimate_image *out)
+{
+    memset(out, 0, sizeof *out);
+    out->mean = image_make(cam->width, cam->height);
+    out->standard_error = image_make(cam->width, cam->height);
+}
+
+/* Where a reference keeps its checkpoint while it renders: the image's
+ * name with ".checkpoint". One left by an interrupted run of the same
+ * reference is resumed; one of another (the identity differs) is not. */
+static void reference_checkpointing(const char *path, const char *record, const camera *cam, int spp, uint64_t seed,
+                                    checkpointing *cp, checkpoint *resumed, char *cp_path, size_t cp_size)
+{
+    memset(cp, 0, sizeof *cp);
+    memset(resumed, 0, sizeof *resumed);
+    checkpoint_path_for_image(path, cp_path, cp_size);
+    cp->path = cp_path;
+    cp->every_seconds = 60.0;
+    snprintf(cp->id.kind, sizeof cp->id.kind, "reference");
+    snprintf(cp->id.program, sizeof cp->id.program, "09-path-tracing");
+    snprintf(cp->id.version, sizeof cp->id.version, "%s", PROJECT_VERSION);
+    snprintf(cp->id.scene, sizeof cp->id.scene, "%s", path);
+    cp->id.width = cam->width;
+    cp->id.height = cam->height;
+    cp->id.spp = spp;
+    cp->id.seed = seed;
+    for (size_t i = 0, n = 0; record[i] != '\0' && n + 1 < sizeof cp->id.flags; i++) /* one line */
+        cp->id.flags[n++] = record[i] == '\n' ? ';' : record[i];
+    size_t bytes = (size_t)cam->width * (size_t)cam->height * sizeof(render_pixel_state);
+    char err[8192];
+    int found = mpi_split_is_root() && access(cp_path, R_OK) == 0;
+    if (found && !checkpoint_read(cp_path, &cp->id, bytes, resumed, err, sizeof err)) {
+        printf("reference: not resuming: %s\n", err);
+        found = 0;
+    }
+    cp->resuming = mpi_split_broadcast_int(found);
+    if (found) {
+        cp->resume = resumed;
+        printf("reference: resuming %s: %ld of %d samples per pixel done\n", cp_path, resumed->done, spp);
+    }
+}
+
 bool experiment_reference(const path_tracer *pt, const camera *cam, int spp, int threads, const char *path,
                           estimate_image *out, char *err, size_t err_size)
 {
-    if (experiment_reference_load(path, cam->width, cam->height, out, err, err_size)) {
-        out->spp = spp;
-        return true;
-    }
     path_tracer reference = *pt;
     reference.integrator = PT_MIS;
     reference.russian_roulette = RR_THROUGHPUT;
-    printf("reference: rendering %dx%d at %d spp with MIS ...\n", cam->width, cam->height, spp);
-    fflush(stdout);
-    *out = render_estimate(&reference, cam, spp, 0x5eedULL, threads);
+    const uint64_t seed = 0x5eedULL;
+    char record[2048], why[4096];
+    reference_record(&reference, cam, spp, seed, record, sizeof record);
+    /* Rank 0 decides whether the cache serves; under mpirun the others
+     * then render with it, or stop. */
+    int cached = 0;
+    if (mpi_split_is_root() && access(path, F_OK) == 0) {
+        cached = record_matches(path, record, why, sizeof why) &&
+                 experiment_reference_load(path, cam->width, cam->height, out, err, err_size);
+        if (!cached)
+            printf("reference: %s is stale (%s): rendering it again\n", path, why);
+    }
+    if (mpi_split_broadcast_int(cached)) {
+        if (!mpi_split_is_root())
+            reference_blank(cam, out);
+        out->spp = spp;
+        return true;
+    }
+    checkpointing cp;
+    checkpoint resumed;
+    char cp_path[4200];
+    reference_checkpointing(path, record, cam, spp, seed, &cp, &resumed, cp_path, sizeof cp_path);
+    if (mpi_split_is_root()) {
+        printf("reference: rendering %dx%d at %d spp with MIS%s ...\n", cam->width, cam->height, spp,
+               mpi_split_ranks() > 1 ? " on every MPI rank" : "");
+        fflush(stdout);
+    }
+    *out = estimate_render_checkpointed(path_trace_radiance, path_tracer_sample_fn(&reference), &reference, cam, spp,
+                                        seed, threads, &cp);
+    checkpoint_free(&resumed);
+    if (!mpi_split_is_root())
+        return true;
     printf("reference: %.1f s, estimated relative error %.4f -> %s\n", out->seconds, estimate_relative_error(out), path);
-    return experiment_reference_save(out, path, err, err_size);
+    if (!experiment_reference_save(out, path, err, err_size) || !record_write(path, record, err, err_size))
+        return false;
+    unlink(cp_path); /* the reference holds all it did */
+    return true;
 }
 
 /* ---- error against the reference ---------------------------------------------------

@@ -8,6 +8,7 @@
 #include "09-path-tracing/path_tracer.h"
 #include "cli.h"
 #include "effects.h"
+#include "mpi_split.h"
 #include "program.h"
 #include "run_record.h"
 
@@ -37,6 +38,9 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
     int status = 0;
     if (from_file && (f->obj != NULL || f->data != NULL)) {
         snprintf(err, sizeof err, "--scene does not combine with --obj or --data");
+        status = 2;
+    } else if (f->data != NULL && opts->resume != NULL) {
+        snprintf(err, sizeof err, "--resume continues a render, not --data (whose references resume by themselves)");
         status = 2;
     } else if (f->integrator.index < 0 && from_file && desc.integrator[0] != '\0' &&
                !pt_integrator_parse(desc.integrator, &integrator)) {
@@ -90,7 +94,10 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
 /* --data: on the chosen scene a cached reference, then every rung at
  * doubling sample counts, then (on the first scene) the Russian roulette
  * sweep. The Cornell box, all diffuse, is where MIS gains least; by
- * default the Veach scene, where it gains most, is measured after it. */
+ * default the Veach scene, where it gains most, is measured after it.
+ * Under mpirun every rank renders the references with the others; then
+ * rank 0 alone measures (the other ranks stop: a measurement of time
+ * wants the machine to itself). */
 static int run_experiments(const cli_options *opts, const chapter_flags *f, const path_tracer *pt)
 {
     const char *first = f->obj != NULL ? "obj" : cli_choice_name(&f->builtin);
@@ -98,36 +105,48 @@ static int run_experiments(const cli_options *opts, const chapter_flags *f, cons
     int scene_count = strcmp(first, "cornell") == 0 ? 2 : 1;
     char err[1024] = "";
     bool ok = true;
-    for (int k = 0; k < scene_count && ok; k++) {
-        pt_scene other;
-        path_tracer experiment_pt = *pt;
-        if (k > 0) {
-            pt_scene_build_builtin(&other, names[k]);
-            experiment_pt.scene = &other;
-        }
-        const pt_scene *scene = experiment_pt.scene;
-        camera cam = pt_scene_camera(scene, f->experiment_size, f->experiment_size);
+    pt_scene other;
+    path_tracer experiment_pt[2] = {*pt, *pt};
+    if (scene_count > 1) {
+        pt_scene_build_builtin(&other, names[1]);
+        experiment_pt[1].scene = &other;
+    }
+    camera cams[2];
+    estimate_image references[2];
+    memset(references, 0, sizeof references);
+    int made = 0;
+    for (int k = 0; k < scene_count && ok; k++, made++) {
+        cams[k] = pt_scene_camera(experiment_pt[k].scene, f->experiment_size, f->experiment_size);
         char reference_path[4096];
         snprintf(reference_path, sizeof reference_path, "%s/ch09_reference_%s_%d.exr", f->data, names[k],
                  f->experiment_size);
-        estimate_image reference;
-        printf("\n== scene %s\n", names[k]);
-        ok = experiment_reference(&experiment_pt, &cam, f->reference_spp, opts->threads, reference_path, &reference,
-                                  err, sizeof err) &&
-             experiment_convergence(scene, names[k], &cam, &reference, f->experiment_spp, opts->threads, f->data,
-                                    err, sizeof err) &&
-             (k > 0 || experiment_russian_roulette(scene, &cam, &reference, 64, opts->threads, f->data, err,
-                                                   sizeof err));
-        estimate_image_free(&reference);
-        if (k > 0)
-            pt_scene_free(&other);
+        if (mpi_split_is_root())
+            printf("\n== reference of scene %s\n", names[k]);
+        ok = experiment_reference(&experiment_pt[k], &cams[k], f->reference_spp, opts->threads, reference_path,
+                                  &references[k], err, sizeof err);
+        ok = mpi_split_broadcast_int(ok); /* rank 0's saving may fail: all stop */
     }
-    if (!ok)
-        fprintf(stderr, PROGRAM ": %s\n", err);
+    if (mpi_split_leave()) { /* rank 0 measures */
+        for (int k = 0; k < scene_count && ok; k++) {
+            const pt_scene *scene = experiment_pt[k].scene;
+            printf("\n== scene %s\n", names[k]);
+            ok = experiment_convergence(scene, names[k], &cams[k], &references[k], f->experiment_spp, opts->threads,
+                                        f->data, err, sizeof err) &&
+                 (k > 0 || experiment_russian_roulette(scene, &cams[k], &references[k], 64, opts->threads, f->data,
+                                                       err, sizeof err));
+        }
+        if (!ok)
+            fprintf(stderr, PROGRAM ": %s\n", err);
+    }
+    for (int k = 0; k < made; k++)
+        estimate_image_free(&references[k]);
+    if (scene_count > 1)
+        pt_scene_free(&other);
     return ok ? 0 : 1;
 }
 
-/* --time-budget, --target-error: passes until either is reached. */
+/* --time-budget, --target-error: passes until either is reached, with
+ * checkpoints of the passes so far (--resume continues them). */
 static int render_progressively(const cli_options *opts, const chapter_flags *f, const path_tracer *pt)
 {
     if (opts->explain) {
@@ -136,11 +155,28 @@ static int render_progressively(const cli_options *opts, const chapter_flags *f,
     }
     char err[1024], counters_path[4096];
     camera cam = pt_scene_camera(pt->scene, opts->width, opts->height);
-    estimate_image e = render_progressive(pt, &cam, opts->seed, opts->threads, f->time_budget, f->target_error,
-                                          opts->quiet ? NULL : stdout);
-    counters_path_for_image(opts->out, counters_path, sizeof counters_path);
-    bool ok = image_write(&e.mean, opts->out, opts->exposure, err, sizeof err) &&
-              counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err);
+    checkpointing cp;
+    checkpoint resumed;
+    size_t state_bytes = 2 * (size_t)cam.width * (size_t)cam.height * 3 * sizeof(float);
+    if (!program_checkpointing(opts, PROGRAM, "progressive", state_bytes, &cp, &resumed))
+        return 1;
+    render_job pilot = {.cam = &cam, .seed = opts->seed, .radiance = path_trace_radiance,
+                        .sample = path_tracer_sample_fn(pt), .scene = pt, .jitter = true, .threads = opts->threads};
+    if (mpi_split_is_root())
+        program_warn_if_long_progressive(opts, PROGRAM, &pilot, f->time_budget, f->target_error,
+                                         cp.resume != NULL ? cp.resume->spp_done : 0);
+    estimate_image e = progressive_render_resumable(path_trace_radiance, path_tracer_sample_fn(pt), pt, &cam,
+                                                    opts->seed, opts->threads, f->time_budget, f->target_error,
+                                                    opts->quiet ? NULL : stdout, &cp);
+    checkpoint_free(&resumed);
+    bool ok = true;
+    if (mpi_split_is_root()) { /* rank 0 writes */
+        counters_path_for_image(opts->out, counters_path, sizeof counters_path);
+        ok = image_write(&e.mean, opts->out, opts->exposure, err, sizeof err) &&
+             counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err);
+    }
+    if (ok)
+        program_checkpoint_done(opts, &cp);
     if (!ok) {
         fprintf(stderr, PROGRAM ": %s\n", err);
     } else if (!opts->quiet) {
@@ -205,6 +241,7 @@ int main(int argc, char **argv)
          1 << 20},
         {"--experiment-spp", CLI_INT, &f.experiment_spp, "N", "largest spp of the experiments (default 256)", 1,
          1 << 16},
+        CLI_CHECKPOINT_FLAGS(opts),
     };
     cli_spec spec = {PROGRAM,
                      "Path tracing (GAMES101 lecture 16): the rendering equation by Monte Carlo, one sample per\n"

@@ -10,6 +10,7 @@
 #include "cli.h"
 #include "effects.h"
 #include "program.h"
+#include "mpi_split.h"
 
 static const char *const MOTION_NAMES[] = {"on", "off", NULL};
 enum { MOTION_ON, MOTION_OFF };
@@ -130,6 +131,7 @@ int main(int argc, char **argv)
          0},
         {"--quick", CLI_BOOL, &f.quick, NULL,
          "with --data: a rough run in seconds (32 x 32, a 1024-spp reference) instead of minutes", 0, 0},
+        CLI_CHECKPOINT_FLAGS(opts),
     };
     cli_spec spec = {"10-distribution",
                      "Distribution ray tracing (Cook, Porter and Carpenter 1984): chapter 02's recursion with\n"
@@ -142,6 +144,8 @@ int main(int argc, char **argv)
                      "against time for N rays per bounce against N samples per pixel.",
                      extras, sizeof extras / sizeof extras[0], "the ray tree (every ray, hit and light sample, with its time and lens point)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    if (f.data != NULL && mpi_split_refuse(spec.program, "--data"))
+        return 2;
     opts.stratify = true; /* Cook's jittered pixel samples */
 
     motion_scene ms;

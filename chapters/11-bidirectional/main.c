@@ -8,6 +8,7 @@
 #include "11-bidirectional/bdpt_experiments.h"
 #include "cli.h"
 #include "program.h"
+#include "mpi_split.h"
 
 /* The built-in scenes (--builtin), each with the line --help shows. */
 typedef struct {
@@ -250,6 +251,8 @@ int main(int argc, char **argv)
                      "CPU time beside chapter 09's path tracer. Diffuse and glossy surfaces, emitting triangles.",
                      extras, sizeof extras / sizeof extras[0], NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    if (mpi_split_refuse(spec.program, "bidirectional path tracing (its light paths land on any pixel)"))
+        return 2;
     if (f.data != NULL)
         return run_experiments(&f, opts.threads, spec.program);
     int only_s, only_t, max_depth;

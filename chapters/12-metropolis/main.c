@@ -10,6 +10,7 @@
 #include "12-metropolis/mlt_scene.h"
 #include "cli.h"
 #include "program.h"
+#include "mpi_split.h"
 
 /* The built-in scenes (--builtin), each with the line --help shows. */
 typedef struct {
@@ -197,6 +198,9 @@ int main(int argc, char **argv)
                      "--data DIR measures error against time against chapter 09's path tracer and chapter 11's BDPT.",
                      extras, sizeof extras / sizeof extras[0], NULL};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    /* --path-trace renders through program_render, split like chapter 09 */
+    if ((f.data != NULL || !f.path_trace) && mpi_split_refuse(spec.program, "Metropolis light transport (and --data)"))
+        return 2;
     if (opts.explain) {
         fprintf(stderr, "%s: --explain is not supported (a chain has no per-pixel paths; try "
                         "09-path-tracing --explain)\ntry --help\n", spec.program);

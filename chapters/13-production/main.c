@@ -15,6 +15,7 @@
 #include "effects.h"
 #include "program.h"
 #include "run_record.h"
+#include "mpi_split.h"
 
 typedef struct {
     cli_choice builtin, walls, rr, sampler;
@@ -127,7 +128,15 @@ static int render(cli_options *opts, const production_flags *f)
     run_record_note("sampler", PT_SAMPLER_NAMES[pt.sampler]);
     if (!opts->quiet && !opts->explain)
         report_structures(&sc, walls);
-    if (!f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why)) {
+    bool wide = !f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why);
+    if (wide && opts->resume != NULL)
+        fprintf(stderr, "13-production: --resume %s: eight paths at a time keep no checkpoints (--one-path does)\n",
+                opts->resume);
+    if (wide && (opts->resume != NULL || mpi_split_refuse("13-production", "eight paths at a time (--one-path is)"))) {
+        pt_scene_free(&sc);
+        return 2;
+    }
+    if (wide) {
         run_record_note("integrator", "lecture, eight paths at a time");
         status = render_eight_paths(opts, &pt, &cam);
     } else {
@@ -166,6 +175,7 @@ int main(int argc, char **argv)
         {"--bench-scenes", CLI_BOOL, &f.bench_scenes, NULL, "s per million samples on 1 thread, 8 paths, one path "
                                                             "and chapter 09's MIS, on the box and with 10k and "
                                                             "100k-triangle tori (--width, --spp; best of 3)", 0, 0},
+        CLI_CHECKPOINT_FLAGS(opts),
     };
     cli_spec spec = {"13-production",
                      "What production renderers do: chapter 09's lecture path tracer, eight paths at a time, on\n"
@@ -174,6 +184,8 @@ int main(int argc, char **argv)
                      "rays that skip a room's walls where it has them; it says which. --bench measures each step.",
                      extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision, one path at a time)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);
+    if ((f.bench || f.bench_scenes) && mpi_split_refuse("13-production", "--bench"))
+        return 2;
     opts.jitter = true;
     if (f.bench_csv != NULL && !f.bench) {
         fprintf(stderr, "13-production: --bench-csv %s: only with --bench\ntry --help\n", f.bench_csv);

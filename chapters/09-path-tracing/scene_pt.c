@@ -247,13 +247,9 @@ int pt_scene_check_scale(const pt_scene *sc, const char *label, FILE *out)
 
 /* ---- intersection ---------------------------------------------------------- */
 
-bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters)
+bool pt_scene_intersect_spheres(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters)
 {
     bool found = false;
-    if (sc->bvh != NULL && sc->triangles.count > 0 && accel_closest_hit(sc->bvh, r, hit, counters)) {
-        found = true;
-        r.t_max = hit->t;
-    }
     for (int i = 0; i < sc->sphere_count; i++) {
         const pt_sphere *s = &sc->spheres[i];
         sphere shape = {s->center, s->radius};
@@ -268,6 +264,16 @@ bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters
         }
     }
     return found;
+}
+
+bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters)
+{
+    bool found = false;
+    if (sc->bvh != NULL && sc->triangles.count > 0 && accel_closest_hit(sc->bvh, r, hit, counters)) {
+        found = true;
+        r.t_max = hit->t;
+    }
+    return pt_scene_intersect_spheres(sc, r, hit, counters) || found;
 }
 
 /* A shadow ray asks only whether anything is in the way (any hit). */

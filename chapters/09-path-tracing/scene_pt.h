@@ -130,6 +130,10 @@ pt_material pt_glass(float ior);
 pt_material pt_mirror(vec3 albedo);
 
 bool pt_scene_intersect(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters);
+/* The spheres' part of pt_scene_intersect(): the nearest sphere in
+ * (r.t_min, r.t_max) into *hit (shape_id -1 - i), each test counted. For
+ * tracers that find the triangles their own way (chapter 13's lanes). */
+bool pt_scene_intersect_spheres(const pt_scene *sc, ray r, hit_record *hit, ray_counters *counters);
 /* Is anything hit in (r.t_min, r.t_max)? An any-hit query of the BVH,
  * then the spheres. */
 bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters);

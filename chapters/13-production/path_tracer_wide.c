@@ -684,21 +684,7 @@ static bool sphere_hit_lane(const pt_scene *sc, const flat_rays8 *rays, int k, f
 {
     ray r = flat_rays8_get(rays, k);
     r.t_max = t_max;
-    bool found = false;
-    for (int i = 0; i < sc->sphere_count; i++) {
-        const pt_sphere *s = &sc->spheres[i];
-        sphere shape = {s->center, s->radius};
-        counters->primitive_tests++;
-        if (sphere_intersect(&shape, r, hit)) {
-            found = true;
-            r.t_max = hit->t;
-            hit->shape_id = -1 - i;
-            hit->material_id = s->material;
-            if (s->inside_out) /* the front is the inside */
-                hit->front_face = !hit->front_face;
-        }
-    }
-    return found;
+    return pt_scene_intersect_spheres(sc, r, hit, counters);
 }
 
 /* A full hit record into lane k's arrays (a sphere's, or a triangle's

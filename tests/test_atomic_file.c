@@ -164,18 +164,7 @@ static void test_full_disk_fails_at_commit(void **state)
     assert_int_equal(count_entries(), before);
 }
 
-static int make_test_dir(void **state)
-{
-    (void)state;
-    return mkdtemp(test_dir) != NULL ? 0 : -1;
-}
-
-static int remove_test_dir(void **state)
-{
-    (void)state;
-    test_remove_tree(test_dir);
-    return 0;
-}
+TEST_TEMP_DIR_FIXTURES(test_dir)
 
 int main(void)
 {

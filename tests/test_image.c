@@ -94,18 +94,7 @@ static int count_temp_files(const char *dir)
     return count;
 }
 
-static int make_test_dir(void **state)
-{
-    (void)state;
-    return mkdtemp(test_dir) != NULL ? 0 : -1;
-}
-
-static int remove_test_dir(void **state)
-{
-    (void)state;
-    test_remove_tree(test_dir);
-    return 0;
-}
+TEST_TEMP_DIR_FIXTURES(test_dir)
 
 /* Every pixel and channel different (so a swapped row, column or channel
  * shows), signs alternating, magnitudes from 1e-6 to 1e6, and in the top

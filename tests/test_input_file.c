@@ -55,18 +55,7 @@ static void write_bytes(const char *path, const char *bytes, size_t length)
 
 static void write_text(const char *path, const char *text) { write_bytes(path, text, strlen(text)); }
 
-static int make_test_dir(void **state)
-{
-    (void)state;
-    return mkdtemp(test_dir) != NULL ? 0 : -1;
-}
-
-static int remove_test_dir(void **state)
-{
-    (void)state;
-    test_remove_tree(test_dir);
-    return 0;
-}
+TEST_TEMP_DIR_FIXTURES(test_dir)
 
 /* Each test starts from the defaults: no protected outputs, the 1 GB limit. */
 static int reset(void **state)

@@ -93,18 +93,7 @@ static int count_temp_files(const char *dir)
     return count;
 }
 
-static int make_test_dir(void **state)
-{
-    (void)state;
-    return mkdtemp(test_dir) != NULL ? 0 : -1;
-}
-
-static int remove_test_dir(void **state)
-{
-    (void)state;
-    test_remove_tree(test_dir);
-    return 0;
-}
+TEST_TEMP_DIR_FIXTURES(test_dir)
 
 /* Parses NUL-terminated text that must be valid. */
 static void parse_ok(mesh *m, const char *text, const char *base_dir)

@@ -200,18 +200,7 @@ static void test_image_flags_leave_out_what_does_not_change_the_image(void **sta
     assert_string_equal(flags, "--integrator mis --max-depth=5");
 }
 
-static int make_test_dir(void **state)
-{
-    (void)state;
-    return mkdtemp(test_dir) != NULL ? 0 : -1;
-}
-
-static int remove_test_dir(void **state)
-{
-    (void)state;
-    test_remove_tree(test_dir);
-    return 0;
-}
+TEST_TEMP_DIR_FIXTURES(test_dir)
 
 int main(void)
 {

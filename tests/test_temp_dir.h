@@ -1,5 +1,5 @@
 /* test_temp_dir.h -- a scratch directory for the suites that write files
- * (test_image, test_obj): made with mkdtemp before the tests, removed with
+ * (test_image, test_obj, test_input_file, test_atomic_file, test_resume): made with mkdtemp before the tests, removed with
  * everything in it after, even what a test made read-only. POSIX: include
  * it from a file compiled with _DEFAULT_SOURCE (the Makefile does). */
 #ifndef TEST_TEMP_DIR_H
@@ -36,5 +36,21 @@ static inline void test_remove_tree(const char *path)
         unlink(path);
     }
 }
+
+/* The group setup and teardown (cmocka_run_group_tests' last two
+ * arguments) of a suite whose scratch directory is `dir`, a char array
+ * holding a mkdtemp template: make_test_dir() and remove_test_dir(). */
+#define TEST_TEMP_DIR_FIXTURES(dir)                                                                                   \
+    static int make_test_dir(void **state)                                                                             \
+    {                                                                                                                  \
+        (void)state;                                                                                                   \
+        return mkdtemp(dir) != NULL ? 0 : -1;                                                                          \
+    }                                                                                                                  \
+    static int remove_test_dir(void **state)                                                                           \
+    {                                                                                                                  \
+        (void)state;                                                                                                   \
+        test_remove_tree(dir);                                                                                         \
+        return 0;                                                                                                      \
+    }
 
 #endif

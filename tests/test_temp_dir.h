@@ -1,7 +1,8 @@
 /* test_temp_dir.h -- a scratch directory for the suites that write files
- * (test_image, test_obj, test_input_file, test_atomic_file, test_resume): made with mkdtemp before the tests, removed with
- * everything in it after, even what a test made read-only. POSIX: include
- * it from a file compiled with _DEFAULT_SOURCE (the Makefile does). */
+ * (test_image, test_obj, test_input_file, test_atomic_file, test_resume):
+ * made with mkdtemp before the tests, removed with everything in it after,
+ * even what a test made read-only. POSIX: include it from a file compiled
+ * with _DEFAULT_SOURCE (the Makefile does). */
 #ifndef TEST_TEMP_DIR_H
 #define TEST_TEMP_DIR_H
 

@@ -43,8 +43,11 @@ check() { # check DESCRIPTION COMMAND...: one check, reported when it fails
 stop_after_checkpoint() {
     local file=$1 signal=$2
     shift 2
-    set -m # a job of its own: a background job would otherwise ignore SIGINT
-    "$@" 2>"$work/stopped.log" &
+    # SIGINT as a terminal's Ctrl-C delivers it: a background job of a
+    # script starts with SIGINT ignored, and so does everything a runner
+    # started in the background (a CI job, nohup); env puts it back.
+    set -m
+    env --default-signal=INT "$@" 2>"$work/stopped.log" &
     local pid=$! waited=0
     set +m
     while [ ! -s "$file" ] && kill -0 "$pid" 2>/dev/null && [ $waited -lt 600 ]; do

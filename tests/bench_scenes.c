@@ -42,6 +42,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
@@ -611,6 +612,10 @@ int main(int argc, char **argv)
 #ifndef BENCH_EMBREE
         printf("bench_scenes: built without Embree (no embree3/rtcore.h: make bench-deps); its rows are left out\n");
 #endif
+        const char *policy = getenv("OMP_WAIT_POLICY");
+        if (policy == NULL || strcasecmp(policy, "passive") != 0)
+            printf("bench_scenes: warning: OMP_WAIT_POLICY is not passive, so after a 2-thread run the idle thread\n"
+                   "  spins while 1 thread renders, and its spin counts as CPU time (make bench sets it)\n");
         ok = for_each_scene(o.scenes, speed_one, &o, err, sizeof err);
         if (speed_csv != NULL)
             ok = ok ? atomic_file_commit(&csv, err, sizeof err) : (atomic_file_abandon(&csv), false);

@@ -20,6 +20,7 @@
 #include "04-uniform-grid/grid.h"
 #include "05-kd-tree/kdtree.h"
 #include "06-bvh/bvh.h"
+#include "08-monte-carlo/estimators.h"
 #include "08-monte-carlo/sampling.h"
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/experiments.h"
@@ -2306,15 +2307,16 @@ static void gray_code_step(sobol_pixel *s)
     for (int d = 0; d < SOBOL_DIMENSIONS; d++)
         s->point_reversed[d] ^= reverse_bits(sobol_direction_numbers(d)[lowest]);
     s->index++;
+    s->ready = 0;
     s->dimension = 0;
 }
 
-/* How many numbers of `samples` samples from `first` on, `draws` each (past
- * SOBOL_DIMENSIONS, the pixel's stream), differ from chapter 09's
- * sobol_sampler_next, when sobol_pixel steps from one sample to the next
- * with `step`. */
+/* How many numbers of `samples` samples from `first` on differ from
+ * chapter 09's sobol_sampler_next, when sobol_pixel steps from one sample
+ * to the next with `step`. The samples draw 1 to 80 numbers each, as paths
+ * of different lengths do (past SOBOL_DIMENSIONS, the pixel's stream). */
 static long sobol_pixel_mismatches(void (*step)(sobol_pixel *), uint64_t seed, uint64_t pixel, uint32_t first,
-                                   int samples, int draws)
+                                   int samples)
 {
     pcg32 rng_fast = pcg32_for_pixel(seed, pixel), rng_lecture = pcg32_for_pixel(seed, pixel);
     sobol_pixel fast;
@@ -2324,6 +2326,7 @@ static long sobol_pixel_mismatches(void (*step)(sobol_pixel *), uint64_t seed, u
         if (i > 0)
             step(&fast);
         sobol_sampler lecture = sobol_sampler_start(seed, pixel, first + (uint32_t)i, &rng_lecture);
+        int draws = 1 + (i * 37 + 79) % 80;
         for (int k = 0; k < draws; k++) {
             float a = sobol_pixel_next(&fast), b = sobol_sampler_next(&lecture);
             wrong += memcmp(&a, &b, sizeof a) != 0;
@@ -2335,8 +2338,9 @@ static long sobol_pixel_mismatches(void (*step)(sobol_pixel *), uint64_t seed, u
 /* Chapter 13's lanes draw chapter 09's numbers, bit for bit, however many
  * samples a pixel takes and wherever its first one is: from sample 0, from
  * a sample in the middle (a resumed or split render), and across index
- * 2^32 - 1 to 0, where every bit of the index flips. 80 draws a sample, so
- * the pixel's stream past the 64th is compared too. */
+ * 2^32 - 1 to 0, where every bit of the index flips; eight dimensions
+ * at a time and one at a time. Up to 80 draws a sample, so the pixel's
+ * stream past the 64th is compared too. */
 static void test_sobol_pixel_draws_chapter_09s_numbers(void **state)
 {
     (void)state;
@@ -2346,17 +2350,21 @@ static void test_sobol_pixel_draws_chapter_09s_numbers(void **state)
         int samples;
     } cases[] = {{1, 0, 0, 1100}, {test_seed(7), 123456, 0, 300}, {test_seed(8), 99, 1000, 300},
                  {test_seed(9), 5, 0xFFFFFF00u, 300}, {2, 77, 0xFFFFFFFFu, 2}};
-    long wrong = 0, twin = 0;
-    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-        wrong += sobol_pixel_mismatches(sobol_pixel_next_sample, cases[c].seed, cases[c].pixel, cases[c].first,
-                                        cases[c].samples, 80);
-        twin += sobol_pixel_mismatches(gray_code_step, cases[c].seed, cases[c].pixel, cases[c].first, cases[c].samples,
-                                       80);
+    for (int simd = 1; simd >= 0; simd--) {
+        sobol_pixel_use_simd(simd);
+        long wrong = 0, twin = 0;
+        for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+            wrong += sobol_pixel_mismatches(sobol_pixel_next_sample, cases[c].seed, cases[c].pixel, cases[c].first,
+                                            cases[c].samples);
+            twin += sobol_pixel_mismatches(gray_code_step, cases[c].seed, cases[c].pixel, cases[c].first,
+                                           cases[c].samples);
+        }
+        print_message("sobol_pixel (%s) against chapter 09's sampler: %ld numbers differ; Gray-code steps (twin): %ld\n",
+                      simd ? "eight dimensions at once" : "one at a time", wrong, twin);
+        assert_int_equal(wrong, 0);
+        assert_true(twin > 1000);
     }
-    print_message("sobol_pixel against chapter 09's sampler: %ld numbers differ; Gray-code steps (twin): %ld\n", wrong,
-                  twin);
-    assert_int_equal(wrong, 0);
-    assert_true(twin > 1000);
+    sobol_pixel_use_simd(true);
 }
 
 static void test_the_benchmark_scenes_are_what_they_say(void **state)

@@ -37,6 +37,7 @@
 #include "13-production/walls.h"
 #include "13-production/wide_trace.h"
 #include "render.h"
+#include "explain.h"
 #include "scene_file.h"
 #include "stats.h"
 #include "accel_check.h"
@@ -1358,28 +1359,36 @@ static void test_eight_paths_same_bits_for_threads_and_lanes(void **state)
     pt_scene_build_cornell_box(&sc);
     use_production(&sc, true);
     camera cam = pt_scene_camera(&sc, 24, 24);
-    path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
-    estimate_image one, two, lanes;
-    assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 1, &one));
-    assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 2, &two));
-    path_tracer_wide_use_avx(false); /* the lanes' arithmetic one lane at a time */
-    assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 1, &lanes));
-    path_tracer_wide_use_avx(true);
-    assert_memory_equal(one.mean.rgb, two.mean.rgb, sizeof(float) * 3 * 24 * 24);
-    assert_memory_equal(one.standard_error.rgb, two.standard_error.rgb, sizeof(float) * 3 * 24 * 24);
-    assert_memory_equal(one.mean.rgb, lanes.mean.rgb, sizeof(float) * 3 * 24 * 24);
-    /* what it refuses: another rung; what it takes: a scene on chapter
-     * 06's BVH (traced one ray at a time, wide_trace.h) */
-    pt.integrator = PT_MIS;
-    assert_false(path_tracer_wide_supported(&pt, NULL, 0));
+    for (int rung = 0; rung < 3; rung++) {
+        path_tracer pt = tracer(&sc, (pt_integrator)rung, RR_FIXED);
+        estimate_image one, two, lanes;
+        assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 1, &one));
+        assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 2, &two));
+        path_tracer_wide_use_avx(false); /* the lanes' arithmetic one lane at a time */
+        assert_true(render_estimate_wide(&pt, &cam, 8, test_seed(91), 1, &lanes));
+        path_tracer_wide_use_avx(true);
+        assert_memory_equal(one.mean.rgb, two.mean.rgb, sizeof(float) * 3 * 24 * 24);
+        assert_memory_equal(one.standard_error.rgb, two.standard_error.rgb, sizeof(float) * 3 * 24 * 24);
+        assert_memory_equal(one.mean.rgb, lanes.mean.rgb, sizeof(float) * 3 * 24 * 24);
+        estimate_image_free(&one);
+        estimate_image_free(&two);
+        estimate_image_free(&lanes);
+    }
+    /* what it refuses: --explain, which follows one path; what it takes:
+     * every rung, and a scene on chapter 06's BVH (traced one ray at a
+     * time, wide_trace.h) */
+    path_tracer pt = tracer(&sc, PT_MIS, RR_FIXED);
+    assert_true(path_tracer_wide_supported(&pt, NULL, 0));
+    explain_begin(stderr);
+    char why[64] = "";
+    assert_false(path_tracer_wide_supported(&pt, why, sizeof why));
+    explain_end();
+    assert_non_null(strstr(why, "explain"));
     pt_scene lecture;
     pt_scene_build_cornell_box(&lecture);
     path_tracer on_bvh = tracer(&lecture, PT_LECTURE, RR_FIXED);
     assert_true(path_tracer_wide_supported(&on_bvh, NULL, 0));
     assert_string_equal(wide_scene_tracers_for(&lecture).all.name, "one ray at a time");
-    estimate_image_free(&one);
-    estimate_image_free(&two);
-    estimate_image_free(&lanes);
     pt_scene_free(&lecture);
     pt_scene_free(&sc);
 }
@@ -1413,16 +1422,34 @@ static void build_feature_scene(pt_scene *sc)
     pt_scene_finish(sc);
 }
 
+/* The box's room whose white walls glow, with its light and a GGX sphere:
+ * emitters large and near every surface, where light sampling and BSDF
+ * sampling each find much of the light, and the MIS weights matter. */
+static void build_glowing_room(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int white = pt_scene_add_material(sc, pt_emitter(PT_CORNELL_WHITE, vec3_splat(1.0f)));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
+    pt_scene_add_cornell_room(sc, white, red, green, light);
+    pt_scene_add_sphere(sc, vec3_make(278, 150, 280), 150,
+                        pt_scene_add_material(sc, pt_glossy(vec3_make(0.9f, 0.6f, 0.3f), 0.15f)), false);
+    pt_scene_finish(sc);
+}
+
 /* Scene `scene` (0: the box with a torus, 1: chapter 09's materials, 2:
- * the feature scene), with its twin `twin` (0: none). */
+ * the feature scene, 3: the glowing room), with its twin `twin` (0: none). */
 static void build_every_scene(pt_scene *sc, int scene, int twin)
 {
     if (scene == 0)
         production_scene_box_with_torus(sc, MESH_TRIANGLES);
     else if (scene == 1)
         pt_scene_build_cornell_box_materials(sc);
-    else
+    else if (scene == 2)
         build_feature_scene(sc);
+    else
+        build_glowing_room(sc);
     for (int m = 0; m < sc->material_count; m++) {
         pt_material *mat = &sc->materials[m];
         bool wrong = (scene == 0 && twin == 1) || (scene == 1 && twin == 1 && mat->kind == BSDF_GLASS) ||
@@ -1438,21 +1465,24 @@ static void build_every_scene(pt_scene *sc, int scene, int twin)
 }
 
 static const char *const EVERY_SCENE_NAMES[] = {"box with a 2000-triangle torus", "glass and GGX metal",
-                                                 "mirror, glossy sphere, point light, environment"};
+                                                 "mirror, glossy sphere, point light, environment",
+                                                 "glowing walls and a GGX sphere"};
 static const char *const EVERY_SCENE_TWINS[3][4] = {{NULL, "every albedo 15 % low"},
                                                     {NULL, "glass tint halved", "GGX F0 halved"},
                                                     {NULL, "point light halved", "environment dropped",
                                                      "mirror albedo halved"}};
 
 /* The eight-path render of scene `scene` (twin `twin`) on the production
- * structures against chapter 09's lecture rung on chapter 06's BVH. */
-static image_check every_scene_check(int scene, int twin, pt_russian_roulette rr, pt_sampler sampler, uint64_t seed)
+ * structures against chapter 09's own render of the same rung on chapter
+ * 06's BVH. */
+static image_check rung_scene_check(pt_integrator rung, int scene, int twin, pt_russian_roulette rr, pt_sampler sampler,
+                                    uint64_t seed)
 {
     pt_scene wide_sc, lecture_sc;
     build_every_scene(&wide_sc, scene, twin);
     use_production(&wide_sc, true);
     build_every_scene(&lecture_sc, scene, 0);
-    path_tracer w = tracer(&wide_sc, PT_LECTURE, rr), l = tracer(&lecture_sc, PT_LECTURE, rr);
+    path_tracer w = tracer(&wide_sc, rung, rr), l = tracer(&lecture_sc, rung, rr);
     w.sampler = l.sampler = sampler;
     if (rr == RR_THROUGHPUT)
         w.rr_start_depth = l.rr_start_depth = RR_START_PBRT;
@@ -1460,6 +1490,11 @@ static image_check every_scene_check(int scene, int twin, pt_russian_roulette rr
     pt_scene_free(&wide_sc);
     pt_scene_free(&lecture_sc);
     return c;
+}
+
+static image_check every_scene_check(int scene, int twin, pt_russian_roulette rr, pt_sampler sampler, uint64_t seed)
+{
+    return rung_scene_check(PT_LECTURE, scene, twin, rr, sampler, seed);
 }
 
 static void test_eight_paths_agree_with_chapter_09_on_every_scene(void **state)
@@ -1488,25 +1523,74 @@ static void test_eight_paths_agree_with_chapter_09_on_every_scene(void **state)
         }
 }
 
-/* The same image, bit for bit, on 1 and 2 threads, on the scenes above,
+/* The cosine and MIS rungs, eight paths at a time, against chapter 09's
+ * trace_iterative() on the same scenes and the glowing room: with the
+ * lecture's numbers and roulette (random, P_RR 0.8), and with the
+ * production's (Sobol, on throughput from bounce 5). The twins leave one
+ * of the MIS rung's two weights off, in the glowing room: the emission a
+ * BSDF sample finds counted in full, and the light sample counted in full.
+ * Each then counts the light both samples find once and a part (the other
+ * weight), too bright; each must be caught. (In the box with its small
+ * light the light sample's weight is within a few thousandths of 1 on the
+ * walls: that twin would hide there.) */
+enum { RUNG_SCENES = 4, RUNG_SCENE_CHECKS = 2 * RUNG_SCENES * 2 };
+
+static void test_eight_paths_cosine_and_mis_agree_with_chapter_09(void **state)
+{
+    (void)state;
+    static const pt_integrator rungs[] = {PT_COSINE, PT_MIS};
+    for (int r = 0; r < 2; r++)
+        for (int scene = 0; scene < RUNG_SCENES; scene++)
+            for (int sampler = 0; sampler < 2; sampler++) {
+                char what[128];
+                snprintf(what, sizeof what, "%s rung, %s, %s", pt_integrator_name(rungs[r]), EVERY_SCENE_NAMES[scene],
+                         sampler ? "Sobol, roulette on throughput" : "random, P_RR 0.8");
+                uint64_t seed = 211 + 20 * (uint64_t)r + 4 * (uint64_t)scene + 2 * (uint64_t)sampler;
+                image_check c = rung_scene_check(rungs[r], scene, 0, sampler ? RR_THROUGHPUT : RR_FIXED,
+                                                 (pt_sampler)sampler, seed);
+                print_message("%s: p = %.3g (image mean z = %.1f)\n", what, c.p, c.z);
+                assert_image_check(c, RUNG_SCENE_CHECKS, what);
+            }
+    static const struct {
+        wide_twin twin;
+        const char *name;
+    } twins[] = {{WIDE_TWIN_EMISSION_UNWEIGHTED, "emission found by the BSDF sample unweighted"},
+                 {WIDE_TWIN_LIGHT_UNWEIGHTED, "light sample unweighted"}};
+    for (int t = 0; t < 2; t++) {
+        path_tracer_wide_twin(twins[t].twin);
+        image_check c = rung_scene_check(PT_MIS, 3, 0, RR_FIXED, PT_SAMPLER_RANDOM, 251 + 2 * (uint64_t)t);
+        path_tracer_wide_twin(WIDE_TWIN_NONE);
+        print_message("twin, MIS rung, %s: p = %.3g (image mean z = %.1f)\n", twins[t].name, c.p, c.z);
+        assert_true(c.p < image_check_alpha(RUNG_SCENE_CHECKS));
+    }
+}
+
+/* The same image, bit for bit, on 1 and 2 threads and with the lanes'
+ * arithmetic in AVX or lane by lane, on the scenes above, on every rung,
  * with either sampler; and with the walls off (walls.h: exact). */
 static void test_eight_paths_same_bits_for_threads_on_every_scene(void **state)
 {
     (void)state;
+    for (int rung = 0; rung < 3; rung++)
     for (int scene = 0; scene < 3; scene++)
         for (int sampler = 0; sampler < 2; sampler++) {
             pt_scene sc;
             build_every_scene(&sc, scene, 0);
             use_production(&sc, true);
             camera cam = pt_scene_camera(&sc, 20, 20);
-            path_tracer pt = tracer(&sc, PT_LECTURE, RR_FIXED);
+            path_tracer pt = tracer(&sc, (pt_integrator)rung, sampler ? RR_THROUGHPUT : RR_FIXED);
             pt.sampler = (pt_sampler)sampler;
-            estimate_image one, two;
+            estimate_image one, two, lanes;
             assert_true(render_estimate_wide(&pt, &cam, 4, test_seed(97), 1, &one));
             assert_true(render_estimate_wide(&pt, &cam, 4, test_seed(97), 2, &two));
             assert_memory_equal(one.mean.rgb, two.mean.rgb, sizeof(float) * 3 * 20 * 20);
             assert_memory_equal(one.standard_error.rgb, two.standard_error.rgb, sizeof(float) * 3 * 20 * 20);
             assert_true(counters_total_rays(&one.counters) == counters_total_rays(&two.counters));
+            path_tracer_wide_use_avx(false); /* the lanes' arithmetic one lane at a time: the same bits */
+            assert_true(render_estimate_wide(&pt, &cam, 4, test_seed(97), 2, &lanes));
+            path_tracer_wide_use_avx(true);
+            assert_memory_equal(one.mean.rgb, lanes.mean.rgb, sizeof(float) * 3 * 20 * 20);
+            estimate_image_free(&lanes);
             /* the walls answer every shadow ray as all the triangles would:
              * without them, the same image */
             assert_true(walls_found(sc.bvh));
@@ -2223,7 +2307,7 @@ static long light_math_mismatches(const pt_scene *sc, int vertices, bool with_co
             expected[k] = vec3_mul(v[k].throughput, vec3_scale(vec3_mul(x.emission, f_r), g / x.pdf_light));
         }
         vec3 got[8];
-        int mask = path_tracer_wide_light_math(v, 8, got);
+        int mask = path_tracer_wide_light_math(v, 8, false, got);
         for (int k = 0; k < 8; k++) {
             bool wide_adds = (mask >> k) & 1;
             *lit += adds[k];
@@ -2455,6 +2539,7 @@ int main(void)
         cmocka_unit_test(test_eight_paths_agree_with_chapter_09),
         cmocka_unit_test(test_eight_paths_same_bits_for_threads_and_lanes),
         cmocka_unit_test(test_eight_paths_agree_with_chapter_09_on_every_scene),
+        cmocka_unit_test(test_eight_paths_cosine_and_mis_agree_with_chapter_09),
         cmocka_unit_test(test_eight_paths_same_bits_for_threads_on_every_scene),
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
         cmocka_unit_test(test_fast_sincos_turns_is_within_a_few_ulps),

@@ -32,6 +32,21 @@ enum { LANES = FLAT_LANES };
 static bool use_avx = true;
 void path_tracer_wide_use_avx(bool on) { use_avx = on; }
 
+/* path_tracer_wide_twin(): the tests' wrong renderers */
+static wide_twin twin_wrong = WIDE_TWIN_NONE;
+void path_tracer_wide_twin(wide_twin twin) { twin_wrong = twin; }
+
+/* chapter 08's cosine_hemisphere_pdf() and bsdf_pdf()'s 1 / pi */
+static const float INV_PI_F = (float)(1.0 / PI);
+
+/* chapter 09's power_heuristic(): the weight of a sample drawn with density
+ * a, when density b could have drawn it too */
+static float power_heuristic(float a, float b)
+{
+    float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
 static bool wide_cpu_has_avx2(void)
 {
 #if WIDE_HAVE_AVX
@@ -44,9 +59,7 @@ static bool wide_cpu_has_avx2(void)
 bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_size)
 {
     const char *reason = NULL;
-    if (pt->integrator != PT_LECTURE)
-        reason = "only the lecture rung";
-    else if (explain_on())
+    if (explain_on())
         reason = "--explain follows one path";
     else if (pt->scene->triangles.count > 0 && pt->scene->bvh == NULL)
         reason = "the scene's triangles are in no structure (pt_scene_finish)";
@@ -78,7 +91,7 @@ wide_scene_tracers wide_scene_tracers_for(const pt_scene *sc)
  * ray); what bounce_math reads (p and its error bound, ng, n, wo, albedo,
  * throughput again; the hemisphere's two numbers,
  * 1 / P_RR) and writes (the next ray, its wo, and the throughput after the
- * bounce, in place). bounce_math_avx writes all eight lanes; a lane whose
+ * bounce, in place; on the cosine and MIS rungs, the direction's pdf). bounce_math_avx writes all eight lanes; a lane whose
  * path ends there is given its next camera ray (start_sample) before the
  * next step reads it. */
 typedef struct {
@@ -88,7 +101,8 @@ typedef struct {
     _Alignas(32) float x_light[3][LANES], x_error[LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];
     _Alignas(32) float contribution[3][LANES], shadow_origin[3][LANES], shadow_direction[3][LANES];
     _Alignas(32) float shadow_t_min[LANES], shadow_t_max[LANES];
-    _Alignas(32) float u_x[LANES], u_y[LANES], rr_scale[LANES];
+    _Alignas(32) float u_x[LANES], u_y[LANES], u_lobe[LANES], rr_scale[LANES];
+    _Alignas(32) float pdf[LANES]; /* the cosine and MIS rungs: the pdf the next direction was drawn with */
 } vertex_lanes;
 
 /* One lane: a pixel, the path of its current sample, and what that path has
@@ -113,6 +127,11 @@ typedef struct {
     /* Does the emission the next ray meets count (at the camera, and after
      * a mirror or glass: no light sample at that vertex counted it)? */
     bool emission_counts;
+    /* The cosine and MIS rungs: the vertex the next ray leaves, and the
+     * pdf its direction was drawn with (trace_iterative's previous_point,
+     * previous_pdf), for the MIS weight of the emission it finds. */
+    vec3 previous_point;
+    float previous_pdf;
 } lane;
 
 /* Shadow rays waiting to be traced, eight by eight, and what each brings
@@ -371,8 +390,9 @@ static bool pick_light(lane *l, const path_tracer *pt, const float *pdf_area, ve
 /* sample_direct_light()'s arithmetic for one lane, exactly: the mask bit
  * says whether the sample adds anything (light and surface face each
  * other, f is not black), and the contribution is what it adds, times the
- * throughput, if its shadow ray gets through. */
-static int light_math_lane(vertex_lanes *L, int k)
+ * throughput, if its shadow ray gets through; with `mis`, weighted by the
+ * power heuristic against the BSDF's cosine-weighted sampling. */
+static int light_math_lane(vertex_lanes *L, int k, bool mis)
 {
 #define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
     vec3 to_light = vec3_sub(AT(x_light), AT(p));
@@ -390,7 +410,9 @@ static int light_math_lane(vertex_lanes *L, int k)
     if (vec3_is_black(f))
         return 0;
     float pdf_light = distance2 * L->pdf_area[k] / cos_theta_light;
-    vec3 contribution = vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * 1.0f));
+    /* bsdf_pdf() of a diffuse surface, both directions above it: cos(theta) / pi */
+    float weight = mis ? power_heuristic(pdf_light, cos_theta * INV_PI_F) : 1.0f;
+    vec3 contribution = vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * weight));
     lanes_set(L->contribution, k, contribution);
     ray shadow = ray_spawn_to(AT(p), L->p_error[k], AT(ng), AT(x_light), L->x_error[k], AT(n_light));
     lanes_set(L->shadow_origin, k, shadow.origin);
@@ -411,7 +433,7 @@ static int light_math_lane(vertex_lanes *L, int k)
 /* The same for the lanes of `lanes`, eight per AVX instruction: the same
  * operations in the same order (sqrt and division are exact in IEEE, so
  * every lane gets the very bits of light_math_lane). */
-SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes)
+SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes, bool mis)
 {
     const __m256 zero = _mm256_setzero_ps();
     __m256 tx = _mm256_sub_ps(LOAD3(x_light, 0), LOAD3(p, 0)), ty = _mm256_sub_ps(LOAD3(x_light, 1), LOAD3(p, 1)),
@@ -432,7 +454,14 @@ SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes)
                                  _mm256_cmp_ps(fz, zero, _CMP_EQ_OQ));
     ok = _mm256_andnot_ps(black, ok);
     __m256 pdf_light = _mm256_div_ps(_mm256_mul_ps(distance2, _mm256_load_ps(L->pdf_area)), cos_theta_light);
-    __m256 scale = _mm256_mul_ps(_mm256_div_ps(cos_theta, pdf_light), _mm256_set1_ps(1.0f));
+    __m256 scale = _mm256_div_ps(cos_theta, pdf_light);
+    if (mis) { /* power_heuristic(pdf_light, cos(theta) / pi); without it the weight is 1, and x 1 changes no bit */
+        __m256 pdf_bsdf = _mm256_mul_ps(cos_theta, _mm256_set1_ps(INV_PI_F));
+        __m256 a2 = _mm256_mul_ps(pdf_light, pdf_light), b2 = _mm256_mul_ps(pdf_bsdf, pdf_bsdf);
+        __m256 sum = _mm256_add_ps(a2, b2);
+        __m256 weight = _mm256_and_ps(_mm256_div_ps(a2, sum), _mm256_cmp_ps(sum, zero, _CMP_GT_OQ));
+        scale = _mm256_mul_ps(scale, weight);
+    }
     _mm256_store_ps(L->contribution[0], _mm256_mul_ps(LOAD3(throughput, 0), _mm256_mul_ps(_mm256_mul_ps(LOAD3(le, 0), fx), scale)));
     _mm256_store_ps(L->contribution[1], _mm256_mul_ps(LOAD3(throughput, 1), _mm256_mul_ps(_mm256_mul_ps(LOAD3(le, 1), fy), scale)));
     _mm256_store_ps(L->contribution[2], _mm256_mul_ps(LOAD3(throughput, 2), _mm256_mul_ps(_mm256_mul_ps(LOAD3(le, 2), fz), scale)));
@@ -500,18 +529,112 @@ static int bounce_math_lane(vertex_lanes *L, int k)
 #undef AT
 }
 
-#if WIDE_HAVE_AVX
-/* The same for the lanes of `lanes`, eight per AVX instruction, operation
- * for operation: sample_uniform_hemisphere() with fast_sincos_turns(),
- * frame_to_world() with vec3_basis(), bsdf_eval(). */
-SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
+/* ---- the cosine and MIS rungs (trace_iterative()) -------------------------------
+ * The same steps in trace_iterative()'s order: the light sample (with the
+ * power heuristic's weight on the MIS rung), the numbers of the next
+ * direction, the bounce, and then the roulette on the throughput the
+ * bounce left. */
+
+/* The numbers of the next direction, after the light sample, as
+ * trace_iterative() draws them: u_y, u_x, and on the MIS rung the lobe's
+ * number that bsdf_sample() takes. The lane's bit if the path may go on
+ * from here: within max_depth (bounce depth + 1; on the cosine rung the
+ * next vertex's light sample, bounce depth + 2, must count too; on the MIS
+ * rung the emission it finds is bounce depth + 1, the BSDF's share of this
+ * vertex's direct light), and the effects ask for it. */
+static int roll_bounce_iterative(lane *l, const path_tracer *pt, vertex_lanes *L, int k, bsdf_kind kind)
 {
-    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), sign_bit = _mm256_set1_ps(-0.0f);
-    /* sample_uniform_hemisphere: z = u_x, r = sqrt(max(0, 1 - z^2)) */
-    __m256 z = _mm256_load_ps(L->u_x);
-    __m256 r = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(one, _mm256_mul_ps(z, z)), zero));
-    /* fast_sincos_turns(u_y) */
-    __m256 u = _mm256_load_ps(L->u_y);
+    bool mis = pt->integrator == PT_MIS;
+    if (l->depth + 1 > pt->max_depth || (l->depth + 2 > pt->max_depth && !mis) ||
+        !(pt->effects & (kind == BSDF_GLOSSY ? EFFECT_GLOSSY : EFFECT_INDIRECT)))
+        return 0;
+    L->u_y[k] = lane_float(l, pt); /* trace_iterative()'s order */
+    L->u_x[k] = lane_float(l, pt);
+    if (mis)
+        L->u_lobe[k] = lane_float(l, pt);
+    L->rr_scale[k] = 1.0f; /* the roulette comes after the bounce */
+    return 1 << k;
+}
+
+/* trace_iterative()'s Russian roulette, after the bounce, on the throughput
+ * it left (and the surface's albedo): false if the path ends here, else the
+ * throughput divided by the probability it went on with. */
+static bool roulette_after_bounce(lane *l, const path_tracer *pt, vec3 *throughput, vec3 albedo)
+{
+    float q;
+    if (!path_tracer_roulette(pt, l->depth, *throughput, albedo, &q))
+        return true;
+    if (lane_float(l, pt) >= q)
+        return false;
+    *throughput = vec3_scale(*throughput, 1.0f / q);
+    return true;
+}
+
+/* sample_cosine_hemisphere() (chapter 08: the concentric map of the unit
+ * square onto the disk, lifted to the hemisphere), its angle by
+ * fast_sincos_turns() as the AVX code computes it. The left and right
+ * triangles' angle pi/4 (oy / ox) is (oy / ox) / 8 of a turn; the top and
+ * bottom ones' pi/2 - pi/4 (ox / oy) has the sine and cosine of
+ * (ox / oy) / 8 of a turn swapped. Those turns lie in [-1/8, 1/8], where the
+ * polynomial was fitted. The centre, 0 / 0, is ratio 0 there: the point
+ * (0, 0) and z = 1, as chapter 08 has it. */
+static vec3 cosine_hemisphere_lane(float u_x, float u_y)
+{
+    float ox = 2.0f * u_x - 1.0f, oy = 2.0f * u_y - 1.0f;
+    bool sides = fabsf(ox) > fabsf(oy);
+    float r = sides ? ox : oy;
+    float ratio = sides ? oy / ox : oy != 0.0f ? ox / oy : 0.0f;
+    float u = sides ? u_x : u_y, rest = 1.0f - u;
+    float one_minus_r = 2.0f * (u < rest ? u : rest); /* 1 - |r|, without cancellation */
+    float s, c;
+    fast_sincos_turns(0.125f * ratio, &s, &c);
+    float z2 = one_minus_r * (2.0f - one_minus_r);
+    return vec3_make(r * (sides ? c : s), r * (sides ? s : c), sqrtf(z2 > 0.0f ? z2 : 0.0f));
+}
+
+/* trace_iterative()'s bounce at a diffuse vertex for one lane, exactly:
+ * wi cosine-weighted, its pdf cos / pi (cosine_hemisphere_pdf()), and
+ * f cos / pdf -- on the cosine rung bsdf_eval() times cos / pdf, if the
+ * pdf is > 0; on the MIS rung bsdf_sample()'s rho, if z > 0 -- the
+ * throughput after it, and the pdf. The lane's bit if the path goes on
+ * (f cos / pdf is not black). */
+static int bounce_cosine_lane(vertex_lanes *L, int k, bool mis)
+{
+#define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
+    vec3 local = cosine_hemisphere_lane(L->u_x[k], L->u_y[k]);
+    vec3 n = AT(n);
+    vec3 wi = frame_to_world(n, local);
+    float pdf = (local.z > 0.0f ? local.z : 0.0f) * INV_PI_F;
+    vec3 weight;
+    if (mis) {
+        if (!(local.z > 0.0f))
+            return 0;
+        weight = AT(albedo);
+    } else {
+        if (!(pdf > 0.0f))
+            return 0;
+        vec3 f = vec3_dot(n, wi) <= 0.0f || vec3_dot(n, AT(wo)) <= 0.0f ? vec3_splat(0.0f)
+                                                                         : vec3_scale(AT(albedo), 1.0f / (float)PI);
+        weight = vec3_scale(f, local.z / pdf);
+    }
+    if (vec3_is_black(weight))
+        return 0;
+    ray next = ray_spawn(AT(p), L->p_error[k], AT(ng), wi);
+    lanes_set(L->ray.origin, k, next.origin);
+    L->ray.t_min[k] = next.t_min;
+    lanes_set(L->ray.direction, k, wi);
+    lanes_set(L->throughput, k, vec3_scale(vec3_mul(AT(throughput), weight), L->rr_scale[k]));
+    lanes_set(L->wo, k, vec3_neg(wi));
+    L->pdf[k] = pdf;
+    return 1 << k;
+#undef AT
+}
+
+#if WIDE_HAVE_AVX
+/* fast_sincos_turns() of eight numbers, operation for operation. */
+SPAWN_TARGET static inline void fast_sincos_turns8(__m256 u, __m256 *sin_out, __m256 *cos_out)
+{
+    const __m256 one = _mm256_set1_ps(1.0f), sign_bit = _mm256_set1_ps(-0.0f);
     __m256 q = _mm256_cvtepi32_ps(_mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(4.0f), u),
                                                                      _mm256_set1_ps(0.5f))));
     __m256 rest = _mm256_sub_ps(u, _mm256_mul_ps(_mm256_set1_ps(0.25f), q));
@@ -528,55 +651,141 @@ SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
     __m256 q1 = _mm256_cmp_ps(q, one, _CMP_EQ_OQ), q2 = _mm256_cmp_ps(q, _mm256_set1_ps(2.0f), _CMP_EQ_OQ),
            q3 = _mm256_cmp_ps(q, _mm256_set1_ps(3.0f), _CMP_EQ_OQ);
     __m256 odd = _mm256_or_ps(q1, q3);
-    __m256 sin_phi = _mm256_xor_ps(_mm256_blendv_ps(sin_r, cos_r, odd), _mm256_and_ps(_mm256_or_ps(q2, q3), sign_bit));
-    __m256 cos_phi = _mm256_xor_ps(_mm256_blendv_ps(cos_r, sin_r, odd), _mm256_and_ps(_mm256_or_ps(q1, q2), sign_bit));
-    __m256 lx = _mm256_mul_ps(r, cos_phi), ly = _mm256_mul_ps(r, sin_phi), lz = z;
-    /* frame_to_world: vec3_basis(n) */
-    __m256 nx = LOAD3(n, 0), ny = LOAD3(n, 1), nz = LOAD3(n, 2);
+    *sin_out = _mm256_xor_ps(_mm256_blendv_ps(sin_r, cos_r, odd), _mm256_and_ps(_mm256_or_ps(q2, q3), sign_bit));
+    *cos_out = _mm256_xor_ps(_mm256_blendv_ps(cos_r, sin_r, odd), _mm256_and_ps(_mm256_or_ps(q1, q2), sign_bit));
+}
+
+/* frame_to_world(n, local) of eight lanes: vec3_basis(n), operation for
+ * operation, then t x + b y + n z. */
+SPAWN_TARGET static inline void frame_to_world8(const __m256 n[3], const __m256 local[3], __m256 w[3])
+{
+    const __m256 one = _mm256_set1_ps(1.0f), sign_bit = _mm256_set1_ps(-0.0f);
+    __m256 nx = n[0], ny = n[1], nz = n[2];
     __m256 sign = _mm256_or_ps(_mm256_and_ps(nz, sign_bit), one);
     __m256 a = _mm256_div_ps(_mm256_set1_ps(-1.0f), _mm256_add_ps(sign, nz));
     __m256 cc = _mm256_mul_ps(_mm256_mul_ps(nx, ny), a);
     __m256 tx = _mm256_add_ps(one, _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(sign, nx), nx), a));
     __m256 ty = _mm256_mul_ps(sign, cc), tz = _mm256_mul_ps(_mm256_xor_ps(sign, sign_bit), nx);
     __m256 bx = cc, by = _mm256_add_ps(sign, _mm256_mul_ps(_mm256_mul_ps(ny, ny), a)), bz = _mm256_xor_ps(ny, sign_bit);
-#define TO_WORLD(t, b, n) _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(t, lx), _mm256_mul_ps(b, ly)), _mm256_mul_ps(n, lz))
-    __m256 wx = TO_WORLD(tx, bx, nx), wy = TO_WORLD(ty, by, ny), wz = TO_WORLD(tz, bz, nz);
+#define TO_WORLD(t, b, n)                                                                                    \
+    _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(t, local[0]), _mm256_mul_ps(b, local[1])), _mm256_mul_ps(n, local[2]))
+    w[0] = TO_WORLD(tx, bx, nx);
+    w[1] = TO_WORLD(ty, by, ny);
+    w[2] = TO_WORLD(tz, bz, nz);
 #undef TO_WORLD
-    /* bsdf_eval: rho / pi where both directions are above the surface */
-    __m256 above = _mm256_and_ps(_mm256_cmp_ps(DOT(nx, ny, nz, wx, wy, wz), zero, _CMP_GT_OQ),
-                                 _mm256_cmp_ps(DOT(nx, ny, nz, LOAD3(wo, 0), LOAD3(wo, 1), LOAD3(wo, 2)), zero, _CMP_GT_OQ));
-    const __m256 inv_pi = _mm256_set1_ps(1.0f / (float)PI);
-    __m256 scale = _mm256_div_ps(lz, _mm256_set1_ps(uniform_hemisphere_pdf()));
-    __m256 fx = _mm256_and_ps(_mm256_mul_ps(LOAD3(albedo, 0), inv_pi), above),
-           fy = _mm256_and_ps(_mm256_mul_ps(LOAD3(albedo, 1), inv_pi), above),
-           fz = _mm256_and_ps(_mm256_mul_ps(LOAD3(albedo, 2), inv_pi), above);
-    __m256 weight_x = _mm256_mul_ps(fx, scale), weight_y = _mm256_mul_ps(fy, scale), weight_z = _mm256_mul_ps(fz, scale);
-    __m256 black = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(weight_x, zero, _CMP_EQ_OQ),
-                                               _mm256_cmp_ps(weight_y, zero, _CMP_EQ_OQ)),
-                                 _mm256_cmp_ps(weight_z, zero, _CMP_EQ_OQ));
-    /* the next ray's origin: ray_spawn() */
+}
+
+/* What every bounce in AVX ends with, for all eight lanes: the next ray
+ * from p along wi (ray_spawn()), its wo, and the throughput times f cos /
+ * pdf (weight) times rr_scale. */
+SPAWN_TARGET static inline void bounce_store8(vertex_lanes *L, const __m256 wi[3], const __m256 weight[3])
+{
+    const __m256 sign_bit = _mm256_set1_ps(-0.0f);
     const __m256 point[3] = {LOAD3(p, 0), LOAD3(p, 1), LOAD3(p, 2)}, ng[3] = {LOAD3(ng, 0), LOAD3(ng, 1), LOAD3(ng, 2)};
-    const __m256 wi[3] = {wx, wy, wz};
     __m256 origin[3], t_min;
     ray_spawn8(point, _mm256_load_ps(L->p_error), ng, wi, origin, &t_min);
+    __m256 rr_scale = _mm256_load_ps(L->rr_scale);
     for (int c = 0; c < 3; c++) {
         _mm256_store_ps(L->ray.origin[c], origin[c]);
         _mm256_store_ps(L->ray.direction[c], wi[c]);
+        _mm256_store_ps(L->throughput[c], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, c), weight[c]), rr_scale));
+        _mm256_store_ps(L->wo[c], _mm256_xor_ps(wi[c], sign_bit));
     }
     _mm256_storeu_ps(L->ray.t_min, t_min);
-    __m256 rr_scale = _mm256_load_ps(L->rr_scale);
-    _mm256_store_ps(L->throughput[0], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 0), weight_x), rr_scale));
-    _mm256_store_ps(L->throughput[1], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 1), weight_y), rr_scale));
-    _mm256_store_ps(L->throughput[2], _mm256_mul_ps(_mm256_mul_ps(LOAD3(throughput, 2), weight_z), rr_scale));
-    _mm256_store_ps(L->wo[0], _mm256_xor_ps(wx, sign_bit));
-    _mm256_store_ps(L->wo[1], _mm256_xor_ps(wy, sign_bit));
-    _mm256_store_ps(L->wo[2], _mm256_xor_ps(wz, sign_bit));
+}
+
+/* f cos / pdf of a diffuse surface (rho / pi where both directions are
+ * above it, as bsdf_eval() says, times `scale` = cos / pdf) into weight;
+ * the mask of the lanes where it is black. */
+SPAWN_TARGET static inline __m256 diffuse_weight8(const vertex_lanes *L, const __m256 n[3], const __m256 wi[3],
+                                                  __m256 scale, __m256 weight[3])
+{
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 wo[3] = {LOAD3(wo, 0), LOAD3(wo, 1), LOAD3(wo, 2)};
+    __m256 above = _mm256_and_ps(_mm256_cmp_ps(spawn_dot8(n, wi), zero, _CMP_GT_OQ),
+                                 _mm256_cmp_ps(spawn_dot8(n, wo), zero, _CMP_GT_OQ));
+    const __m256 inv_pi = _mm256_set1_ps(1.0f / (float)PI);
+    __m256 black = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    for (int c = 0; c < 3; c++) {
+        weight[c] = _mm256_mul_ps(_mm256_and_ps(_mm256_mul_ps(LOAD3(albedo, c), inv_pi), above), scale);
+        black = _mm256_and_ps(black, _mm256_cmp_ps(weight[c], zero, _CMP_EQ_OQ));
+    }
+    return black;
+}
+
+/* The same as bounce_math_lane for the lanes of `lanes`, eight per AVX
+ * instruction, operation for operation: sample_uniform_hemisphere() with
+ * fast_sincos_turns(), frame_to_world() with vec3_basis(), bsdf_eval(). */
+SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
+{
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f);
+    /* sample_uniform_hemisphere: z = u_x, r = sqrt(max(0, 1 - z^2)), phi = 2 pi u_y */
+    __m256 z = _mm256_load_ps(L->u_x);
+    __m256 r = _mm256_sqrt_ps(_mm256_max_ps(_mm256_sub_ps(one, _mm256_mul_ps(z, z)), zero));
+    __m256 sin_phi, cos_phi;
+    fast_sincos_turns8(_mm256_load_ps(L->u_y), &sin_phi, &cos_phi);
+    const __m256 local[3] = {_mm256_mul_ps(r, cos_phi), _mm256_mul_ps(r, sin_phi), z};
+    const __m256 n[3] = {LOAD3(n, 0), LOAD3(n, 1), LOAD3(n, 2)};
+    __m256 wi[3], weight[3];
+    frame_to_world8(n, local, wi);
+    __m256 black = diffuse_weight8(L, n, wi, _mm256_div_ps(z, _mm256_set1_ps(uniform_hemisphere_pdf())), weight);
+    bounce_store8(L, wi, weight);
     int mask = ~_mm256_movemask_ps(black) & lanes;
     _mm256_zeroupper();
     return mask;
+}
+
+/* cosine_hemisphere_lane() of eight lanes, operation for operation: the
+ * branches on the triangle become blends, and the centre's 0 / 0 a mask. */
+SPAWN_TARGET static inline void cosine_hemisphere8(__m256 u_x, __m256 u_y, __m256 local[3])
+{
+    const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), two = _mm256_set1_ps(2.0f);
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    __m256 ox = _mm256_sub_ps(_mm256_mul_ps(two, u_x), one), oy = _mm256_sub_ps(_mm256_mul_ps(two, u_y), one);
+    __m256 sides = _mm256_cmp_ps(_mm256_and_ps(ox, abs_mask), _mm256_and_ps(oy, abs_mask), _CMP_GT_OQ);
+    __m256 r = _mm256_blendv_ps(oy, ox, sides);
+    __m256 top = _mm256_and_ps(_mm256_div_ps(ox, oy), _mm256_cmp_ps(oy, zero, _CMP_NEQ_OQ));
+    __m256 ratio = _mm256_blendv_ps(top, _mm256_div_ps(oy, ox), sides);
+    __m256 u = _mm256_blendv_ps(u_y, u_x, sides);
+    __m256 one_minus_r = _mm256_mul_ps(two, _mm256_min_ps(u, _mm256_sub_ps(one, u)));
+    __m256 s, c;
+    fast_sincos_turns8(_mm256_mul_ps(_mm256_set1_ps(0.125f), ratio), &s, &c);
+    local[0] = _mm256_mul_ps(r, _mm256_blendv_ps(s, c, sides));
+    local[1] = _mm256_mul_ps(r, _mm256_blendv_ps(c, s, sides));
+    __m256 z2 = _mm256_mul_ps(one_minus_r, _mm256_sub_ps(two, one_minus_r));
+    local[2] = _mm256_sqrt_ps(_mm256_max_ps(z2, zero));
+}
+
+/* The same as bounce_cosine_lane for the lanes of `lanes`, eight per AVX
+ * instruction, operation for operation. */
+SPAWN_TARGET static int bounce_cosine_avx(vertex_lanes *L, int lanes, bool mis)
+{
+    const __m256 zero = _mm256_setzero_ps();
+    __m256 local[3], wi[3], weight[3];
+    cosine_hemisphere8(_mm256_load_ps(L->u_x), _mm256_load_ps(L->u_y), local);
+    const __m256 n[3] = {LOAD3(n, 0), LOAD3(n, 1), LOAD3(n, 2)};
+    frame_to_world8(n, local, wi);
+    __m256 pdf = _mm256_mul_ps(_mm256_max_ps(local[2], zero), _mm256_set1_ps(INV_PI_F));
+    __m256 on, black;
+    if (mis) { /* bsdf_sample(): z > 0, and f cos / pdf = rho */
+        on = _mm256_cmp_ps(local[2], zero, _CMP_GT_OQ);
+        black = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        for (int c = 0; c < 3; c++) {
+            weight[c] = LOAD3(albedo, c);
+            black = _mm256_and_ps(black, _mm256_cmp_ps(weight[c], zero, _CMP_EQ_OQ));
+        }
+    } else { /* pdf > 0, and bsdf_eval() cos / pdf */
+        on = _mm256_cmp_ps(pdf, zero, _CMP_GT_OQ);
+        black = diffuse_weight8(L, n, wi, _mm256_div_ps(local[2], pdf), weight);
+    }
+    bounce_store8(L, wi, weight);
+    _mm256_store_ps(L->pdf, pdf);
+    int mask = _mm256_movemask_ps(_mm256_andnot_ps(black, on)) & lanes;
+    _mm256_zeroupper();
+    return mask;
+}
 #undef LOAD3
 #undef DOT
-}
 #endif
 
 /* ---- the other materials, one lane at a time --------------------------------------
@@ -587,8 +796,9 @@ SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
 #define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
 
 /* shade()'s light sample at a glossy vertex: sample_direct_light's
- * arithmetic with bsdf_eval(); the lane's bit if it adds light. */
-static int light_math_surface_lane(vertex_lanes *L, int k, const pt_material *m)
+ * arithmetic with bsdf_eval() (and with `mis`, the power heuristic's weight
+ * against bsdf_pdf()); the lane's bit if it adds light. */
+static int light_math_surface_lane(vertex_lanes *L, int k, const pt_material *m, bool mis)
 {
     vec3 to_light = vec3_sub(AT(x_light), AT(p));
     float distance2 = vec3_length_squared(to_light);
@@ -601,7 +811,9 @@ static int light_math_surface_lane(vertex_lanes *L, int k, const pt_material *m)
     if (vec3_is_black(f))
         return 0;
     float pdf_light = distance2 * L->pdf_area[k] / cos_theta_light; /* per steradian */
-    lanes_set(L->contribution, k, vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light)));
+    float weight = mis ? power_heuristic(pdf_light, bsdf_pdf(m, n, AT(wo), wi)) : 1.0f;
+    lanes_set(L->contribution, k,
+              vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * weight)));
     ray shadow = ray_spawn_to(AT(p), L->p_error[k], AT(ng), AT(x_light), L->x_error[k], AT(n_light));
     lanes_set(L->shadow_origin, k, shadow.origin);
     lanes_set(L->shadow_direction, k, shadow.direction);
@@ -616,6 +828,14 @@ typedef struct {
     ray next;
     vec3 throughput, wo;
 } lane_bounce;
+
+/* The lane's next ray from p along wi, and the throughput it carries. */
+static void lane_bounce_set(lane_bounce *out, const vertex_lanes *L, int k, vec3 wi, vec3 throughput)
+{
+    out->next = ray_spawn(AT(p), L->p_error[k], AT(ng), wi);
+    out->throughput = throughput;
+    out->wo = vec3_neg(wi);
+}
 
 /* shade()'s bounce at a glossy vertex: wi uniform on the hemisphere
  * (chapter 08's sample_uniform_hemisphere), f cos / pdf from bsdf_eval();
@@ -634,12 +854,17 @@ static bool bounce_surface_lane(const vertex_lanes *L, int k, const pt_material 
     return true;
 }
 
+static bool bounce_iterative_lane(lane *l, const path_tracer *pt, const vertex_lanes *L, int k, const pt_material *m,
+                                  bool front, lane_bounce *out, ray_counters *counters);
+
 /* shade_delta(): a mirror or glass picks the direction (bsdf_sample), from
  * the roulette's number and three more, in its order; the emission the ray
  * meets then counts. False if the path ends here. */
 static bool bounce_delta_lane(lane *l, const path_tracer *pt, const vertex_lanes *L, int k, const pt_material *m,
                               bool front, lane_bounce *out, ray_counters *counters)
 {
+    if (pt->integrator != PT_LECTURE)
+        return bounce_iterative_lane(l, pt, L, k, m, front, out, counters);
     if (l->depth + 2 > pt->max_depth)
         return false;
     float p_rr = 1.0f;
@@ -657,6 +882,53 @@ static bool bounce_delta_lane(lane *l, const path_tracer *pt, const vertex_lanes
     out->next = ray_spawn(AT(p), L->p_error[k], AT(ng), s.wi);
     out->throughput = vec3_mul(AT(throughput), vec3_scale(s.weight, 1.0f / p_rr));
     out->wo = vec3_neg(s.wi);
+    return true;
+}
+
+/* trace_iterative()'s bounce at a glossy vertex (whose numbers
+ * roll_bounce_iterative drew), a mirror or glass (whose numbers it draws
+ * here), one lane: the direction from bsdf_sample() on the MIS rung and on
+ * delta surfaces, else cosine-weighted (chapter 08's
+ * sample_cosine_hemisphere) with f cos / pdf from bsdf_eval(); then the
+ * roulette on the new throughput. False if the path ends here. */
+static bool bounce_iterative_lane(lane *l, const path_tracer *pt, const vertex_lanes *L, int k, const pt_material *m,
+                                  bool front, lane_bounce *out, ray_counters *counters)
+{
+    bool delta = bsdf_is_delta(m);
+    vec3 n = AT(n), wo = AT(wo);
+    bsdf_sample_result s;
+    if (delta) {
+        if (l->depth + 1 > pt->max_depth)
+            return false;
+        float u_y = lane_float(l, pt), u_x = lane_float(l, pt), u_lobe = lane_float(l, pt);
+        if (!bsdf_sample(m, n, wo, vec2_make(u_x, u_y), u_lobe, front, &s))
+            return false;
+    } else if (pt->integrator == PT_MIS) {
+        if (!bsdf_sample(m, n, wo, vec2_make(L->u_x[k], L->u_y[k]), L->u_lobe[k], front, &s))
+            return false;
+    } else {
+        vec3 local = sample_cosine_hemisphere(vec2_make(L->u_x[k], L->u_y[k]));
+        s.wi = frame_to_world(n, local);
+        s.pdf = cosine_hemisphere_pdf(local.z);
+        if (!(s.pdf > 0.0f))
+            return false;
+        s.weight = vec3_scale(bsdf_eval(m, n, wo, s.wi), local.z / s.pdf);
+        s.is_delta = s.is_transmission = false;
+    }
+    if (vec3_is_black(s.weight))
+        return false;
+    if (s.is_delta && !(pt->effects & (s.is_transmission ? EFFECT_REFRACTION : EFFECT_REFLECTION)))
+        return false;
+    vec3 throughput = vec3_mul(AT(throughput), s.weight);
+    if (!roulette_after_bounce(l, pt, &throughput, m->albedo))
+        return false;
+    if (s.is_delta && s.is_transmission)
+        counters->refraction_rays++;
+    else if (s.is_delta)
+        counters->reflection_rays++;
+    lane_bounce_set(out, L, k, s.wi, throughput);
+    l->previous_point = AT(p);
+    l->previous_pdf = s.pdf;
     return true;
 }
 
@@ -789,8 +1061,9 @@ SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const flat_hits8 *hi
 /* The first hits of the active lanes: the triangles' (through the
  * tracer), then the spheres' lane by lane; the hit records in the lanes'
  * arrays, the materials, and the bits of the lanes hit on their front
- * (*front). Returns the bits of the lanes hit. */
-static int closest_hits(row_job *job, vertex_lanes *L, int active, int material[LANES], int *front)
+ * (*front) and of those that hit a sphere (*spheres). Returns the bits of
+ * the lanes hit. */
+static int closest_hits(row_job *job, vertex_lanes *L, int active, int material[LANES], int *front, int *spheres)
 {
     const pt_scene *sc = job->pt->scene;
     const wide_tracer *all = &job->trace->all;
@@ -817,14 +1090,42 @@ static int closest_hits(row_job *job, vertex_lanes *L, int active, int material[
         int k = __builtin_ctz((unsigned)left);
         *front |= hit_record_set(sc, &sphere_hits[k], k, L, material);
     }
+    *spheres = sphere_lanes;
     return hit_lanes | sphere_lanes;
+}
+
+/* The emission lane k's ray found on the front of an emitter, after the
+ * camera: in full where no light sample counted it -- after a mirror or
+ * glass, or on the cosine and MIS rungs an emitter the light table does
+ * not hold (a sphere); on the MIS rung, after a BSDF sample, with the power
+ * heuristic's weight against the light sample that could have found it
+ * too, as trace_iterative() weighs it; else not at all (the light sample
+ * at the vertex before counted it). */
+static void emission_found(row_job *job, const vertex_lanes *L, int k, int material, bool sphere)
+{
+    const path_tracer *pt = job->pt;
+    lane *l = &job->lanes[k];
+    float weight = 1.0f;
+    if (!l->emission_counts && (pt->integrator == PT_LECTURE || !sphere)) {
+        if (pt->integrator != PT_MIS)
+            return;
+        vec3 p = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]), ng = vec3_make(L->ng[0][k], L->ng[1][k], L->ng[2][k]);
+        vec3 wo = vec3_make(L->wo[0][k], L->wo[1][k], L->wo[2][k]);
+        float distance2 = vec3_length_squared(vec3_sub(p, l->previous_point));
+        float pdf_light = distance2 * job->pdf_area[material] / fabsf(vec3_dot(ng, wo)); /* per steradian */
+        if (twin_wrong != WIDE_TWIN_EMISSION_UNWEIGHTED)
+            weight = power_heuristic(l->previous_pdf, pdf_light);
+    }
+    vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
+    vec3 le = pt->scene->materials[material].emission;
+    l->radiance = vec3_add(l->radiance, vec3_scale(vec3_mul(throughput, le), weight));
 }
 
 /* What the rays found that needs no light sample, and what the lanes hit:
  * the environment for the lanes that left the scene; the emission at the
  * first hit (camera lanes) and after a mirror or glass; the lanes' bits by
  * material (*diffuse, *glossy, *delta). */
-static void light_found(row_job *job, vertex_lanes *L, int active, int hit_lanes, int front,
+static void light_found(row_job *job, vertex_lanes *L, int active, int hit_lanes, int front, int spheres,
                         const int material[LANES], int *diffuse, int *glossy, int *delta)
 {
     const pt_scene *sc = job->pt->scene;
@@ -844,6 +1145,7 @@ static void light_found(row_job *job, vertex_lanes *L, int active, int hit_lanes
         lanes_set(L->wo, k, vec3_normalize(vec3_neg(direction)));
         lanes[k].emission_counts = false;
     }
+    const int camera = job->camera & hit_lanes;
     job->camera &= ~active;
     *diffuse = *glossy = *delta = 0;
     for (int left = hit_lanes; left != 0; left &= left - 1) {
@@ -852,10 +1154,8 @@ static void light_found(row_job *job, vertex_lanes *L, int active, int hit_lanes
         *diffuse |= (m->kind == BSDF_DIFFUSE) << k;
         *glossy |= (m->kind == BSDF_GLOSSY) << k;
         *delta |= bsdf_is_delta(m) << k;
-        if (lanes[k].emission_counts && ((front >> k) & 1)) { /* seen through a mirror or glass */
-            vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
-            lanes[k].radiance = vec3_add(lanes[k].radiance, vec3_mul(throughput, m->emission));
-        }
+        if (((front & ~camera) >> k) & 1 && !vec3_is_black(m->emission))
+            emission_found(job, L, k, material[k], (spheres >> k) & 1);
         lanes[k].emission_counts = false;
     }
 }
@@ -901,7 +1201,12 @@ static int bounces_aside(row_job *job, const vertex_lanes *L, int glossy, int de
     int on = 0;
     for (int left = glossy; left != 0; left &= left - 1) {
         int k = __builtin_ctz((unsigned)left);
-        on |= (int)bounce_surface_lane(L, k, &materials[material[k]], &aside[k]) << k;
+        const pt_material *m = &materials[material[k]];
+        bool goes_on = job->pt->integrator == PT_LECTURE
+                           ? bounce_surface_lane(L, k, m, &aside[k])
+                           : bounce_iterative_lane(&job->lanes[k], job->pt, L, k, m, (front >> k) & 1, &aside[k],
+                                                   job->counters);
+        on |= (int)goes_on << k;
     }
     job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)on);
     for (int left = delta; left != 0; left &= left - 1) {
@@ -913,11 +1218,62 @@ static int bounces_aside(row_job *job, const vertex_lanes *L, int glossy, int de
     return on;
 }
 
+/* The diffuse lanes' bounces on the lecture rung (of `lanes`, those the
+ * roulette let go on), in AVX or lane by lane: the lanes that go on. */
+static int bounce_diffuse(row_job *job, vertex_lanes *L, int lanes)
+{
+#if WIDE_HAVE_AVX
+    if (lanes != 0 && job->avx)
+        return bounce_math_avx(L, lanes);
+#endif
+    int on = 0;
+    for (int left = lanes; left != 0; left &= left - 1)
+        on |= bounce_math_lane(L, __builtin_ctz((unsigned)left));
+    return on;
+}
+
+/* The same on the cosine and MIS rungs: the bounce (cosine-weighted), in
+ * AVX or lane by lane, then each lane's roulette on its new throughput;
+ * the vertex and the pdf the next ray was drawn with kept for the MIS
+ * weight of the emission it finds. */
+static int bounce_diffuse_iterative(row_job *job, vertex_lanes *L, int lanes)
+{
+    const path_tracer *pt = job->pt;
+    bool mis = pt->integrator == PT_MIS;
+    int on = 0;
+#if WIDE_HAVE_AVX
+    if (lanes != 0 && job->avx)
+        on = bounce_cosine_avx(L, lanes, mis);
+    else
+#endif
+        for (int left = lanes; left != 0; left &= left - 1)
+            on |= bounce_cosine_lane(L, __builtin_ctz((unsigned)left), mis);
+    for (int left = on; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        lane *l = &job->lanes[k];
+        vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
+        vec3 albedo = vec3_make(L->albedo[0][k], L->albedo[1][k], L->albedo[2][k]);
+        if (!roulette_after_bounce(l, pt, &throughput, albedo)) {
+            on &= ~(1 << k);
+            continue;
+        }
+        lanes_set(L->throughput, k, throughput);
+        l->previous_point = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]);
+        l->previous_pdf = L->pdf[k];
+    }
+    return on;
+}
+
 /* One row of the image, eight pixels at a time. */
 static void render_row(row_job *job)
 {
     const path_tracer *pt = job->pt;
     const pt_scene *sc = pt->scene;
+    const bool lecture = pt->integrator == PT_LECTURE;
+    /* sample_direct_light()'s with_mis: on the MIS rung, where the path may
+     * go on by a BSDF sample that could find the same light (the effects) */
+    const bool mis = pt->integrator == PT_MIS && twin_wrong != WIDE_TWIN_LIGHT_UNWEIGHTED;
+    const bool mis_diffuse = mis && (pt->effects & EFFECT_INDIRECT), mis_glossy = mis && (pt->effects & EFFECT_GLOSSY);
     lane lanes[LANES];
     vertex_lanes L;
     job->lanes = lanes;
@@ -931,13 +1287,15 @@ static void render_row(row_job *job)
             active |= (lanes[k].x >= 0) << k;
         if (active == 0)
             return; /* every pixel written, so no shadow ray waits */
-        int material[LANES], front = 0, picked = 0, diffuse, glossy, delta;
-        int hit_lanes = closest_hits(job, &L, active, material, &front);
-        light_found(job, &L, active, hit_lanes, front, material, &diffuse, &glossy, &delta);
+        int material[LANES], front = 0, spheres = 0, picked = 0, diffuse, glossy, delta;
+        int hit_lanes = closest_hits(job, &L, active, material, &front, &spheres);
+        light_found(job, &L, active, hit_lanes, front, spheres, material, &diffuse, &glossy, &delta);
         /* Diffuse lanes take the AVX route; glossy ones, mirrors and glass
          * chapter 09's BSDFs lane by lane. Each lane's random numbers, in
          * shade()'s order: the point on the light, then the roulette and
-         * the next direction. The last do not depend on the light sample,
+         * the next direction (trace_iterative()'s: the point on the light,
+         * the next direction, and after the bounce the roulette). The
+         * direction's do not depend on the light sample,
          * so they are drawn before its arithmetic, and the light's and the
          * bounce's arithmetic run back to back, where the processor
          * overlaps their long chains of divisions and square roots.
@@ -948,18 +1306,19 @@ static void render_row(row_job *job)
             int k = __builtin_ctz((unsigned)left);
             if (lanes[k].depth + 1 <= pt->max_depth && pick_light(&lanes[k], pt, job->pdf_area, &L, k))
                 picked |= 1 << k;
-            bounce |= roll_bounce(&lanes[k], pt, &L, k, sc->materials[material[k]].kind);
+            bsdf_kind kind = sc->materials[material[k]].kind;
+            bounce |= lecture ? roll_bounce(&lanes[k], pt, &L, k, kind) : roll_bounce_iterative(&lanes[k], pt, &L, k, kind);
         }
 #if WIDE_HAVE_AVX
         if ((picked & diffuse) != 0 && job->avx)
-            lit = light_math_avx(&L, picked & diffuse); /* (writes every lane: first) */
+            lit = light_math_avx(&L, picked & diffuse, mis_diffuse); /* (writes every lane: first) */
         else
 #endif
             for (int left = picked & diffuse; left != 0; left &= left - 1)
-                lit |= light_math_lane(&L, __builtin_ctz((unsigned)left));
+                lit |= light_math_lane(&L, __builtin_ctz((unsigned)left), mis_diffuse);
         for (int left = picked & glossy; left != 0; left &= left - 1) {
             int k = __builtin_ctz((unsigned)left);
-            lit |= light_math_surface_lane(&L, k, &sc->materials[material[k]]);
+            lit |= light_math_surface_lane(&L, k, &sc->materials[material[k]], mis_glossy);
         }
         lane_bounce aside[LANES];
         int aside_on = bounces_aside(job, &L, bounce & glossy, delta, front, material, aside);
@@ -967,19 +1326,10 @@ static void render_row(row_job *job)
         if (sc->point_light_count > 0) /* lights without area: before the bounce replaces wo and throughput */
             for (int left = surface; left != 0; left &= left - 1) {
                 int k = __builtin_ctz((unsigned)left);
-                point_lights_lane(job, &L, k, &sc->materials[material[k]]);
+                if (lanes[k].depth + 1 <= pt->max_depth)
+                    point_lights_lane(job, &L, k, &sc->materials[material[k]]);
             }
-#if WIDE_HAVE_AVX
-        if ((bounce & diffuse) != 0 && job->avx)
-            bounce = bounce_math_avx(&L, bounce & diffuse);
-        else
-#endif
-        {
-            int lanes_on = 0;
-            for (int left = bounce & diffuse; left != 0; left &= left - 1)
-                lanes_on |= bounce_math_lane(&L, __builtin_ctz((unsigned)left));
-            bounce = lanes_on;
-        }
+        bounce = lecture ? bounce_diffuse(job, &L, bounce & diffuse) : bounce_diffuse_iterative(job, &L, bounce & diffuse);
         job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)bounce);
         for (int left = aside_on; left != 0; left &= left - 1) { /* the lanes kept aside, back */
             int k = __builtin_ctz((unsigned)left);
@@ -1116,7 +1466,7 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
     return done > 0 ? seconds / done * (double)total : 0.0;
 }
 
-int path_tracer_wide_light_math(const wide_light_vertex *v, int count, vec3 contribution[8])
+int path_tracer_wide_light_math(const wide_light_vertex *v, int count, bool mis, vec3 contribution[8])
 {
     vertex_lanes L;
     memset(&L, 0, sizeof L);
@@ -1139,11 +1489,11 @@ int path_tracer_wide_light_math(const wide_light_vertex *v, int count, vec3 cont
     int lit = 0;
 #if WIDE_HAVE_AVX
     if (use_avx && __builtin_cpu_supports("avx2"))
-        lit = light_math_avx(&L, lanes);
+        lit = light_math_avx(&L, lanes, mis);
     else
 #endif
         for (int k = 0; k < count && k < LANES; k++)
-            lit |= light_math_lane(&L, k);
+            lit |= light_math_lane(&L, k, mis);
     for (int k = 0; k < count && k < LANES; k++)
         contribution[k] = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
     return lit;

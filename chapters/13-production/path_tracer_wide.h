@@ -1,4 +1,4 @@
-/* path_tracer_wide.h -- the lecture's path tracer, eight paths at a time.
+/* path_tracer_wide.h -- chapter 09's path tracer, eight paths at a time.
  *
  * One path is a chain: each bounce waits for the ray before it, and the
  * processor has little to do while it waits. Eight paths -- eight pixels,
@@ -20,17 +20,27 @@
  * from its scrambled Sobol points as path_trace_sobol_sample() (found from
  * the sample before's, sobol_pixel.h) -- and makes
  * the same decisions (the same rays, hits, light samples and roulette), so
- * its samples are the lecture rung's but for rounding: the sum along a
- * path is added from the camera out instead of from the last bounce back
- * (the recursion), and the diffuse bounce's azimuth comes from a
- * polynomial (fast_sincos.h). One exception: a path whose f cos / pdf is
+ * its samples are chapter 09's of the same rung but for rounding: the sum
+ * along a path is added from the camera out instead of from the last
+ * bounce back (the lecture's recursion), and the diffuse bounce's angle
+ * comes from a polynomial (fast_sincos.h). One exception, on the lecture
+ * rung: a path whose f cos / pdf is
  * exactly black ends here, where the recursion goes on and draws numbers
  * for nothing; the image's distribution is the same.
  *
- * Every scene chapter 09 renders with the lecture rung: triangles in any
- * structure (the production one, walls.h, or any of chapter 03's
- * interface), spheres, all materials, area and point lights, the
- * environment; any Russian roulette. Not another rung, not --explain.
+ * Every scene chapter 09 renders: triangles in any structure (the
+ * production one, walls.h, or any of chapter 03's interface), spheres, all
+ * materials, area and point lights, the environment; any Russian roulette;
+ * and every rung of chapter 09's ladder. The lecture rung as shade() does
+ * it (above); the cosine and MIS rungs as trace_iterative() does them, in
+ * its order: the light sample (with the power heuristic's weight on the
+ * MIS rung), then the next direction -- cosine-weighted on the cosine
+ * rung, from bsdf_sample() on the MIS rung and on mirrors and glass --
+ * and the roulette after the bounce, on the new throughput; the emission
+ * a BSDF-sampled ray finds counted with its MIS weight. Their diffuse
+ * lanes' light sample and bounce are eight-wide as the lecture's are (the
+ * cosine-weighted direction through sample_cosine_hemisphere()'s
+ * concentric map, its angle by the same polynomial). Not --explain.
  *
  * Usage:
  *   estimate_image e;
@@ -95,6 +105,13 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
  * rendering. */
 void path_tracer_wide_use_avx(bool on);
 
+/* For the tests' twins only: the renderer with one of the MIS rung's two
+ * weights left off -- the emission a BSDF-sampled ray finds counted in
+ * full, or the light sample counted in full -- which its comparison with
+ * chapter 09 must catch. Not thread-safe: set it before rendering. */
+typedef enum { WIDE_TWIN_NONE, WIDE_TWIN_EMISSION_UNWEIGHTED, WIDE_TWIN_LIGHT_UNWEIGHTED } wide_twin;
+void path_tracer_wide_twin(wide_twin twin);
+
 /* One vertex's light sample as the lanes compute it: the hit (point, its
  * error bound, geometric and shading normals), the direction back along the
  * path, the surface's albedo (diffuse), the path's throughput, and the
@@ -107,12 +124,14 @@ typedef struct {
     float x_error, pdf_area;
 } wide_light_vertex;
 
-/* For the tests: the light samples' arithmetic of up to eight vertices,
- * as the eight-path renderer does it (in AVX where it runs, else lane by
- * lane): bit k of the result says whether vertex k's sample adds light,
- * and contribution[k] is what it adds, times the throughput, if its shadow
- * ray gets through. Chapter 09's shade() computes the same from
- * pt_scene_sample_light() and bsdf_eval(). */
-int path_tracer_wide_light_math(const wide_light_vertex *v, int count, vec3 contribution[8]);
+/* For the tests: the light samples' arithmetic of up to eight vertices
+ * on diffuse surfaces, as the eight-path renderer does it (in AVX where it
+ * runs, else lane by lane): bit k of the result says whether vertex k's
+ * sample adds light, and contribution[k] is what it adds, times the
+ * throughput, if its shadow ray gets through -- with the power heuristic's
+ * weight against the cosine-weighted BSDF sample if `mis`. Chapter 09's
+ * shade() and sample_direct_light() compute the same from
+ * pt_scene_sample_light(), bsdf_eval() and bsdf_pdf(). */
+int path_tracer_wide_light_math(const wide_light_vertex *v, int count, bool mis, vec3 contribution[8]);
 
 #endif

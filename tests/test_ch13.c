@@ -2251,7 +2251,11 @@ static void test_fast_sincos_turns_is_within_a_few_ulps(void **state)
  * On random vertices of the Cornell box with random light samples the two
  * agree to rounding (the forms order their products differently: a few
  * ulps each, LIGHT_MATH_TOLERANCE relative), and agree on which samples
- * add light. The twin: the area form without cos(theta') is caught. */
+ * add light; so does the MIS rung's, weighted by the power heuristic
+ * against bsdf_pdf(). The twins: the area form without cos(theta'), and
+ * the MIS rung's sample expected without its weight (within a few
+ * thousandths of 1 in the box: still far outside the tolerance), are
+ * caught. */
 static const float LIGHT_MATH_TOLERANCE = 1e-5f;
 
 static vec3 random_unit_in_hemisphere(vec3 n, pcg32 *rng)
@@ -2264,7 +2268,11 @@ static vec3 random_unit_in_hemisphere(vec3 n, pcg32 *rng)
     }
 }
 
-static long light_math_mismatches(const pt_scene *sc, int vertices, bool with_cos_light, uint64_t seed, long *lit)
+/* `mis`: the MIS rung's light sample, weighted by the power heuristic
+ * against bsdf_pdf() (sample_direct_light()); `expect_mis`: the weight in
+ * the expected value. */
+static long light_math_mismatches(const pt_scene *sc, int vertices, bool with_cos_light, bool mis, bool expect_mis,
+                                  uint64_t seed, long *lit)
 {
     pcg32 rng = pcg32_for_pixel(seed, 0);
     long wrong = 0;
@@ -2304,10 +2312,12 @@ static long light_math_mismatches(const pt_scene *sc, int vertices, bool with_co
             vec3 f_r = bsdf_eval(m, v[k].n, v[k].wo, ws);
             adds[k] = cos_theta > 0.0f && cos_theta_x > 0.0f && !vec3_is_black(f_r);
             float g = cos_theta * (with_cos_light ? cos_theta_x : 1.0f) / distance2;
-            expected[k] = vec3_mul(v[k].throughput, vec3_scale(vec3_mul(x.emission, f_r), g / x.pdf_light));
+            float pdf_light = distance2 * x.pdf_light / cos_theta_x, pdf_bsdf = bsdf_pdf(m, v[k].n, v[k].wo, ws);
+            float weight = expect_mis ? pdf_light * pdf_light / (pdf_light * pdf_light + pdf_bsdf * pdf_bsdf) : 1.0f;
+            expected[k] = vec3_mul(v[k].throughput, vec3_scale(vec3_mul(x.emission, f_r), g / x.pdf_light * weight));
         }
         vec3 got[8];
-        int mask = path_tracer_wide_light_math(v, 8, false, got);
+        int mask = path_tracer_wide_light_math(v, 8, mis, got);
         for (int k = 0; k < 8; k++) {
             bool wide_adds = (mask >> k) & 1;
             *lit += adds[k];
@@ -2330,20 +2340,24 @@ static void test_lanes_light_sample_is_chapter_09s(void **state)
     pt_scene sc;
     pt_scene_build_cornell_box(&sc);
     enum { VERTICES = 8000 };
-    for (int avx = 1; avx >= 0; avx--) {
-        path_tracer_wide_use_avx(avx);
-        long lit = 0;
-        long wrong = light_math_mismatches(&sc, VERTICES, true, test_seed(151), &lit);
-        print_message("light sample, %s: %ld of %d vertices differ from chapter 09's (%ld add light)\n",
-                      avx ? "AVX" : "lane by lane", wrong, VERTICES, lit);
-        assert_int_equal(wrong, 0);
-        assert_true(lit > VERTICES / 4);
-    }
+    for (int avx = 1; avx >= 0; avx--)
+        for (int mis = 0; mis < 2; mis++) {
+            path_tracer_wide_use_avx(avx);
+            long lit = 0;
+            long wrong = light_math_mismatches(&sc, VERTICES, true, mis, mis, test_seed(151), &lit);
+            print_message("light sample%s, %s: %ld of %d vertices differ from chapter 09's (%ld add light)\n",
+                          mis ? " with its MIS weight" : "", avx ? "AVX" : "lane by lane", wrong, VERTICES, lit);
+            assert_int_equal(wrong, 0);
+            assert_true(lit > VERTICES / 4);
+        }
     path_tracer_wide_use_avx(true);
     long lit = 0;
-    long twin = light_math_mismatches(&sc, VERTICES, false, test_seed(151), &lit);
-    print_message("twin, without cos(theta'): %ld differ\n", twin);
+    long twin = light_math_mismatches(&sc, VERTICES, false, false, false, test_seed(151), &lit);
+    lit = 0;
+    long unweighted = light_math_mismatches(&sc, VERTICES, true, false, true, test_seed(151), &lit);
+    print_message("twins: without cos(theta'): %ld differ; without the MIS weight: %ld differ\n", twin, unweighted);
     assert_true(twin > lit / 2);
+    assert_true(unweighted > lit / 2);
     pt_scene_free(&sc);
 }
 

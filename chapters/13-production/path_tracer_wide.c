@@ -27,6 +27,12 @@
 
 enum { LANES = FLAT_LANES };
 
+/* On the functions only the cosine and MIS rungs call from render_row:
+ * inlined, they grew it past what the compiler inlines into it, and left
+ * the light's pick (pt_scene_sample_emitter) a call at every step of every
+ * lane of every rung. */
+#define NOT_INLINED __attribute__((noinline))
+
 /* path_tracer_wide_use_avx(): the lanes' arithmetic in AVX2 where the
  * processor has it, or lane by lane (the same bits; for the tests). */
 static bool use_avx = true;
@@ -542,7 +548,7 @@ static int bounce_math_lane(vertex_lanes *L, int k)
  * next vertex's light sample, bounce depth + 2, must count too; on the MIS
  * rung the emission it finds is bounce depth + 1, the BSDF's share of this
  * vertex's direct light), and the effects ask for it. */
-static int roll_bounce_iterative(lane *l, const path_tracer *pt, vertex_lanes *L, int k, bsdf_kind kind)
+NOT_INLINED static int roll_bounce_iterative(lane *l, const path_tracer *pt, vertex_lanes *L, int k, bsdf_kind kind)
 {
     bool mis = pt->integrator == PT_MIS;
     if (l->depth + 1 > pt->max_depth || (l->depth + 2 > pt->max_depth && !mis) ||
@@ -1101,7 +1107,7 @@ static int closest_hits(row_job *job, vertex_lanes *L, int active, int material[
  * heuristic's weight against the light sample that could have found it
  * too, as trace_iterative() weighs it; else not at all (the light sample
  * at the vertex before counted it). */
-static void emission_found(row_job *job, const vertex_lanes *L, int k, int material, bool sphere)
+NOT_INLINED static void emission_found(row_job *job, const vertex_lanes *L, int k, int material, bool sphere)
 {
     const path_tracer *pt = job->pt;
     lane *l = &job->lanes[k];
@@ -1145,7 +1151,10 @@ static void light_found(row_job *job, vertex_lanes *L, int active, int hit_lanes
         lanes_set(L->wo, k, vec3_normalize(vec3_neg(direction)));
         lanes[k].emission_counts = false;
     }
-    const int camera = job->camera & hit_lanes;
+    /* the lanes whose emission may count: after the camera, on their front;
+     * on the lecture rung only after a mirror or glass */
+    const bool lecture = job->pt->integrator == PT_LECTURE;
+    const int found = front & ~(job->camera & hit_lanes);
     job->camera &= ~active;
     *diffuse = *glossy = *delta = 0;
     for (int left = hit_lanes; left != 0; left &= left - 1) {
@@ -1154,7 +1163,7 @@ static void light_found(row_job *job, vertex_lanes *L, int active, int hit_lanes
         *diffuse |= (m->kind == BSDF_DIFFUSE) << k;
         *glossy |= (m->kind == BSDF_GLOSSY) << k;
         *delta |= bsdf_is_delta(m) << k;
-        if (((front & ~camera) >> k) & 1 && !vec3_is_black(m->emission))
+        if ((found >> k) & 1 && (lanes[k].emission_counts || !lecture) && !vec3_is_black(m->emission))
             emission_found(job, L, k, material[k], (spheres >> k) & 1);
         lanes[k].emission_counts = false;
     }
@@ -1236,7 +1245,7 @@ static int bounce_diffuse(row_job *job, vertex_lanes *L, int lanes)
  * AVX or lane by lane, then each lane's roulette on its new throughput;
  * the vertex and the pdf the next ray was drawn with kept for the MIS
  * weight of the emission it finds. */
-static int bounce_diffuse_iterative(row_job *job, vertex_lanes *L, int lanes)
+NOT_INLINED static int bounce_diffuse_iterative(row_job *job, vertex_lanes *L, int lanes)
 {
     const path_tracer *pt = job->pt;
     bool mis = pt->integrator == PT_MIS;

@@ -214,23 +214,27 @@ static bool renderer_available(const bench_scene *b, renderer_kind r)
     return (r != R_EMBREE && r != R_EMBREE8) || b->structures[ON_EMBREE] != NULL;
 }
 
-/* --sampler: chapter 13's renderers' numbers */
+/* --sampler and --integrator: chapter 13's renderers' numbers and rung */
 static pt_sampler bench_sampler = PRODUCTION_SAMPLER;
+static pt_integrator bench_integrator;
 
 /* The path tracer renderer r runs: chapter 13's program's (the lecture
  * rung with Sobol samples and roulette on throughput from bounce 3, at most
- * 64 bounces: production_path_tracer_defaults), or chapter 09's MIS rung
- * as chapter 09 runs it (random numbers, P_RR 0.8 from bounce 3). The
- * scene's structure is switched to the renderer's. */
+ * 64 bounces: production_path_tracer_defaults; --sampler and --integrator
+ * change its numbers and rung), or chapter 09's MIS rung as chapter 09
+ * runs it (random numbers, P_RR 0.8 from bounce 3). The scene's structure
+ * is switched to the renderer's. */
 
 static path_tracer renderer_setup(bench_scene *b, renderer_kind r)
 {
     b->sc.bvh = b->structures[r == R_MIS ? ON_CH06 : r == R_EMBREE || r == R_EMBREE8 ? ON_EMBREE : ON_CH13];
     path_tracer pt = r == R_MIS ? path_tracer_defaults(&b->sc) : production_path_tracer_defaults(&b->sc);
-    if (r == R_MIS)
+    if (r == R_MIS) {
         pt.integrator = PT_MIS;
-    else
+    } else {
         pt.sampler = bench_sampler;
+        pt.integrator = bench_integrator;
+    }
     return pt;
 }
 
@@ -389,6 +393,7 @@ typedef struct {
     uint64_t seed;
     renderer_kind renderer;
     pt_sampler sampler;
+    pt_integrator integrator;
 } bench_options;
 
 static void usage(void)
@@ -410,7 +415,9 @@ static void usage(void)
            "  --reps N         best of N (default 3)       --threads N (default 2)   --seed N (default 1)\n"
            "  --csv FILE       with --speed: the table as CSV too\n"
            "  --sampler random|sobol  chapter 13's numbers (default sobol, its program's); random names its\n"
-           "                   manifest rows NAME-random\n");
+           "                   manifest rows NAME-random\n"
+           "  --integrator lecture|cosine|mis  chapter 13's rung (default lecture, its program's); another names\n"
+           "                   its manifest rows NAME-RUNG (ch13-mis, ch13-mis-random, ...)\n");
 }
 
 static bool parse_renderer(const char *name, renderer_kind *out)
@@ -426,7 +433,8 @@ static bool parse_renderer(const char *name, renderer_kind *out)
 /* 0 to go on, else the exit status (help: 0 after printing it, -1). */
 static int parse_options(int argc, char **argv, bench_options *o)
 {
-    *o = (bench_options){MODE_NONE, NULL, NULL, NULL, NULL, NULL, NULL, 64, 16, 3, 2, 1, R_CH13, PRODUCTION_SAMPLER};
+    *o = (bench_options){MODE_NONE, NULL, NULL, NULL, NULL, NULL, NULL, 64, 16, 3, 2, 1, R_CH13,
+                         PRODUCTION_SAMPLER, production_path_tracer_defaults(NULL).integrator};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *value = i + 1 < argc ? argv[i + 1] : NULL;
         bool takes = true;
@@ -457,6 +465,11 @@ static int parse_options(int argc, char **argv, bench_options *o)
             }
         } else if (strcmp(a, "--sampler") == 0 && (strcmp(value, "random") == 0 || strcmp(value, "sobol") == 0)) {
             o->sampler = value[0] == 's' ? PT_SAMPLER_SOBOL : PT_SAMPLER_RANDOM;
+        } else if (strcmp(a, "--integrator") == 0) {
+            if (!pt_integrator_parse(value, &o->integrator)) {
+                fprintf(stderr, "bench_scenes: --integrator %s: unknown (lecture, cosine, mis)\n", value);
+                return 2;
+            }
         } else if (strcmp(a, "--width") == 0 && atoi(value) > 0) {
             o->size = atoi(value);
         } else if (strcmp(a, "--spp") == 0 && atoi(value) > 0) {
@@ -537,6 +550,18 @@ static bool speed_one(const char *name, const bench_options *o, char *err, size_
     return true;
 }
 
+/* The renderer's name in the manifest: chapter 13's with the rung and the
+ * numbers where they are not its program's (ch13-mis, ch13-random,
+ * ch13-cosine-random). */
+static void row_name(const bench_options *o, char *out, size_t size)
+{
+    bool ch13 = o->renderer != R_MIS;
+    bool other_rung = ch13 && o->integrator != production_path_tracer_defaults(NULL).integrator;
+    bool other_sampler = ch13 && o->sampler != PRODUCTION_SAMPLER;
+    snprintf(out, size, "%s%s%s%s", RENDERER_NAMES[o->renderer], other_rung ? "-" : "",
+             other_rung ? pt_integrator_name(o->integrator) : "", other_sampler ? "-random" : "");
+}
+
 /* One line appended to the manifest (a log the runs add to one by one;
  * bench_equal_time reads it). */
 static bool manifest_append(const bench_options *o, const char *scene, const render_run *run, char *err,
@@ -549,9 +574,10 @@ static bool manifest_append(const bench_options *o, const char *scene, const ren
         snprintf(err, err_size, "%s: cannot append to it", o->manifest);
         return false;
     }
-    bool other = o->sampler != PRODUCTION_SAMPLER && o->renderer != R_MIS;
-    fprintf(f, "%s%s,%s,%d,%d,%llu,%.6f,%.6f,%s\n", RENDERER_NAMES[o->renderer], other ? "-random" : "", scene, o->spp, o->threads,
-            (unsigned long long)o->seed, run->cpu, run->wall, o->out);
+    char name[64];
+    row_name(o, name, sizeof name);
+    fprintf(f, "%s,%s,%d,%d,%llu,%.6f,%.6f,%s\n", name, scene, o->spp, o->threads, (unsigned long long)o->seed,
+            run->cpu, run->wall, o->out);
     if (fclose(f) != 0) {
         snprintf(err, err_size, "%s: cannot append to it", o->manifest);
         return false;
@@ -578,9 +604,10 @@ static bool render_mode(const bench_options *o, char *err, size_t err_size)
     } else {
         render_run run = render_once(&b, o->renderer, &cam, o->spp, o->seed, o->threads, &e);
         ok = image_write(&e.mean, o->out, 0.0f, err, err_size) && manifest_append(o, b.name, &run, err, err_size);
+        char name[64];
+        row_name(o, name, sizeof name);
         if (ok)
-            printf("bench_scenes: %s %s %d spp %d threads seed %llu: %.3f s CPU, %.3f s wall%s -> %s\n",
-                   RENDERER_NAMES[o->renderer], b.name, o->spp, o->threads, (unsigned long long)o->seed, run.cpu,
+            printf("bench_scenes: %s %s %d spp %d threads seed %llu: %.3f s CPU, %.3f s wall%s -> %s\n", name, b.name, o->spp, o->threads, (unsigned long long)o->seed, run.cpu,
                    run.wall, run.wide ? ", 8 paths at a time" : "", o->out);
     }
     estimate_image_free(&e);
@@ -595,6 +622,7 @@ int main(int argc, char **argv)
     if (status != 0)
         return status < 0 ? 0 : status;
     bench_sampler = o.sampler;
+    bench_integrator = o.integrator;
     char err[8192] = "";
     bool ok = true;
     atomic_file csv;

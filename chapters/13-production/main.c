@@ -18,7 +18,7 @@
 #include "mpi_split.h"
 
 typedef struct {
-    cli_choice builtin, walls, rr, sampler;
+    cli_choice builtin, walls, rr, sampler, integrator;
     const char *obj, *bench_csv;
     bool bench, bench_scenes, one_path;
     int rr_start, torus;
@@ -27,7 +27,7 @@ typedef struct {
 
 static const char *const ON_OFF[] = {"on", "off", NULL};
 
-/* Eight paths at a time: the lecture rung's image, by another route. */
+/* Eight paths at a time: chapter 09's image of the same rung, by another route. */
 static int render_eight_paths(const cli_options *opts, const path_tracer *pt, const camera *cam)
 {
     char err[1024], counters_path[4096];
@@ -44,8 +44,9 @@ static int render_eight_paths(const cli_options *opts, const path_tracer *pt, co
         fprintf(stderr, "13-production: %s\n", err);
         status = 1;
     } else if (!opts->quiet) {
-        printf("13-production: %dx%d, %d spp, 8 paths at a time, %d threads, %.3f s -> %s\n", opts->width,
-               opts->height, opts->spp, opts->threads, e.seconds, opts->out);
+        printf("13-production: %dx%d, %d spp, the %s rung, 8 paths at a time, %d threads, %.3f s -> %s\n",
+               opts->width, opts->height, opts->spp, pt_integrator_name(pt->integrator), opts->threads, e.seconds,
+               opts->out);
         counters_print(stdout, &e.counters, e.seconds);
         printf("%.3f s per million camera samples\n", e.seconds / ((double)opts->width * opts->height * opts->spp) * 1e6);
     }
@@ -112,6 +113,17 @@ static int render(cli_options *opts, const production_flags *f)
     if (pt_scene_has_no_light(&sc, err, sizeof err))
         fprintf(stderr, "13-production: warning: %s\n", err);
     effects_report e = effects_analyse(&desc);
+    /* the rung: --integrator, else the scene file's, else the program's default */
+    pt_integrator integrator = production_path_tracer_defaults(&sc).integrator;
+    if (f->integrator.index >= 0) {
+        integrator = (pt_integrator)f->integrator.index;
+    } else if (from_file && desc.integrator[0] != '\0' && !pt_integrator_parse(desc.integrator, &integrator)) {
+        fprintf(stderr, "13-production: %s:%d:%d: unknown integrator '%s' (lecture, cosine, mis)\n", desc.source,
+                desc.integrator_line, desc.integrator_column, desc.integrator);
+        scene_desc_free(&desc);
+        pt_scene_free(&sc);
+        return 1;
+    }
     scene_desc_free(&desc);
     bool walls = f->walls.index == 0;
     pt_scene_use_accel(&sc, walls ? production_scene_accel : production_scene_accel_no_walls, &sc);
@@ -121,6 +133,7 @@ static int render(cli_options *opts, const production_flags *f)
     pt.russian_roulette = (pt_russian_roulette)f->rr.index;
     pt.rr_start_depth = f->rr_start;
     pt.sampler = (pt_sampler)f->sampler.index;
+    pt.integrator = integrator;
     camera cam = pt_scene_camera(&sc, opts->width, opts->height);
     char why[160];
     int status;
@@ -136,13 +149,14 @@ static int render(cli_options *opts, const production_flags *f)
         pt_scene_free(&sc);
         return 2;
     }
+    char note[64];
+    snprintf(note, sizeof note, "%s, %s at a time", pt_integrator_name(pt.integrator), wide ? "eight paths" : "one path");
+    run_record_note("integrator", note);
     if (wide) {
-        run_record_note("integrator", "lecture, eight paths at a time");
         status = render_eight_paths(opts, &pt, &cam);
     } else {
         if (!f->one_path && !opts->quiet && !opts->explain)
             printf("13-production: one path at a time (eight at a time: %s)\n", why);
-        run_record_note("integrator", "lecture, one path at a time");
         status = program_render_sampled(opts, "13-production", path_trace_radiance, path_tracer_sample_fn(&pt), &pt,
                                         &cam, NULL);
     }
@@ -154,7 +168,8 @@ int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch13.exr", 512, 512, 16);
     production_flags f = {{PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {ON_OFF, NULL, 0},
-                          {PT_ROULETTE_NAMES, NULL, PRODUCTION_ROULETTE}, {PT_SAMPLER_NAMES, NULL, PRODUCTION_SAMPLER}, NULL, NULL,
+                          {PT_ROULETTE_NAMES, NULL, PRODUCTION_ROULETTE}, {PT_SAMPLER_NAMES, NULL, PRODUCTION_SAMPLER},
+                          {PT_INTEGRATOR_NAMES, NULL, -1}, NULL, NULL,
                           false, false, false, 3, 0, CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--builtin", CLI_CHOICE, &f.builtin, NULL, "a scene of chapter 09 (default cornell)", 0, 0},
@@ -163,6 +178,8 @@ int main(int argc, char **argv)
          8, 100000000},
         CLI_CAMERA_FLAGS(f.view),
         {"--walls", CLI_CHOICE, &f.walls, NULL, "on (default): shadow rays inside a room skip its walls", 0, 0},
+        {"--integrator", CLI_CHOICE, &f.integrator, NULL, "chapter 09's rung (default lecture, or the scene file's): "
+                                                          "each eight paths at a time", 0, 0},
         {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: throughput (default, from --rr-start), fixed (P_RR 0.8), albedo or off", 0,
          0},
         {"--rr-start", CLI_INT, &f.rr_start, "N", "--rr throughput or albedo: the first bounce it may end", 0, 1000},
@@ -178,7 +195,7 @@ int main(int argc, char **argv)
         CLI_CHECKPOINT_FLAGS(opts),
     };
     cli_spec spec = {"13-production",
-                     "What production renderers do: chapter 09's lecture path tracer, eight paths at a time, on\n"
+                     "What production renderers do: chapter 09's path tracer, eight paths at a time, on\n"
                      "any scene chapter 09 renders (meshes, spheres, every material, area and point lights,\n"
                      "the environment): the flat set for at most 64 triangles, the " BVH4_NAME " above, shadow\n"
                      "rays that skip a room's walls where it has them; it says which. --bench measures each step.",

@@ -272,8 +272,14 @@ bool bvh4_use_triangle_test(accel *a, triangle_test test)
 
 accel *bvh4_build(const triangle_set *set, bvh_split split)
 {
+    return bvh4_build_with_top(set, split, BVH4_SAH.top_area_fraction);
+}
+
+accel *bvh4_build_with_top(const triangle_set *set, bvh_split split, float top_area_fraction)
+{
     double start = timer_seconds();
     bvh_sah_params sah = BVH4_SAH;
+    sah.top_area_fraction = top_area_fraction;
     accel *binary_accel = bvh_build_with(set, split, &sah);
     const bvh *binary = (const bvh *)binary_accel;
 

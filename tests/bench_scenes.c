@@ -42,6 +42,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
@@ -213,16 +214,23 @@ static bool renderer_available(const bench_scene *b, renderer_kind r)
     return (r != R_EMBREE && r != R_EMBREE8) || b->structures[ON_EMBREE] != NULL;
 }
 
+/* --sampler: chapter 13's renderers' numbers */
+static pt_sampler bench_sampler = PRODUCTION_SAMPLER;
+
 /* The path tracer renderer r runs: chapter 13's program's (the lecture
- * rung, P_RR 0.8 from bounce 3, at most 64 bounces: its defaults), or
- * chapter 09's MIS rung (the same roulette and depth). The scene's
- * structure is switched to the renderer's. */
+ * rung with Sobol samples and roulette on throughput from bounce 3, at most
+ * 64 bounces: production_path_tracer_defaults), or chapter 09's MIS rung
+ * as chapter 09 runs it (random numbers, P_RR 0.8 from bounce 3). The
+ * scene's structure is switched to the renderer's. */
+
 static path_tracer renderer_setup(bench_scene *b, renderer_kind r)
 {
     b->sc.bvh = b->structures[r == R_MIS ? ON_CH06 : r == R_EMBREE || r == R_EMBREE8 ? ON_EMBREE : ON_CH13];
-    path_tracer pt = path_tracer_defaults(&b->sc);
+    path_tracer pt = r == R_MIS ? path_tracer_defaults(&b->sc) : production_path_tracer_defaults(&b->sc);
     if (r == R_MIS)
         pt.integrator = PT_MIS;
+    else
+        pt.sampler = bench_sampler;
     return pt;
 }
 
@@ -380,6 +388,7 @@ typedef struct {
     int size, spp, reps, threads;
     uint64_t seed;
     renderer_kind renderer;
+    pt_sampler sampler;
 } bench_options;
 
 static void usage(void)
@@ -399,7 +408,9 @@ static void usage(void)
            "  --scenes LIST    which scenes (default all: cornell,cornell-10k,cornell-100k,cornell-1m,glossy-glass)\n"
            "  --width N        image N x N (default 64)    --spp N   samples per pixel (default 16)\n"
            "  --reps N         best of N (default 3)       --threads N (default 2)   --seed N (default 1)\n"
-           "  --csv FILE       with --speed: the table as CSV too\n");
+           "  --csv FILE       with --speed: the table as CSV too\n"
+           "  --sampler random|sobol  chapter 13's numbers (default sobol, its program's); random names its\n"
+           "                   manifest rows NAME-random\n");
 }
 
 static bool parse_renderer(const char *name, renderer_kind *out)
@@ -415,7 +426,7 @@ static bool parse_renderer(const char *name, renderer_kind *out)
 /* 0 to go on, else the exit status (help: 0 after printing it, -1). */
 static int parse_options(int argc, char **argv, bench_options *o)
 {
-    *o = (bench_options){MODE_NONE, NULL, NULL, NULL, NULL, NULL, NULL, 64, 16, 3, 2, 1, R_CH13};
+    *o = (bench_options){MODE_NONE, NULL, NULL, NULL, NULL, NULL, NULL, 64, 16, 3, 2, 1, R_CH13, PRODUCTION_SAMPLER};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *value = i + 1 < argc ? argv[i + 1] : NULL;
         bool takes = true;
@@ -444,6 +455,8 @@ static int parse_options(int argc, char **argv, bench_options *o)
                         value);
                 return 2;
             }
+        } else if (strcmp(a, "--sampler") == 0 && (strcmp(value, "random") == 0 || strcmp(value, "sobol") == 0)) {
+            o->sampler = value[0] == 's' ? PT_SAMPLER_SOBOL : PT_SAMPLER_RANDOM;
         } else if (strcmp(a, "--width") == 0 && atoi(value) > 0) {
             o->size = atoi(value);
         } else if (strcmp(a, "--spp") == 0 && atoi(value) > 0) {
@@ -536,7 +549,8 @@ static bool manifest_append(const bench_options *o, const char *scene, const ren
         snprintf(err, err_size, "%s: cannot append to it", o->manifest);
         return false;
     }
-    fprintf(f, "%s,%s,%d,%d,%llu,%.6f,%.6f,%s\n", RENDERER_NAMES[o->renderer], scene, o->spp, o->threads,
+    bool other = o->sampler != PRODUCTION_SAMPLER && o->renderer != R_MIS;
+    fprintf(f, "%s%s,%s,%d,%d,%llu,%.6f,%.6f,%s\n", RENDERER_NAMES[o->renderer], other ? "-random" : "", scene, o->spp, o->threads,
             (unsigned long long)o->seed, run->cpu, run->wall, o->out);
     if (fclose(f) != 0) {
         snprintf(err, err_size, "%s: cannot append to it", o->manifest);
@@ -580,6 +594,7 @@ int main(int argc, char **argv)
     int status = parse_options(argc, argv, &o);
     if (status != 0)
         return status < 0 ? 0 : status;
+    bench_sampler = o.sampler;
     char err[8192] = "";
     bool ok = true;
     atomic_file csv;
@@ -597,6 +612,10 @@ int main(int argc, char **argv)
 #ifndef BENCH_EMBREE
         printf("bench_scenes: built without Embree (no embree3/rtcore.h: make bench-deps); its rows are left out\n");
 #endif
+        const char *policy = getenv("OMP_WAIT_POLICY");
+        if (policy == NULL || strcasecmp(policy, "passive") != 0)
+            printf("bench_scenes: warning: OMP_WAIT_POLICY is not passive, so after a 2-thread run the idle thread\n"
+                   "  spins while 1 thread renders, and its spin counts as CPU time (make bench sets it)\n");
         ok = for_each_scene(o.scenes, speed_one, &o, err, sizeof err);
         if (speed_csv != NULL)
             ok = ok ? atomic_file_commit(&csv, err, sizeof err) : (atomic_file_abandon(&csv), false);

@@ -20,6 +20,7 @@
 #include "04-uniform-grid/grid.h"
 #include "05-kd-tree/kdtree.h"
 #include "06-bvh/bvh.h"
+#include "08-monte-carlo/estimators.h"
 #include "08-monte-carlo/sampling.h"
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/experiments.h"
@@ -30,6 +31,7 @@
 #include "13-production/fast_sincos.h"
 #include "13-production/flat.h"
 #include "13-production/path_tracer_wide.h"
+#include "13-production/sobol_pixel.h"
 #include "13-production/spawn_avx.h"
 #include "13-production/speed.h"
 #include "13-production/walls.h"
@@ -2361,6 +2363,79 @@ static bool faces_closed(const mesh *m, int first)
     return closed;
 }
 
+/* ---- a pixel's Sobol points, one after another -------------------------------- */
+
+/* The twin's step: the Gray-code step chapter 08 uses for its points
+ * (xor the one direction number of the lowest set bit of i + 1). It gives
+ * the same sets of 2^m points but in another order, so a pixel's sample i
+ * would not be chapter 09's point i. */
+static void gray_code_step(sobol_pixel *s)
+{
+    uint32_t next = s->index + 1;
+    int lowest = next == 0 ? 31 : __builtin_ctz(next);
+    for (int d = 0; d < SOBOL_DIMENSIONS; d++)
+        s->point_reversed[d] ^= reverse_bits(sobol_direction_numbers(d)[lowest]);
+    s->index++;
+    s->ready = 0;
+    s->dimension = 0;
+}
+
+/* How many numbers of `samples` samples from `first` on differ from
+ * chapter 09's sobol_sampler_next, when sobol_pixel steps from one sample
+ * to the next with `step`. The samples draw 1 to 80 numbers each, as paths
+ * of different lengths do (past SOBOL_DIMENSIONS, the pixel's stream). */
+static long sobol_pixel_mismatches(void (*step)(sobol_pixel *), uint64_t seed, uint64_t pixel, uint32_t first,
+                                   int samples)
+{
+    pcg32 rng_fast = pcg32_for_pixel(seed, pixel), rng_lecture = pcg32_for_pixel(seed, pixel);
+    sobol_pixel fast;
+    sobol_pixel_start(&fast, seed, pixel, first, &rng_fast);
+    long wrong = 0;
+    for (int i = 0; i < samples; i++) {
+        if (i > 0)
+            step(&fast);
+        sobol_sampler lecture = sobol_sampler_start(seed, pixel, first + (uint32_t)i, &rng_lecture);
+        int draws = 1 + (i * 37 + 79) % 80;
+        for (int k = 0; k < draws; k++) {
+            float a = sobol_pixel_next(&fast), b = sobol_sampler_next(&lecture);
+            wrong += memcmp(&a, &b, sizeof a) != 0;
+        }
+    }
+    return wrong;
+}
+
+/* Chapter 13's lanes draw chapter 09's numbers, bit for bit, however many
+ * samples a pixel takes and wherever its first one is: from sample 0, from
+ * a sample in the middle (a resumed or split render), and across index
+ * 2^32 - 1 to 0, where every bit of the index flips; eight dimensions
+ * at a time and one at a time. Up to 80 draws a sample, so the pixel's
+ * stream past the 64th is compared too. */
+static void test_sobol_pixel_draws_chapter_09s_numbers(void **state)
+{
+    (void)state;
+    const struct {
+        uint64_t seed, pixel;
+        uint32_t first;
+        int samples;
+    } cases[] = {{1, 0, 0, 1100}, {test_seed(7), 123456, 0, 300}, {test_seed(8), 99, 1000, 300},
+                 {test_seed(9), 5, 0xFFFFFF00u, 300}, {2, 77, 0xFFFFFFFFu, 2}};
+    for (int simd = 1; simd >= 0; simd--) {
+        sobol_pixel_use_simd(simd);
+        long wrong = 0, twin = 0;
+        for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+            wrong += sobol_pixel_mismatches(sobol_pixel_next_sample, cases[c].seed, cases[c].pixel, cases[c].first,
+                                            cases[c].samples);
+            twin += sobol_pixel_mismatches(gray_code_step, cases[c].seed, cases[c].pixel, cases[c].first,
+                                           cases[c].samples);
+        }
+        print_message("sobol_pixel (%s) against chapter 09's sampler: %ld numbers differ; Gray-code steps (twin): %ld\n",
+                      simd ? "eight dimensions at once" : "one at a time", wrong, twin);
+        assert_int_equal(wrong, 0);
+        assert_true(twin > 1000);
+    }
+    sobol_pixel_use_simd(true);
+}
+
 static void test_the_benchmark_scenes_are_what_they_say(void **state)
 {
     (void)state;
@@ -2456,6 +2531,7 @@ int main(void)
         cmocka_unit_test(test_lanes_light_sample_is_chapter_09s),
         cmocka_unit_test(test_no_ray_leaks_through_a_closed_mesh_anywhere),
         cmocka_unit_test(test_moller_trumbore_leaks_through_every_entry_point),
+        cmocka_unit_test(test_sobol_pixel_draws_chapter_09s_numbers),
         cmocka_unit_test(test_the_benchmark_scenes_are_what_they_say),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

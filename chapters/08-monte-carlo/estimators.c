@@ -163,40 +163,6 @@ uint32_t sobol_bits(uint32_t index, int dimension)
     return result;
 }
 
-static uint32_t reverse_bits(uint32_t x)
-{
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
-    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
-    return (x >> 16) | (x << 16);
-}
-
-/* Owen scrambling flips each bit of the fraction (most significant first)
- * by a random choice that depends only on the bits above it: the points of
- * an elementary box stay in one box, and the boxes are permuted at random,
- * level by level. In the bit-reversed word "above" becomes "below", and each
- * step below changes bit k by a function of the bits under k only:
- *   x ^= x * even   (bit k of x * even depends on bits < k),
- *   x += seed       (the carry into bit k comes from bits < k),
- *   x *= odd        (bit k of the product is x_k xor a function of bits < k).
- * So the whole is an Owen scrambling chosen by the seed (Laine and Karras
- * 2011). These steps and constants are Vegdahl's improved hash (2021, also
- * Blender Cycles'), whose scrambles behave much more like independent ones
- * than the original's. (The hash alone does not promise that each output is
- * exactly uniform over random seeds: the seed-dependent multiplier can
- * cancel the seed's own bit. points_sobol_owen adds a random xor on top.) */
-uint32_t owen_scramble(uint32_t bits, uint32_t seed)
-{
-    uint32_t x = reverse_bits(bits);
-    x ^= x * 0x3d20adeau;
-    x += seed;
-    x *= (seed >> 16) | 1u;
-    x ^= x * 0x05526c56u;
-    x ^= x * 0x53a22864u;
-    return reverse_bits(x);
-}
-
 /* Sobol's direction numbers v_1..v_32 of dimension d (the values
  * sobol_bits gives for index 1, 2, 4, ...). */
 static void sobol_directions(int dimension, uint32_t v[32])

@@ -106,11 +106,52 @@ void jittered_grid_shape(int n, int *nx, int *ny);
  * multiple of 2^m is a (0, m, 2)-net: each box [a/2^j, (a+1)/2^j) x
  * [b/2^k, (b+1)/2^k) with j + k = m holds exactly one point. */
 uint32_t sobol_bits(uint32_t index, int dimension);
+/* x's bits in the opposite order: bit 0 becomes bit 31. */
+static inline uint32_t reverse_bits(uint32_t x)
+{
+    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
+    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
+    return (x >> 16) | (x << 16);
+}
+
 /* Owen's nested scrambling, hash-based (Laine and Karras 2011; Vegdahl 2021):
  * each bit is flipped or not depending on the seed and on the bits above it,
  * which keeps every net property. points_generate adds a random xor on top,
- * which makes each point exactly uniform. */
-uint32_t owen_scramble(uint32_t bits, uint32_t seed);
+ * which makes each point exactly uniform. (Here in the header, inline: a
+ * path tracer calls it for every number it draws, chapters 09 and 13.)
+ *
+ * Owen scrambling flips each bit of the fraction (most significant first)
+ * by a random choice that depends only on the bits above it: the points of
+ * an elementary box stay in one box, and the boxes are permuted at random,
+ * level by level. In the bit-reversed word "above" becomes "below", and each
+ * step below changes bit k by a function of the bits under k only:
+ *   x ^= x * even   (bit k of x * even depends on bits < k),
+ *   x += seed       (the carry into bit k comes from bits < k),
+ *   x *= odd        (bit k of the product is x_k xor a function of bits < k).
+ * So the whole is an Owen scrambling chosen by the seed (Laine and Karras
+ * 2011). These steps and constants are Vegdahl's improved hash (2021, also
+ * Blender Cycles'), whose scrambles behave much more like independent ones
+ * than the original's. (The hash alone does not promise that each output is
+ * exactly uniform over random seeds: the seed-dependent multiplier can
+ * cancel the seed's own bit. points_sobol_owen adds a random xor on top.)
+ * owen_scramble_reversed is the steps alone, on the reversed word, for a
+ * caller that keeps its points reversed. */
+static inline uint32_t owen_scramble_reversed(uint32_t x, uint32_t seed)
+{
+    x ^= x * 0x3d20adeau;
+    x += seed;
+    x *= (seed >> 16) | 1u;
+    x ^= x * 0x05526c56u;
+    x ^= x * 0x53a22864u;
+    return x;
+}
+
+static inline uint32_t owen_scramble(uint32_t bits, uint32_t seed)
+{
+    return reverse_bits(owen_scramble_reversed(reverse_bits(bits), seed));
+}
 
 /* ---- the estimator --------------------------------------------------------- */
 

@@ -90,10 +90,15 @@ static void make_directions(void)
     }
 }
 
-uint32_t sobol_sequence_bits(uint32_t index, int dimension)
+const uint32_t *sobol_direction_numbers(int dimension)
 {
     call_once(&directions_made, make_directions);
-    const uint32_t *v = directions[dimension];
+    return directions[dimension];
+}
+
+uint32_t sobol_sequence_bits(uint32_t index, int dimension)
+{
+    const uint32_t *v = sobol_direction_numbers(dimension);
     uint32_t result = 0;
     for (int k = 0; index != 0; k++, index >>= 1)
         if (index & 1u)
@@ -123,17 +128,23 @@ sobol_sampler sobol_sampler_start(uint64_t seed, uint64_t pixel, uint32_t index,
     return s;
 }
 
+/* The dimension's scramble, the same for every sample of the pixel:
+ * Owen's (chapter 08's owen_scramble) keeps the nets, and a random xor on
+ * top (a digital shift) makes the point exactly uniform, whatever the
+ * hash's quality, as in chapter 08's points_sobol_owen. */
+sobol_scramble sobol_sampler_scramble(const sobol_sampler *s, int dimension)
+{
+    uint64_t h = mix64(s->key + (uint64_t)(dimension + 1) * GOLDEN_GAMMA);
+    return (sobol_scramble){.owen_seed = (uint32_t)h, .shift = (uint32_t)(h >> 32)};
+}
+
 float sobol_sampler_next(void *state)
 {
     sobol_sampler *s = state;
     int d = s->dimension++;
     if (d >= SOBOL_DIMENSIONS)
         return pcg32_float(s->rng);
-    /* The dimension's scramble, the same for every sample of the pixel:
-     * Owen's (chapter 08's owen_scramble) keeps the nets, and a random xor
-     * on top (a digital shift) makes the point exactly uniform, whatever the
-     * hash's quality, as in chapter 08's points_sobol_owen. */
-    uint64_t h = mix64(s->key + (uint64_t)(d + 1) * GOLDEN_GAMMA);
-    uint32_t bits = owen_scramble(sobol_sequence_bits(s->index, d), (uint32_t)h) ^ (uint32_t)(h >> 32);
+    sobol_scramble scramble = sobol_sampler_scramble(s, d);
+    uint32_t bits = owen_scramble(sobol_sequence_bits(s->index, d), scramble.owen_seed) ^ scramble.shift;
     return (float)(bits >> 8) * 0x1.0p-24f; /* the top 24 bits, as pcg32_float: never 1 */
 }

@@ -57,6 +57,20 @@ typedef struct {
 
 sobol_sampler sobol_sampler_start(uint64_t seed, uint64_t pixel, uint32_t index, pcg32 *rng);
 
+/* How coordinate `dimension` of the sampler's pixel is scrambled: Owen's
+ * scramble with owen_seed (chapter 08's owen_scramble), then an xor with
+ * shift. The same for every sample of the pixel. */
+typedef struct {
+    uint32_t owen_seed, shift;
+} sobol_scramble;
+
+sobol_scramble sobol_sampler_scramble(const sobol_sampler *s, int dimension);
+
+/* Dimension d's direction numbers v_1 .. v_32, as 32-bit fractions:
+ * sobol_sequence_bits(index, d) is the xor of v_(k+1) over the set bits k
+ * of index. (Chapter 13 steps from one point to the next with them.) */
+const uint32_t *sobol_direction_numbers(int dimension);
+
 /* The next coordinate of the sample's point, in [0, 1): pt_random's next
  * (state points to a sobol_sampler). */
 float sobol_sampler_next(void *state);

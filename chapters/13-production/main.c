@@ -116,7 +116,7 @@ static int render(cli_options *opts, const production_flags *f)
     bool walls = f->walls.index == 0;
     pt_scene_use_accel(&sc, walls ? production_scene_accel : production_scene_accel_no_walls, &sc);
     program_note_accel(sc.bvh->stats.name);
-    path_tracer pt = path_tracer_defaults(&sc);
+    path_tracer pt = production_path_tracer_defaults(&sc);
     pt.effects = effects_decide(&e, EFFECT_ALL);
     pt.russian_roulette = (pt_russian_roulette)f->rr.index;
     pt.rr_start_depth = f->rr_start;
@@ -154,7 +154,7 @@ int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch13.exr", 512, 512, 16);
     production_flags f = {{PT_BUILTIN_SCENE_NAMES, PT_BUILTIN_SCENE_NOTES, 0}, {ON_OFF, NULL, 0},
-                          {PT_ROULETTE_NAMES, NULL, RR_FIXED}, {PT_SAMPLER_NAMES, NULL, PT_SAMPLER_RANDOM}, NULL, NULL,
+                          {PT_ROULETTE_NAMES, NULL, PRODUCTION_ROULETTE}, {PT_SAMPLER_NAMES, NULL, PRODUCTION_SAMPLER}, NULL, NULL,
                           false, false, false, 3, 0, CAMERA_NOT_OVERRIDDEN};
     const cli_flag extras[] = {
         {"--builtin", CLI_CHOICE, &f.builtin, NULL, "a scene of chapter 09 (default cornell)", 0, 0},
@@ -163,11 +163,11 @@ int main(int argc, char **argv)
          8, 100000000},
         CLI_CAMERA_FLAGS(f.view),
         {"--walls", CLI_CHOICE, &f.walls, NULL, "on (default): shadow rays inside a room skip its walls", 0, 0},
-        {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: fixed (P_RR 0.8, default), throughput, albedo or off", 0,
+        {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: throughput (default, from --rr-start), fixed (P_RR 0.8), albedo or off", 0,
          0},
         {"--rr-start", CLI_INT, &f.rr_start, "N", "--rr throughput or albedo: the first bounce it may end", 0, 1000},
-        {"--sampler", CLI_CHOICE, &f.sampler, NULL, "random (default): independent numbers; sobol: each pixel's "
-                                                  "samples the points of a scrambled Sobol sequence (chapter 09)", 0, 0},
+        {"--sampler", CLI_CHOICE, &f.sampler, NULL, "sobol (default): each pixel's samples the points of a "
+                                                  "scrambled Sobol sequence (chapter 09); random: independent numbers", 0, 0},
         {"--one-path", CLI_BOOL, &f.one_path, NULL, "one path at a time even where eight at a time could run", 0, 0},
         {"--bench", CLI_BOOL, &f.bench, NULL, "the table of what each step buys, on the Cornell box (a square of "
                                               "--width pixels, --spp samples; best of 5)", 0, 0},

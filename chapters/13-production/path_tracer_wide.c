@@ -13,7 +13,7 @@
 #include "13-production/wide_trace.h"
 #include "08-monte-carlo/sampling.h"
 #include "09-path-tracing/bsdf.h"
-#include "09-path-tracing/sobol_sampler.h"
+#include "13-production/sobol_pixel.h"
 #include "explain.h"
 #include "memory.h"
 #include "stats.h"
@@ -107,8 +107,9 @@ typedef struct {
     bool waiting;
     int waiting_unsettled;
     vec3 waiting_radiance;
-    /* --sampler sobol: the sample's point (its rng is the lane's) */
-    sobol_sampler sobol;
+    /* --sampler sobol: the pixel's points, the sample's the current one
+     * (its rng is the lane's) */
+    sobol_pixel sobol;
     /* Does the emission the next ray meets count (at the camera, and after
      * a mirror or glass: no light sample at that vertex counted it)? */
     bool emission_counts;
@@ -147,21 +148,26 @@ typedef struct {
 } row_job;
 
 
+path_tracer production_path_tracer_defaults(const pt_scene *scene)
+{
+    path_tracer pt = path_tracer_defaults(scene);
+    pt.sampler = PRODUCTION_SAMPLER;
+    pt.russian_roulette = PRODUCTION_ROULETTE;
+    return pt;
+}
+
 /* The lane's next number, from where chapter 09's path tracer takes it
  * (path_tracer.h, --sampler): the pixel's stream, or the sample's point of
  * the pixel's scrambled Sobol sequence. */
 static inline float lane_float(lane *l, const path_tracer *pt)
 {
-    return pt->sampler == PT_SAMPLER_SOBOL ? sobol_sampler_next(&l->sobol) : pcg32_float(&l->rng);
+    return pt->sampler == PT_SAMPLER_SOBOL ? sobol_pixel_next(&l->sobol) : pcg32_float(&l->rng);
 }
 
 /* A lane's next camera sample, drawn as render_pixel() draws it (jitter
  * within the pixel: two numbers). */
 static void start_sample(lane *l, row_job *job)
 {
-    if (job->pt->sampler == PT_SAMPLER_SOBOL) /* path_trace_sobol_sample(): point sample_id of the pixel's sequence */
-        l->sobol = sobol_sampler_start(job->seed, (uint64_t)l->y * (uint64_t)job->cam->width + (uint64_t)l->x,
-                                       (uint32_t)(job->spp - l->samples_left), &l->rng);
     float px = (float)l->x + lane_float(l, job->pt);
     float py = (float)l->y + lane_float(l, job->pt);
     int k = (int)(l - job->lanes);
@@ -188,7 +194,10 @@ static void start_pixel(lane *l, row_job *job)
     l->sample_id = 0;
     l->unsettled = 0;
     l->waiting = false;
-    l->rng = pcg32_for_pixel(job->seed, (uint64_t)l->y * (uint64_t)job->cam->width + (uint64_t)l->x);
+    uint64_t pixel = (uint64_t)l->y * (uint64_t)job->cam->width + (uint64_t)l->x;
+    l->rng = pcg32_for_pixel(job->seed, pixel);
+    if (job->pt->sampler == PT_SAMPLER_SOBOL) /* path_trace_sobol_sample(): sample i is point i of the pixel's sequence */
+        sobol_pixel_start(&l->sobol, job->seed, pixel, 0, &l->rng);
     memset(l->channel, 0, sizeof l->channel);
     start_sample(l, job);
 }
@@ -309,6 +318,8 @@ static void end_sample(lane *l, row_job *job)
     l->sample_id++;
     l->unsettled = 0;
     if (--l->samples_left > 0) {
+        if (job->pt->sampler == PT_SAMPLER_SOBOL)
+            sobol_pixel_next_sample(&l->sobol);
         start_sample(l, job);
         return;
     }

@@ -17,7 +17,8 @@
  *
  * Each pixel draws the same numbers in the same order as
  * path_trace_radiance() -- from its random stream, or with --sampler sobol
- * from its scrambled Sobol points as path_trace_sobol_sample() -- and makes
+ * from its scrambled Sobol points as path_trace_sobol_sample() (found from
+ * the sample before's, sobol_pixel.h) -- and makes
  * the same decisions (the same rays, hits, light samples and roulette), so
  * its samples are the lecture rung's but for rounding: the sum along a
  * path is added from the camera out instead of from the last bounce back
@@ -44,6 +45,17 @@
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "13-production/wide_trace.h"
+
+/* What chapter 13's program renders with unless told otherwise (and what
+ * make bench times as chapter 13): chapter 09's defaults, with the numbers
+ * and the roulette production renderers use -- each pixel's samples the
+ * points of its scrambled Sobol sequence (--sampler sobol), and a path
+ * ended with probability 1 - min(1, max throughput) from bounce 3 (--rr
+ * throughput; chapter 09's table of roulettes). Both leave the image's
+ * expectation alone and lower its error at the same time. */
+#define PRODUCTION_SAMPLER ((pt_sampler)PT_SAMPLER_SOBOL)
+#define PRODUCTION_ROULETTE ((pt_russian_roulette)RR_THROUGHPUT)
+path_tracer production_path_tracer_defaults(const pt_scene *scene);
 
 /* Can pt render eight paths at a time? If not, why (into why, if not NULL). */
 bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_size);

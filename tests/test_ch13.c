@@ -548,6 +548,75 @@ static void test_bvh4_triangle_test_matches_chapter_01(void **state)
     assert_true(hits > 20000);
 }
 
+/* The largest share of the root box's surface area that a leaf's box has:
+ * the share of rays through the tree that test that leaf's triangles. */
+static double bvh4_largest_leaf_share(const accel *a)
+{
+    const bvh4 *b = (const bvh4 *)a;
+    aabb root = {vec3_make(INFINITY, INFINITY, INFINITY), vec3_make(-INFINITY, -INFINITY, -INFINITY)};
+    double largest = 0.0;
+    for (int pass = 0; pass < 2; pass++)
+        for (int n = 0; n < (pass == 0 ? 1 : b->node_count); n++)
+            for (int k = 0; k < BVH4_WIDTH; k++) {
+                const bvh4_node *node = &b->nodes[n];
+                if (node->child[k] == BVH4_EMPTY)
+                    continue;
+                aabb box = {vec3_make(node->bounds[0][k], node->bounds[1][k], node->bounds[2][k]),
+                            vec3_make(node->bounds[3][k], node->bounds[4][k], node->bounds[5][k])};
+                if (pass == 0)
+                    root = aabb_union(root, box);
+                else if (bvh4_is_leaf(node->child[k]))
+                    largest = fmax(largest, aabb_surface_area(box) / aabb_surface_area(root));
+            }
+    return largest;
+}
+
+/* A room's walls get leaves of their own. Any two walls that meet span the
+ * whole room, so a leaf holding both has the room's box, and every ray in
+ * the room tests it; the SAH with C_t = 1 keeps such a leaf (splitting off
+ * one wall leaves the other's box as big). A wall alone has a box with at
+ * most 1/3 of the room's area (a face of the box, both sides), so with the
+ * lower C_t near the root no leaf should reach 1/2 of the root's area. And
+ * a ray from inside the room tests only the wall it leaves through: fewer
+ * triangle tests than with one leaf of walls, the same hits. The twin is
+ * the same tree without the lower C_t: the room-sized leaf, found. */
+static void test_bvh4_room_walls_get_leaves_of_their_own(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    assert_true(bench_scene_build(&sc, "cornell-10k"));
+    accel *tree = bvh4_build(&sc.triangles, BVH_SPLIT_SAH);
+    accel *twin = bvh4_build_with_top(&sc.triangles, BVH_SPLIT_SAH, 0.0f);
+    assert_true(bvh4_largest_leaf_share(tree) < 0.5);
+    assert_true(bvh4_largest_leaf_share(twin) > 0.9);
+    pcg32 rng = pcg32_for_pixel(13, 24);
+    ray_counters counters[2] = {{0}, {0}};
+    int rays = 0;
+    for (int i = 0; i < 4096; i++) {
+        vec3 origin = vec3_make(20.0f + 510.0f * pcg32_float(&rng), 20.0f + 500.0f * pcg32_float(&rng),
+                                20.0f + 520.0f * pcg32_float(&rng));
+        vec3 direction = vec3_make(2 * pcg32_float(&rng) - 1, 2 * pcg32_float(&rng) - 1, 2 * pcg32_float(&rng) - 1);
+        if (vec3_dot(direction, direction) > 1.0f || vec3_dot(direction, direction) < 1e-4f)
+            continue;
+        ray r = ray_make(origin, direction);
+        rays++;
+        hit_record h[2];
+        bool found[2] = {accel_closest_hit(tree, r, &h[0], &counters[0]), accel_closest_hit(twin, r, &h[1], &counters[1])};
+        assert_int_equal(found[0], found[1]);
+        if (found[0]) {
+            assert_int_equal(h[0].shape_id, h[1].shape_id);
+            assert_true(h[0].t == h[1].t);
+        }
+    }
+    /* the twin: every ray starts in the room leaf's box and tests its 8
+     * triangles; the tree: 0.39 times as many tests */
+    assert_true(counters[1].primitive_tests >= 8 * (uint64_t)rays);
+    assert_true((double)counters[0].primitive_tests < 0.75 * (double)counters[1].primitive_tests);
+    accel_destroy(tree);
+    accel_destroy(twin);
+    pt_scene_free(&sc);
+}
+
 static void test_bvh4_empty_set_builds_and_misses(void **state)
 {
     (void)state;
@@ -2539,6 +2608,7 @@ int main(void)
         cmocka_unit_test(test_bvh4_kernels_give_identical_answers),
         cmocka_unit_test(test_bvh4_slab_test_matches_chapter_03),
         cmocka_unit_test(test_bvh4_triangle_test_matches_chapter_01),
+        cmocka_unit_test(test_bvh4_room_walls_get_leaves_of_their_own),
         cmocka_unit_test(test_bvh4_empty_set_builds_and_misses),
         cmocka_unit_test(test_flat_equals_brute_force_bit_for_bit),
         cmocka_unit_test(test_flat_twins_are_caught),

@@ -62,6 +62,7 @@ typedef struct {
     int max_depth;
     bvh_split split;
     bvh_sah_params sah;
+    float root_area; /* the root box's, for sah.top_area_fraction */
 } builder;
 
 /* The SAH counts a leaf's triangles in blocks of sah.leaf_block: a 4-wide
@@ -259,6 +260,9 @@ static bool split_sah(builder *b, int begin, int end, const box3 *box, const box
         }
         /* Sweep the planes between bins, once from each side. */
         float node_area = box3_area(box);
+        float traversal_cost = b->sah.top_area_fraction > 0.0f && node_area >= b->sah.top_area_fraction * b->root_area
+                                   ? b->sah.top_traversal_cost
+                                   : b->sah.traversal_cost;
         for (int axis = 0; axis < 3; axis++) {
             if (!binned[axis])
                 continue;
@@ -281,7 +285,7 @@ static bool split_sah(builder *b, int begin, int end, const box3 *box, const box
                 n += bins[axis][k].count;
                 if (n == 0 || right_count[k + 1] == 0)
                     continue; /* one side empty: not a split */
-                float cost = b->sah.traversal_cost * node_area +
+                float cost = traversal_cost * node_area +
                              BVH_SAH_INTERSECTION_COST * (box3_area(&left) * sah_blocks(b, n) +
                                                           right_area[k + 1] * sah_blocks(b, right_count[k + 1]));
                 if (cost < best_cost) {
@@ -340,6 +344,8 @@ static void build_node(builder *b, int node_index, int begin, int end, int depth
         box3_grow(&centroids, c, c);
     }
     node->box = box3_to_aabb(&box);
+    if (depth == 0)
+        b->root_area = box3_area(&box);
 
     /* Recursively split set of objects in two subsets */
     int axis = 0, mid = begin;
@@ -448,13 +454,13 @@ static bvh *bvh_alloc(const triangle_set *set)
 
 accel *bvh_build(const triangle_set *set, bvh_split split)
 {
-    bvh_sah_params sah = {BVH_SAH_TRAVERSAL_COST, 1, BVH_SAH_MAX_LEAF_SIZE};
+    bvh_sah_params sah = {BVH_SAH_TRAVERSAL_COST, 1, BVH_SAH_MAX_LEAF_SIZE, 0.0f, 0.0f};
     return bvh_build_with(set, split, &sah);
 }
 
 accel *bvh_build_max_leaf(const triangle_set *set, int max_leaf_size)
 {
-    bvh_sah_params sah = {BVH_SAH_TRAVERSAL_COST, 1, max_leaf_size > 0 ? max_leaf_size : 1};
+    bvh_sah_params sah = {BVH_SAH_TRAVERSAL_COST, 1, max_leaf_size > 0 ? max_leaf_size : 1, 0.0f, 0.0f};
     return bvh_build_with(set, BVH_SPLIT_SAH, &sah);
 }
 

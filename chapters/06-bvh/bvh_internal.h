@@ -90,6 +90,10 @@ typedef struct {
     float traversal_cost; /* C_t, with C_i = 1 */
     int leaf_block;       /* a leaf costs C_i per started block of this many triangles */
     int max_leaf_size;    /* split larger sets even when the SAH prefers a leaf */
+    /* C_t for the sets whose box has at least top_area_fraction of the
+     * root's surface area (none if it is 0): the 4-wide BVH splits the
+     * few large sets near the root more eagerly (bvh4_build.c says why). */
+    float top_area_fraction, top_traversal_cost;
 } bvh_sah_params;
 
 accel *bvh_build_with(const triangle_set *set, bvh_split split, const bvh_sah_params *sah);

@@ -95,9 +95,10 @@ wide_scene_tracers wide_scene_tracers_for(const pt_scene *sc)
  * light, its error bound, normal, radiance and pdf per unit area) and
  * writes (each lane's contribution, times its throughput, and its shadow
  * ray); what bounce_math reads (p and its error bound, ng, n, wo, albedo,
- * throughput again; the hemisphere's two numbers,
- * 1 / P_RR) and writes (the next ray, its wo, and the throughput after the
- * bounce, in place; on the cosine and MIS rungs, the direction's pdf). bounce_math_avx writes all eight lanes; a lane whose
+ * throughput again; the hemisphere's two numbers, and the MIS rung's
+ * lobe number; 1 / P_RR) and writes (the next ray, its wo, and the
+ * throughput after the bounce, in place; on the cosine and MIS rungs, the
+ * direction's pdf). bounce_math_avx writes all eight lanes; a lane whose
  * path ends there is given its next camera ray (start_sample) before the
  * next step reads it. */
 typedef struct {
@@ -1316,7 +1317,8 @@ static void render_row(row_job *job)
             if (lanes[k].depth + 1 <= pt->max_depth && pick_light(&lanes[k], pt, job->pdf_area, &L, k))
                 picked |= 1 << k;
             bsdf_kind kind = sc->materials[material[k]].kind;
-            bounce |= lecture ? roll_bounce(&lanes[k], pt, &L, k, kind) : roll_bounce_iterative(&lanes[k], pt, &L, k, kind);
+            bounce |= lecture ? roll_bounce(&lanes[k], pt, &L, k, kind)
+                              : roll_bounce_iterative(&lanes[k], pt, &L, k, kind);
         }
 #if WIDE_HAVE_AVX
         if ((picked & diffuse) != 0 && job->avx)
@@ -1338,7 +1340,8 @@ static void render_row(row_job *job)
                 if (lanes[k].depth + 1 <= pt->max_depth)
                     point_lights_lane(job, &L, k, &sc->materials[material[k]]);
             }
-        bounce = lecture ? bounce_diffuse(job, &L, bounce & diffuse) : bounce_diffuse_iterative(job, &L, bounce & diffuse);
+        bounce = lecture ? bounce_diffuse(job, &L, bounce & diffuse)
+                         : bounce_diffuse_iterative(job, &L, bounce & diffuse);
         job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)bounce);
         for (int left = aside_on; left != 0; left &= left - 1) { /* the lanes kept aside, back */
             int k = __builtin_ctz((unsigned)left);

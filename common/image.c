@@ -254,6 +254,48 @@ static exr_result_t exr_define_rgb(exr_context_t ctxt, const image *img)
     return rv;
 }
 
+/* ZIP's rule for a chunk that does not shrink: store its packed bytes as
+ * they are, and a reader, seeing a chunk as long as its pixels, takes them
+ * raw. OpenEXR's Core library before 3.2 breaks the rule when the deflated
+ * chunk comes out exactly as long as the pixels: it stores the deflated
+ * bytes under the raw length, and every reader then decodes them as pixels
+ * (garbage up to 1e38 and NaN in one 16-row block of a noisy render). So
+ * the library's compressor runs inside this one, which stores the packed
+ * bytes itself whenever the result is not shorter, or did not succeed:
+ * always a valid ZIP chunk. */
+static bool exr_raw_fallback = true; /* image_exr_raw_fallback(); the tests' twin turns it off */
+static _Atomic long exr_chunks_raw, exr_chunks_raw_exactly; /* image_exr_raw_chunks() */
+
+static exr_result_t exr_compress_or_store(exr_encode_pipeline_t *encoder)
+{
+    exr_result_t (*library_compress)(exr_encode_pipeline_t *) = (exr_result_t(*)(exr_encode_pipeline_t *))(
+        uintptr_t)encoder->encoding_user_data;
+    exr_result_t rv = library_compress(encoder);
+    if (rv == EXR_ERR_SUCCESS && encoder->compressed_bytes < encoder->packed_bytes)
+        return rv;
+    if (encoder->compressed_buffer == NULL || encoder->compressed_alloc_size < encoder->packed_bytes)
+        return rv == EXR_ERR_SUCCESS ? EXR_ERR_OUT_OF_MEMORY : rv;
+    exr_chunks_raw++;
+    exr_chunks_raw_exactly += rv == EXR_ERR_SUCCESS && encoder->compressed_bytes == encoder->packed_bytes &&
+                              memcmp(encoder->compressed_buffer, encoder->packed_buffer, encoder->packed_bytes) != 0;
+    if (encoder->compressed_buffer != encoder->packed_buffer) {
+        if (exr_raw_fallback)
+            memcpy(encoder->compressed_buffer, encoder->packed_buffer, encoder->packed_bytes);
+        else /* the twin: a raw chunk with other bytes than the pixels' */
+            memset(encoder->compressed_buffer, 0xA5, encoder->packed_bytes);
+    }
+    encoder->compressed_bytes = encoder->packed_bytes;
+    return EXR_ERR_SUCCESS;
+}
+
+void image_exr_raw_fallback(bool on) { exr_raw_fallback = on; }
+
+void image_exr_raw_chunks(long *raw, long *deflated_to_raw_length)
+{
+    *raw = exr_chunks_raw;
+    *deflated_to_raw_length = exr_chunks_raw_exactly;
+}
+
 /* After exr_write_header: encode and write every chunk in order. The
  * pipeline is initialised on the first chunk (which allocates its buffers)
  * and only updated for the rest, so the buffers are reused; the default
@@ -282,6 +324,10 @@ static exr_result_t exr_write_rgb_chunks(exr_context_t ctxt, const image *img)
         } else {
             rv = exr_encoding_update(ctxt, 0, &chunk, &encoder);
             exr_point_encoder(&encoder, img, chunk.start_y);
+        }
+        if (encoder.compress_fn != NULL && encoder.compress_fn != exr_compress_or_store) { /* NULL: no compression */
+            encoder.encoding_user_data = (void *)(uintptr_t)encoder.compress_fn;
+            encoder.compress_fn = exr_compress_or_store;
         }
         if (rv == EXR_ERR_SUCCESS)
             rv = exr_encoding_run(ctxt, 0, &encoder);

@@ -50,6 +50,13 @@ static inline void image_set(image *img, int x, int y, vec3 c)
 /* Each returns true on success; on failure false, with one line naming the
  * file and the reason in err, and no file left behind. */
 bool image_write_exr(const image *img, const char *path, char *err, size_t err_size);
+/* For the tests: how many ZIP chunks image_write_exr has stored raw
+ * because deflating did not shrink them, and how many of those deflated to
+ * exactly their raw length (the case older OpenEXR libraries store wrong);
+ * and the twin: false stores such chunks with other bytes than the
+ * pixels'. Not thread-safe. */
+void image_exr_raw_chunks(long *raw, long *deflated_to_raw_length);
+void image_exr_raw_fallback(bool on);
 bool image_read_exr(image *out, const char *path, char *err, size_t err_size);
 /* exposure_stops: the preview shows radiance * 2^exposure_stops. */
 bool image_write_png(const image *img, const char *path, float exposure_stops, char *err, size_t err_size);

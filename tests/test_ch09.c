@@ -1620,6 +1620,26 @@ static double true_over_estimated(const estimate_image *e, const estimate_image 
     return estimated > 0.0 ? sqrt(relmse) / estimated : INFINITY;
 }
 
+/* One NaN pixel makes the measured error NaN, not 0: a broken image (a
+ * corrupt EXR read back) must not score as a perfect one in an equal-time
+ * table. The twin, the same image without the NaN, measures 0. */
+static void test_error_of_an_image_with_a_nan_is_not_zero(void **state)
+{
+    (void)state;
+    estimate_image reference = {.mean = image_make(4, 4), .standard_error = image_make(4, 4)};
+    image broken = image_make(4, 4);
+    for (size_t i = 0; i < (size_t)4 * 4 * 3; i++)
+        reference.mean.rgb[i] = broken.rgb[i] = 0.5f;
+    double rmse, relmse, twin_rmse, twin_relmse;
+    experiment_error(&broken, &reference, &twin_rmse, &twin_relmse);
+    broken.rgb[17] = NAN;
+    experiment_error(&broken, &reference, &rmse, &relmse);
+    assert_true(isnan(rmse) && isnan(relmse));
+    assert_true(twin_rmse == 0.0 && twin_relmse == 0.0);
+    image_free(&broken);
+    estimate_image_free(&reference);
+}
+
 static void test_target_error_is_reached_not_assumed(void **state)
 {
     (void)state;
@@ -1744,6 +1764,7 @@ static void test_an_exported_scene_reads_back_the_same(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_error_of_an_image_with_a_nan_is_not_zero),
         cmocka_unit_test(test_target_error_is_reached_not_assumed),
         cmocka_unit_test(test_a_scene_without_light_is_reported),
         cmocka_unit_test(test_games101_assignment_7_scene_file),

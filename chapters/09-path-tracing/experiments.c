@@ -306,8 +306,10 @@ void experiment_error(const image *img, const estimate_image *ref, double *rmse,
         sum += squared;
         sum_relative += squared / (r * r + RELATIVE_ERROR_EPSILON);
     }
-    *rmse = sqrt(fmax(0.0, sum / (double)n));
-    *relmse = fmax(0.0, sum_relative / (double)n);
+    /* A NaN pixel makes the error NaN, never 0 (fmax would pick 0 over it),
+     * so that a broken image cannot score as a perfect one. */
+    *rmse = isnan(sum) ? (double)NAN : sqrt(fmax(0.0, sum / (double)n));
+    *relmse = isnan(sum_relative) ? (double)NAN : fmax(0.0, sum_relative / (double)n);
 }
 
 /* A CSV is written as "<path>.tmp" and renamed into place only when every

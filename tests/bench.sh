@@ -107,8 +107,8 @@ if ! command -v blender > /dev/null 2>&1; then
 else
     blender --version 2> /dev/null | head -1
     MANIFEST=$OUT/runs-$MODE.csv
-    # bench_scenes' arguments for a manifest row's renderer: ch13-mis is
-    # chapter 13's renderer on the MIS rung (--integrator mis)
+    # bench_scenes' arguments for a manifest row's renderer: ch13-lecture
+    # is chapter 13's renderer on the lecture rung (--integrator lecture)
     ours_args() {
         case $2 in
         "$1"-lecture | "$1"-cosine | "$1"-mis) OURS="--renderer $1 --integrator ${2#"$1"-}" ;;
@@ -123,12 +123,12 @@ else
             --threads 2 --out "$ref" || exit 1
         ln -sf "$(basename "$ref")" "$OUT/ref/$s.exr"
         ln -sf "$(basename "$ref" .exr)-stderr.exr" "$OUT/ref/$s-stderr.exr"
-        # ours (its program's rung, and chapter 09's MIS rung eight paths at a
+        # ours (its program's MIS rung, and the lecture rung eight paths at a
         # time), Cycles, chapter 09's MIS, in turn at each sample count and
         # seed (A B C D A B C D ...)
         for spp in $CYCLES_SPP; do
             for seed in $SEEDS; do
-                for r in ch13 ch13-mis cycles ch09-mis; do
+                for r in ch13 ch13-lecture cycles ch09-mis; do
                     img=$OUT/runs/$s-$r-$spp-$seed.exr
                     if [ $r = cycles ]; then
                         blender -b --factory-startup -P tests/bench_cycles.py -- --scene "$scene" --spp "$spp" \
@@ -146,7 +146,7 @@ else
         # ours is faster per sample: more samples, so that its curve reaches Cycles' CPU times
         for spp in $OURS_EXTRA_SPP; do
             for seed in $SEEDS; do
-                for r in ch13 ch13-mis; do
+                for r in ch13 ch13-lecture; do
                     ours_args ch13 $r
                     # shellcheck disable=SC2086
                     "$BIN/bench_scenes" --render "$scene" $OURS --spp "$spp" --width "$CYCLES_WIDTH" \

@@ -216,11 +216,11 @@ static bool renderer_available(const bench_scene *b, renderer_kind r)
 
 /* --sampler and --integrator: chapter 13's renderers' numbers and rung */
 static pt_sampler bench_sampler = PRODUCTION_SAMPLER;
-static pt_integrator bench_integrator;
+static pt_integrator bench_integrator = PRODUCTION_INTEGRATOR;
 
-/* The path tracer renderer r runs: chapter 13's program's (the lecture
- * rung with Sobol samples and roulette on throughput from bounce 3, at most
- * 64 bounces: production_path_tracer_defaults; --sampler and --integrator
+/* The path tracer renderer r runs: chapter 13's program's (the MIS rung
+ * with Sobol samples and roulette on throughput from bounce 3, at most 64
+ * bounces: production_path_tracer_defaults; --sampler and --integrator
  * change its numbers and rung), or chapter 09's MIS rung as chapter 09
  * runs it (random numbers, P_RR 0.8 from bounce 3). The scene's structure
  * is switched to the renderer's. */
@@ -416,8 +416,8 @@ static void usage(void)
            "  --csv FILE       with --speed: the table as CSV too\n"
            "  --sampler random|sobol  chapter 13's numbers (default sobol, its program's); random names its\n"
            "                   manifest rows NAME-random\n"
-           "  --integrator lecture|cosine|mis  chapter 13's rung (default lecture, its program's); another names\n"
-           "                   its manifest rows NAME-RUNG (ch13-mis, ch13-mis-random, ...)\n");
+           "  --integrator lecture|cosine|mis  chapter 13's rung (default mis, its program's); another names\n"
+           "                   its manifest rows NAME-RUNG (ch13-lecture, ch13-lecture-random, ...)\n");
 }
 
 static bool parse_renderer(const char *name, renderer_kind *out)
@@ -551,7 +551,7 @@ static bool speed_one(const char *name, const bench_options *o, char *err, size_
 }
 
 /* The renderer's name in the manifest: chapter 13's with the rung and the
- * numbers where they are not its program's (ch13-mis, ch13-random,
+ * numbers where they are not its program's (ch13-lecture, ch13-random,
  * ch13-cosine-random). */
 static void row_name(const bench_options *o, char *out, size_t size)
 {

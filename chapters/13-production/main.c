@@ -178,7 +178,7 @@ int main(int argc, char **argv)
          8, 100000000},
         CLI_CAMERA_FLAGS(f.view),
         {"--walls", CLI_CHOICE, &f.walls, NULL, "on (default): shadow rays inside a room skip its walls", 0, 0},
-        {"--integrator", CLI_CHOICE, &f.integrator, NULL, "chapter 09's rung (default lecture, or the scene file's): "
+        {"--integrator", CLI_CHOICE, &f.integrator, NULL, "chapter 09's rung (default mis, or the scene file's): "
                                                           "each eight paths at a time", 0, 0},
         {"--rr", CLI_CHOICE, &f.rr, NULL, "Russian roulette: throughput (default, from --rr-start), fixed (P_RR 0.8), albedo or off", 0,
          0},

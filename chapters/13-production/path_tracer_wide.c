@@ -179,6 +179,7 @@ path_tracer production_path_tracer_defaults(const pt_scene *scene)
     path_tracer pt = path_tracer_defaults(scene);
     pt.sampler = PRODUCTION_SAMPLER;
     pt.russian_roulette = PRODUCTION_ROULETTE;
+    pt.integrator = PRODUCTION_INTEGRATOR;
     return pt;
 }
 

@@ -57,14 +57,17 @@
 #include "13-production/wide_trace.h"
 
 /* What chapter 13's program renders with unless told otherwise (and what
- * make bench times as chapter 13): chapter 09's defaults, with the numbers
- * and the roulette production renderers use -- each pixel's samples the
- * points of its scrambled Sobol sequence (--sampler sobol), and a path
- * ended with probability 1 - min(1, max throughput) from bounce 3 (--rr
- * throughput; chapter 09's table of roulettes). Both leave the image's
- * expectation alone and lower its error at the same time. */
+ * make bench times as chapter 13): chapter 09's defaults, with the rung,
+ * the numbers and the roulette production renderers use -- chapter 09's
+ * MIS rung (--integrator mis: directions from the BSDF, light and BSDF
+ * samples weighed by the power heuristic), each pixel's samples the points
+ * of its scrambled Sobol sequence (--sampler sobol), and a path ended with
+ * probability 1 - min(1, max throughput) from bounce 3 (--rr throughput;
+ * chapter 09's table of roulettes). None changes the image's expectation;
+ * each lowers its error at the same time. */
 #define PRODUCTION_SAMPLER ((pt_sampler)PT_SAMPLER_SOBOL)
 #define PRODUCTION_ROULETTE ((pt_russian_roulette)RR_THROUGHPUT)
+#define PRODUCTION_INTEGRATOR ((pt_integrator)PT_MIS)
 path_tracer production_path_tracer_defaults(const pt_scene *scene);
 
 /* Can pt render eight paths at a time? If not, why (into why, if not NULL). */

@@ -79,17 +79,26 @@ static void release(atomic_file *f)
     f->stream = NULL;
 }
 
-/* Creates the temporary file. Not mkstemp: it creates the file with mode
- * 0600, and the finished file should get the usual 0666 & ~umask like any
- * other the program writes. */
+/* Creates the temporary file, its name tracked before the file exists: a
+ * signal between the two would otherwise leave a file the handler does not
+ * know (the handler may run on any thread, so blocking signals here would
+ * not close the gap). Not mkstemp: it creates the file with mode 0600, and
+ * the finished file should get the usual 0666 & ~umask like any other the
+ * program writes. */
 static int create_temp(atomic_file *f, size_t size)
 {
     int fd = -1;
     for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
         unsigned n = atomic_fetch_add(&temp_counter, 1u);
         snprintf(f->temp_path, size, "%s.tmp.%ld.%u", f->path, (long)getpid(), n);
+        track(f->temp_path, true);
         fd = open(f->temp_path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-        if (fd < 0 && errno != EEXIST)
+        if (fd >= 0)
+            break;
+        int failure = errno;
+        track(f->temp_path, false);
+        errno = failure;
+        if (failure != EEXIST)
             break;
     }
     return fd;
@@ -103,8 +112,6 @@ bool atomic_file_open(atomic_file *f, const char *path, char *err, size_t err_si
     f->temp_path = malloc(size);
     install_handlers();
     int fd = f->path != NULL && f->temp_path != NULL ? create_temp(f, size) : (errno = ENOMEM, -1);
-    if (fd >= 0)
-        track(f->temp_path, true);
     if (fd >= 0 && (f->stream = fdopen(fd, "w")) == NULL) {
         int failure = errno;
         close(fd);

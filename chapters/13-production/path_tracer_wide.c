@@ -511,6 +511,20 @@ static int roll_bounce(lane *l, const path_tracer *pt, vertex_lanes *L, int k, b
     return 1 << k;
 }
 
+/* A diffuse lane's next ray along wi, and its throughput times weight
+ * (and the roulette's 1 / q): what every rung's bounce writes. */
+static void lane_store_bounce(vertex_lanes *L, int k, vec3 wi, vec3 weight)
+{
+    vec3 p = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]), ng = vec3_make(L->ng[0][k], L->ng[1][k], L->ng[2][k]);
+    vec3 throughput = vec3_make(L->throughput[0][k], L->throughput[1][k], L->throughput[2][k]);
+    ray next = ray_spawn(p, L->p_error[k], ng, wi);
+    lanes_set(L->ray.origin, k, next.origin);
+    L->ray.t_min[k] = next.t_min;
+    lanes_set(L->ray.direction, k, wi);
+    lanes_set(L->throughput, k, vec3_scale(vec3_mul(throughput, weight), L->rr_scale[k]));
+    lanes_set(L->wo, k, vec3_neg(wi));
+}
+
 /* shade()'s bounce for one lane, exactly: wi uniform on the hemisphere,
  * f cos / pdf, the throughput after it; the lane's bit if that is not black. */
 static int bounce_math_lane(vertex_lanes *L, int k)
@@ -527,12 +541,7 @@ static int bounce_math_lane(vertex_lanes *L, int k)
     vec3 weight = vec3_scale(f, local.z / uniform_hemisphere_pdf());
     if (vec3_is_black(weight))
         return 0;
-    ray next = ray_spawn(AT(p), L->p_error[k], AT(ng), wi);
-    lanes_set(L->ray.origin, k, next.origin);
-    L->ray.t_min[k] = next.t_min;
-    lanes_set(L->ray.direction, k, wi);
-    lanes_set(L->throughput, k, vec3_scale(vec3_mul(AT(throughput), weight), L->rr_scale[k]));
-    lanes_set(L->wo, k, vec3_neg(wi));
+    lane_store_bounce(L, k, wi, weight);
     return 1 << k;
 #undef AT
 }
@@ -627,12 +636,7 @@ static int bounce_cosine_lane(vertex_lanes *L, int k, bool mis)
     }
     if (vec3_is_black(weight))
         return 0;
-    ray next = ray_spawn(AT(p), L->p_error[k], AT(ng), wi);
-    lanes_set(L->ray.origin, k, next.origin);
-    L->ray.t_min[k] = next.t_min;
-    lanes_set(L->ray.direction, k, wi);
-    lanes_set(L->throughput, k, vec3_scale(vec3_mul(AT(throughput), weight), L->rr_scale[k]));
-    lanes_set(L->wo, k, vec3_neg(wi));
+    lane_store_bounce(L, k, wi, weight);
     L->pdf[k] = pdf;
     return 1 << k;
 #undef AT

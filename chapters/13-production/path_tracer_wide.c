@@ -395,6 +395,20 @@ static bool pick_light(lane *l, const path_tracer *pt, const float *pdf_area, ve
     return true;
 }
 
+/* Lane k's shadow ray, from its hit to its point on the light (ray_spawn_to:
+ * off both surfaces by their error bounds), into the lanes. */
+static void lane_store_shadow(vertex_lanes *L, int k)
+{
+    vec3 p = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]), ng = vec3_make(L->ng[0][k], L->ng[1][k], L->ng[2][k]);
+    vec3 x_light = vec3_make(L->x_light[0][k], L->x_light[1][k], L->x_light[2][k]);
+    vec3 n_light = vec3_make(L->n_light[0][k], L->n_light[1][k], L->n_light[2][k]);
+    ray shadow = ray_spawn_to(p, L->p_error[k], ng, x_light, L->x_error[k], n_light);
+    lanes_set(L->shadow_origin, k, shadow.origin);
+    lanes_set(L->shadow_direction, k, shadow.direction);
+    L->shadow_t_min[k] = shadow.t_min;
+    L->shadow_t_max[k] = shadow.t_max;
+}
+
 /* sample_direct_light()'s arithmetic for one lane, exactly: the mask bit
  * says whether the sample adds anything (light and surface face each
  * other, f is not black), and the contribution is what it adds, times the
@@ -422,11 +436,7 @@ static int light_math_lane(vertex_lanes *L, int k, bool mis)
     float weight = mis ? power_heuristic(pdf_light, cos_theta * INV_PI_F) : 1.0f;
     vec3 contribution = vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * weight));
     lanes_set(L->contribution, k, contribution);
-    ray shadow = ray_spawn_to(AT(p), L->p_error[k], AT(ng), AT(x_light), L->x_error[k], AT(n_light));
-    lanes_set(L->shadow_origin, k, shadow.origin);
-    lanes_set(L->shadow_direction, k, shadow.direction);
-    L->shadow_t_min[k] = shadow.t_min;
-    L->shadow_t_max[k] = shadow.t_max;
+    lane_store_shadow(L, k);
     return 1 << k;
 #undef AT
 }
@@ -826,11 +836,7 @@ static int light_math_surface_lane(vertex_lanes *L, int k, const pt_material *m,
     float weight = mis ? power_heuristic(pdf_light, bsdf_pdf(m, n, AT(wo), wi)) : 1.0f;
     lanes_set(L->contribution, k,
               vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * weight)));
-    ray shadow = ray_spawn_to(AT(p), L->p_error[k], AT(ng), AT(x_light), L->x_error[k], AT(n_light));
-    lanes_set(L->shadow_origin, k, shadow.origin);
-    lanes_set(L->shadow_direction, k, shadow.direction);
-    L->shadow_t_min[k] = shadow.t_min;
-    L->shadow_t_max[k] = shadow.t_max;
+    lane_store_shadow(L, k);
     return 1 << k;
 }
 

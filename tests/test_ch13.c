@@ -1592,6 +1592,42 @@ static void test_eight_paths_agree_with_chapter_09_on_every_scene(void **state)
         }
 }
 
+/* What the program and make bench run (production_path_tracer_defaults:
+ * the MIS rung, Sobol points, roulette on throughput), eight paths at a
+ * time on the production structures, against chapter 09's own render with
+ * the same settings, on the benchmark scenes themselves (bench_scenes.h)
+ * but the million-triangle one (the 100k's shape, whose two builds alone
+ * would take most of the suite's time under the sanitizers). The twin: the
+ * production render of the glossy and glass box with the metal block's F0
+ * halved. */
+enum { BENCHMARK_SCENE_CHECKS = 4 }; /* the Sidak family: one image check per scene */
+
+static void test_production_defaults_agree_with_chapter_09_on_the_benchmark_scenes(void **state)
+{
+    (void)state;
+    static const char *const names[BENCHMARK_SCENE_CHECKS] = {"cornell", "cornell-10k", "cornell-100k", "glossy-glass"};
+    for (int twin = 0; twin < 2; twin++)
+        for (int i = twin ? 3 : 0; i < BENCHMARK_SCENE_CHECKS; i++) {
+            pt_scene wide_sc, lecture_sc;
+            assert_true(bench_scene_build(&wide_sc, names[i]) && bench_scene_build(&lecture_sc, names[i]));
+            use_production(&wide_sc, true);
+            for (int m = 0; twin && m < wide_sc.material_count; m++)
+                if (wide_sc.materials[m].kind == BSDF_GLOSSY)
+                    wide_sc.materials[m].albedo = vec3_scale(wide_sc.materials[m].albedo, 0.5f);
+            path_tracer w = production_path_tracer_defaults(&wide_sc), l = production_path_tracer_defaults(&lecture_sc);
+            image_check c = wide_against_chapter_09(&w, &l, 301 + 2 * (uint64_t)i);
+            pt_scene_free(&wide_sc);
+            pt_scene_free(&lecture_sc);
+            if (twin) {
+                print_message("twin, %s, the metal's F0 halved: p = %.3g (image mean z = %.1f)\n", names[i], c.p, c.z);
+                assert_true(c.p < image_check_alpha(BENCHMARK_SCENE_CHECKS));
+            } else {
+                print_message("production defaults, %s: p = %.3g (image mean z = %.1f)\n", names[i], c.p, c.z);
+                assert_image_check(c, BENCHMARK_SCENE_CHECKS, names[i]);
+            }
+        }
+}
+
 /* The cosine and MIS rungs, eight paths at a time, against chapter 09's
  * trace_iterative() on the same scenes and the glowing room: with the
  * lecture's numbers and roulette (random, P_RR 0.8), and with the
@@ -2623,6 +2659,7 @@ int main(void)
         cmocka_unit_test(test_eight_paths_agree_with_chapter_09),
         cmocka_unit_test(test_eight_paths_same_bits_for_threads_and_lanes),
         cmocka_unit_test(test_eight_paths_agree_with_chapter_09_on_every_scene),
+        cmocka_unit_test(test_production_defaults_agree_with_chapter_09_on_the_benchmark_scenes),
         cmocka_unit_test(test_eight_paths_cosine_and_mis_agree_with_chapter_09),
         cmocka_unit_test(test_eight_paths_same_bits_for_threads_on_every_scene),
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),

@@ -199,6 +199,20 @@ static void warn_long(const cli_options *opts, const char *label, double one_thr
             mpi_split_ranks() > 1 ? " of all ranks" : "", PILOT_PIXELS, advice);
 }
 
+void program_warn_if_black(const cli_options *opts, const char *label, const image *img)
+{
+    size_t values = (size_t)img->width * (size_t)img->height * 3;
+    for (size_t i = 0; i < values; i++)
+        if (img->rgb[i] != 0.0f)
+            return;
+    if (!opts->quiet)
+        fprintf(stderr, "%s: warning: every pixel of the image is black: the camera sees nothing lit. Is it inside "
+                        "an object, under the floor or facing away? --eye and --target are in the scene's own "
+                        "coordinates; an OBJ exported from Blender is Y-up, so Blender's (x, y, z) is (x, z, -y) "
+                        "here\n",
+                label);
+}
+
 void program_warn_if_long(const cli_options *opts, const char *label, double one_thread_seconds)
 {
     warn_long(opts, label, one_thread_seconds,
@@ -324,6 +338,7 @@ int program_render_sampled(const cli_options *opts, const char *label, radiance_
     }
 
     char err[IMAGE_ERROR_SIZE];
+    program_warn_if_black(opts, label, &img);
     bool ok = image_write(&img, opts->out, opts->exposure, err, sizeof err);
     image_free(&img);
     if (!ok) {

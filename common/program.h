@@ -80,6 +80,11 @@ void program_note_accel(const char *name);
 double program_pilot_seconds(const render_job *job);
 void program_warn_if_long(const cli_options *opts, const char *label, double one_thread_seconds);
 
+/* After a render, a warning (unless --quiet) when every pixel is exactly
+ * black: almost never what was asked for, and most often a camera placed
+ * in another program's coordinates (inside an object, under the floor). */
+void program_warn_if_black(const cli_options *opts, const char *label, const image *img);
+
 /* A chapter's warning about something in the scene file it cannot show:
  * "label: file:line:col: warning: message". */
 void program_warn(const char *label, const scene_desc *d, int line, int column, const char *format, ...)

@@ -373,5 +373,26 @@ for program in "${programs[@]}"; do
     fi
 done
 
+# ---- a camera that sees nothing lit ---------------------------------------
+# Below the Cornell box and looking away from it, the camera sees only the
+# black sky: the render must say so (a camera placed in another program's
+# coordinates does exactly this), and the same render seen right must not.
+for p in 09-path-tracing 13-production; do
+    program=$bin/$p
+    case " ${programs[*]} " in *" $program "*) ;; *) continue ;; esac
+    fresh_dir
+    cases=$((cases + 2))
+    if ! "$program" --width 16 --height 12 --spp 2 --threads 1 --eye 278,-200,-300 --target 278,-200,0 \
+        --out "$dir/out.exr" > /dev/null 2> "$dir/.stderr" || ! grep -q "every pixel of the image is black" "$dir/.stderr"; then
+        failures=$((failures + 1))
+        echo "FAIL $p: a camera that sees only the black sky gives no warning"
+    fi
+    "$program" --width 16 --height 12 --spp 2 --threads 1 --out "$dir/out.exr" > /dev/null 2> "$dir/.stderr"
+    if grep -q "every pixel of the image is black" "$dir/.stderr"; then
+        failures=$((failures + 1))
+        echo "FAIL $p: the Cornell box seen right is called black"
+    fi
+done
+
 echo "bad input: $cases cases, $failures failed"
 [ $failures -eq 0 ]

@@ -171,6 +171,7 @@ static int render_progressively(const cli_options *opts, const chapter_flags *f,
     checkpoint_free(&resumed);
     bool ok = true;
     if (mpi_split_is_root()) { /* rank 0 writes */
+        program_warn_if_black(opts, PROGRAM, &e.mean);
         counters_path_for_image(opts->out, counters_path, sizeof counters_path);
         ok = image_write(&e.mean, opts->out, opts->exposure, err, sizeof err) &&
              counters_write_json(counters_path, &e.counters, e.seconds, NULL, err, sizeof err);

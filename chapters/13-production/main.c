@@ -37,6 +37,7 @@ static int render_eight_paths(const cli_options *opts, const path_tracer *pt, co
     if (!opts->quiet && (long)cam->width * cam->height >= 16384)
         program_warn_if_long(opts, "13-production", render_estimate_wide_pilot(pt, cam, opts->spp, opts->seed, 64));
     render_estimate_wide(pt, cam, opts->spp, opts->seed, opts->threads, &e);
+    program_warn_if_black(opts, "13-production", &e.mean);
     counters_path_for_image(opts->out, counters_path, sizeof counters_path);
     int status = 0;
     if (!image_write(&e.mean, opts->out, opts->exposure, err, sizeof err) ||

@@ -1477,11 +1477,7 @@ enum { EVERY_SCENE_CHECKS = 5, MESH_TRIANGLES = 2000 };
 static void build_feature_scene(pt_scene *sc)
 {
     pt_scene_init(sc);
-    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
-    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
-    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
-    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
-    pt_scene_add_cornell_room(sc, white, red, green, light);
+    pt_scene_add_painted_cornell_room(sc);
     pt_scene_add_sphere(sc, vec3_make(370, 120, 350), 120, pt_scene_add_material(sc, pt_mirror(vec3_splat(0.9f))),
                         false);
     pt_scene_add_sphere(sc, vec3_make(170, 90, 200), 90,

@@ -324,6 +324,16 @@ const vec3 PT_CORNELL_RED = {0.63f, 0.065f, 0.05f};
 const vec3 PT_CORNELL_GREEN = {0.14f, 0.45f, 0.091f};
 const vec3 PT_CORNELL_LIGHT = {17.0f, 12.0f, 4.0f};
 
+int pt_scene_add_painted_cornell_room(pt_scene *sc)
+{
+    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
+    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
+    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
+    pt_scene_add_cornell_room(sc, white, red, green, light);
+    return white;
+}
+
 void pt_scene_add_cornell_room(pt_scene *sc, int white, int red, int green, int light)
 {
     /* Floor, ceiling, back wall, right (green) and left (red) walls: the
@@ -362,11 +372,7 @@ static void cornell_tall_block(pt_scene *sc, int m)
 void pt_scene_build_cornell_box(pt_scene *sc)
 {
     pt_scene_init(sc);
-    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
-    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
-    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
-    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
-    pt_scene_add_cornell_room(sc, white, red, green, light);
+    int white = pt_scene_add_painted_cornell_room(sc);
     cornell_short_block(sc, white);
     cornell_tall_block(sc, white);
     pt_scene_finish(sc);

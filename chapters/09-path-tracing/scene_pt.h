@@ -218,6 +218,9 @@ extern const vec3 PT_CORNELL_WHITE, PT_CORNELL_RED, PT_CORNELL_GREEN, PT_CORNELL
  * green and red walls, the light in the ceiling, and the original camera;
  * millimetres. The rooms of pt_scene_build_cornell_box and of chapter 10. */
 void pt_scene_add_cornell_room(pt_scene *sc, int white, int red, int green, int light);
+/* The same room in its own paints, added as materials first (white, red,
+ * green, the light, in that order); returns the white's index. */
+int pt_scene_add_painted_cornell_room(pt_scene *sc);
 /* The Cornell box as measured (Cornell University Program of Computer
  * Graphics): white, red and green walls, a square light in the ceiling, a
  * short and a tall block; millimetres; the original camera. */

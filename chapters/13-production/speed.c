@@ -216,11 +216,7 @@ bool production_speed(int size, int spp, int repeats, const char *csv_path, char
 void production_scene_box_with_torus(pt_scene *sc, int triangles)
 {
     pt_scene_init(sc);
-    int white = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_WHITE));
-    int red = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_RED));
-    int green = pt_scene_add_material(sc, pt_diffuse(PT_CORNELL_GREEN));
-    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.65f), PT_CORNELL_LIGHT));
-    pt_scene_add_cornell_room(sc, white, red, green, light);
+    int white = pt_scene_add_painted_cornell_room(sc);
     /* 2 u v = triangles with u = 2 v: v = sqrt(triangles / 4) */
     int v = (int)lround(sqrt((double)(triangles > 8 ? triangles : 8) / 4.0)), u = 2 * v;
     mesh torus;

@@ -36,13 +36,13 @@ if [ "$MODE" = full ]; then
     ACCEL_SIZES="1024 10240 102400 1048576" ACCEL_ARGS="--reps 3"
     TABLE_ARGS="--width 256 --spp 16" EMBREE_PT_ARGS="--width 256 --spp 16 --reps 5"
     SPEED_ARGS="--width 256 --spp 16 --reps 5"
-    CYCLES_SCENES="cornell cornell-10k cornell-100k cornell-1m glossy-glass"
+    CYCLES_SCENES="cornell cornell-10k cornell-100k cornell-1m glossy-glass open-100k"
     CYCLES_WIDTH=128 REFERENCE_SPP=8192 CYCLES_SPP="16 64 256" OURS_EXTRA_SPP="1024" SEEDS="1 2"
 else
     ACCEL_SIZES="10240 102400" ACCEL_ARGS="--reps 1 --only bvh4-sah,bvh4-stream"
     TABLE_ARGS="--width 96 --spp 8" EMBREE_PT_ARGS="--width 64 --spp 8 --reps 3"
     SPEED_ARGS="--width 96 --spp 8 --reps 3"
-    CYCLES_SCENES="cornell-10k glossy-glass"
+    CYCLES_SCENES="cornell-10k glossy-glass open-100k"
     CYCLES_WIDTH=64 REFERENCE_SPP=1024 CYCLES_SPP="16 64" OURS_EXTRA_SPP="256" SEEDS="1"
 fi
 
@@ -50,7 +50,7 @@ echo "== make bench ($MODE): $(nproc) processors, load average $(cut -d' ' -f1-3
 START=$(date +%s)
 
 # The scene set, written once (the 1M mesh takes a few seconds).
-for s in cornell cornell-10k cornell-100k cornell-1m glossy-glass; do
+for s in cornell cornell-10k cornell-100k cornell-1m glossy-glass open-100k; do
     [ -f "$OUT/scenes/$s.scene" ] && [ "$OUT/scenes/$s.scene" -nt "$BIN/bench_scenes" ] ||
         "$BIN/bench_scenes" --write "$OUT/scenes" --scenes "$s" || exit 1
 done

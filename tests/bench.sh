@@ -16,8 +16,10 @@
 # quick (the default): small images, few repeats, the 1M-triangle mesh in
 # the speed table only: a few minutes on 2 cores. full (make bench
 # FULL=1): every size, larger images, more repeats, every scene in the
-# Cycles comparison: about an hour. `cycles` runs part 4 alone
-# (make bench-cycles). Everything lands in BUILD/bench/ and BUILD/data/.
+# Cycles comparison: about half an hour on 2 cores. `cycles` runs part 4
+# alone (make bench-cycles); SCENES="A B" in the environment (make bench
+# SCENES=...) limits part 4 to those scenes. Everything lands in
+# BUILD/bench/ and BUILD/data/.
 set -u
 # OpenMP's idle threads sleep instead of spinning. A program that runs on 2
 # threads and then on 1 keeps its second thread; spinning, it is charged to
@@ -45,6 +47,8 @@ else
     CYCLES_SCENES="cornell-10k glossy-glass open-100k"
     CYCLES_WIDTH=64 REFERENCE_SPP=1024 CYCLES_SPP="16 64" OURS_EXTRA_SPP="256" SEEDS="1"
 fi
+
+CYCLES_SCENES=${SCENES:-$CYCLES_SCENES}
 
 echo "== make bench ($MODE): $(nproc) processors, load average $(cut -d' ' -f1-3 /proc/loadavg)"
 START=$(date +%s)

@@ -16,8 +16,10 @@
 # quick (the default): small images, few repeats, the 1M-triangle mesh in
 # the speed table only: a few minutes on 2 cores. full (make bench
 # FULL=1): every size, larger images, more repeats, every scene in the
-# Cycles comparison: about an hour. `cycles` runs part 4 alone
-# (make bench-cycles). Everything lands in BUILD/bench/ and BUILD/data/.
+# Cycles comparison: about half an hour on 2 cores. `cycles` runs part 4
+# alone (make bench-cycles); SCENES="A B" in the environment (make bench
+# SCENES=...) limits part 4 to those scenes. Everything lands in
+# BUILD/bench/ and BUILD/data/.
 set -u
 # OpenMP's idle threads sleep instead of spinning. A program that runs on 2
 # threads and then on 1 keeps its second thread; spinning, it is charged to
@@ -36,21 +38,23 @@ if [ "$MODE" = full ]; then
     ACCEL_SIZES="1024 10240 102400 1048576" ACCEL_ARGS="--reps 3"
     TABLE_ARGS="--width 256 --spp 16" EMBREE_PT_ARGS="--width 256 --spp 16 --reps 5"
     SPEED_ARGS="--width 256 --spp 16 --reps 5"
-    CYCLES_SCENES="cornell cornell-10k cornell-100k cornell-1m glossy-glass"
+    CYCLES_SCENES="cornell cornell-10k cornell-100k cornell-1m glossy-glass open-100k"
     CYCLES_WIDTH=128 REFERENCE_SPP=8192 CYCLES_SPP="16 64 256" OURS_EXTRA_SPP="1024" SEEDS="1 2"
 else
     ACCEL_SIZES="10240 102400" ACCEL_ARGS="--reps 1 --only bvh4-sah,bvh4-stream"
     TABLE_ARGS="--width 96 --spp 8" EMBREE_PT_ARGS="--width 64 --spp 8 --reps 3"
     SPEED_ARGS="--width 96 --spp 8 --reps 3"
-    CYCLES_SCENES="cornell-10k glossy-glass"
+    CYCLES_SCENES="cornell-10k glossy-glass open-100k"
     CYCLES_WIDTH=64 REFERENCE_SPP=1024 CYCLES_SPP="16 64" OURS_EXTRA_SPP="256" SEEDS="1"
 fi
+
+CYCLES_SCENES=${SCENES:-$CYCLES_SCENES}
 
 echo "== make bench ($MODE): $(nproc) processors, load average $(cut -d' ' -f1-3 /proc/loadavg)"
 START=$(date +%s)
 
 # The scene set, written once (the 1M mesh takes a few seconds).
-for s in cornell cornell-10k cornell-100k cornell-1m glossy-glass; do
+for s in cornell cornell-10k cornell-100k cornell-1m glossy-glass open-100k; do
     [ -f "$OUT/scenes/$s.scene" ] && [ "$OUT/scenes/$s.scene" -nt "$BIN/bench_scenes" ] ||
         "$BIN/bench_scenes" --write "$OUT/scenes" --scenes "$s" || exit 1
 done

@@ -13,7 +13,8 @@
 # glass of index Ni, Ks larger than Kd GGX metal (F0 = Ks, alpha =
 # sqrt(2 / (Ns + 2))), else Lambertian Kd. Matched settings: CPU device,
 # no denoiser, no adaptive sampling, no clamping, no glossy filter, no
-# light threshold, a 1-pixel box filter, black world, the same eye, target
+# light threshold, a 1-pixel box filter, the scene's uniform world (black
+# unless it has a background line), the same eye, target
 # and vertical field of view, --max-bounces on every kind of bounce, a
 # fixed seed. Cycles keeps what makes it Cycles: its sampler, its Russian
 # roulette, its light sampling.
@@ -48,8 +49,8 @@ def parse_args():
 
 
 def read_scene(path):
-    """The camera (eye, target, up, fov) and the OBJ path of a scene file."""
-    camera, obj = None, None
+    """The camera (eye, target, up, fov), the OBJ path and the background of a scene file."""
+    camera, obj, background = None, None, (0.0, 0.0, 0.0)
     with open(path) as f:
         for number, line in enumerate(f, 1):
             words = shlex.split(line.split("#", 1)[0])
@@ -65,11 +66,13 @@ def read_scene(path):
                 camera = (keys["eye"], keys["target"], keys.get("up", [0, 1, 0]), keys.get("fov", [40])[0])
             elif words[0] == "mesh":
                 obj = os.path.join(os.path.dirname(path), words[words.index("path") + 1])
+            elif words[0] == "background":
+                background = tuple(float(w) for w in words[1:4])
             else:
-                sys.exit("%s:%d: bench_cycles.py reads only camera and mesh lines" % (path, number))
+                sys.exit("%s:%d: bench_cycles.py reads only camera, mesh and background lines" % (path, number))
     if camera is None or obj is None:
         sys.exit("%s: needs a camera and a mesh line" % path)
-    return camera, obj
+    return camera, obj, background
 
 
 def read_mtl(path):
@@ -147,7 +150,7 @@ def build_material(mat, m):
         links.new(diffuse.outputs["BSDF"], out.inputs["Surface"])
 
 
-def set_up_scene(args, camera, obj_path):
+def set_up_scene(args, camera, obj_path, background):
     for o in list(bpy.data.objects):
         bpy.data.objects.remove(o, do_unlink=True)
     bpy.ops.wm.obj_import(filepath=obj_path, forward_axis="NEGATIVE_Z", up_axis="Y")
@@ -171,7 +174,7 @@ def set_up_scene(args, camera, obj_path):
     world = scene.world or bpy.data.worlds.new("bench")
     scene.world = world
     world.use_nodes = False
-    world.color = (0.0, 0.0, 0.0)
+    world.color = background  # the environment's radiance, uniform (black unless the scene says)
 
     r, c = scene.render, scene.cycles
     r.engine = "CYCLES"
@@ -211,8 +214,8 @@ def set_up_scene(args, camera, obj_path):
 
 def main():
     args = parse_args()
-    camera, obj_path = read_scene(args.scene)
-    set_up_scene(args, camera, obj_path)
+    camera, obj_path, background = read_scene(args.scene)
+    set_up_scene(args, camera, obj_path, background)
     cpu0, wall0 = time.process_time(), time.perf_counter()
     bpy.ops.render.render()
     cpu, wall = time.process_time() - cpu0, time.perf_counter() - wall0

@@ -1597,16 +1597,17 @@ static void test_eight_paths_agree_with_chapter_09_on_every_scene(void **state)
  * shape. The twin: the production render of the glossy and glass box with
  * the metal block's F0 halved. */
 #if defined(__SANITIZE_ADDRESS__)
-enum { BENCHMARK_SCENE_CHECKS = 4 }; /* the Sidak family: one image check per scene */
+enum { BENCHMARK_SCENE_CHECKS = 5 }; /* the Sidak family: one image check per scene */
 #else
-enum { BENCHMARK_SCENE_CHECKS = 5 };
+enum { BENCHMARK_SCENE_CHECKS = 6 };
 #endif
 enum { BENCHMARK_GLOSSY_GLASS = 3 };
 
 static void test_production_defaults_agree_with_chapter_09_on_the_benchmark_scenes(void **state)
 {
     (void)state;
-    static const char *const names[] = {"cornell", "cornell-10k", "cornell-100k", "glossy-glass", "cornell-1m"};
+    static const char *const names[] = {"cornell",      "cornell-10k", "cornell-100k",
+                                        "glossy-glass", "open-100k",   "cornell-1m"};
     for (int twin = 0; twin < 2; twin++)
         for (int i = twin ? BENCHMARK_GLOSSY_GLASS : 0; i < (twin ? BENCHMARK_GLOSSY_GLASS + 1 : BENCHMARK_SCENE_CHECKS);
              i++) {
@@ -2572,16 +2573,59 @@ static void test_sobol_pixel_draws_chapter_09s_numbers(void **state)
     sobol_pixel_use_simd(true);
 }
 
+/* bench_scene_write() of `name` into dir, loaded back through the scene
+ * file: the same corners, materials, camera, lights and environment. */
+static void written_scene_loads_back(const char *dir, const char *name)
+{
+    pt_scene sc, back;
+    assert_true(bench_scene_build(&sc, name));
+    char path[256], err[1024];
+    assert_true(bench_scene_write(dir, name, err, sizeof err));
+    snprintf(path, sizeof path, "%s/%s.scene", dir, name);
+    scene_desc desc;
+    scene_desc_init(&desc);
+    pt_scene_report_materials(NULL);
+    assert_true(scene_desc_load(&desc, path, err, sizeof err));
+    assert_true(pt_scene_from_desc(&back, &desc, "test", err, sizeof err));
+    assert_int_equal(back.triangles.count, sc.triangles.count);
+    for (int i = 0; i < sc.geometry.face_count; i++) {
+        for (int c = 0; c < 3; c++) {
+            vec3 p = mesh_vertex(&sc.geometry, i, c), q = mesh_vertex(&back.geometry, i, c);
+            assert_true(p.x == q.x && p.y == q.y && p.z == q.z);
+        }
+        const pt_material *a = &sc.materials[sc.geometry.faces[i].material];
+        const pt_material *b = &back.materials[back.geometry.faces[i].material];
+        assert_int_equal(a->kind, b->kind);
+        assert_true(a->albedo.x == b->albedo.x && a->albedo.y == b->albedo.y && a->albedo.z == b->albedo.z);
+        assert_true(a->emission.x == b->emission.x && a->emission.z == b->emission.z);
+    }
+    assert_true(back.eye.z == sc.eye.z && back.vertical_fov_degrees == sc.vertical_fov_degrees);
+    assert_int_equal(back.emitter_count, sc.emitter_count);
+    assert_true(back.environment.x == sc.environment.x && back.environment.y == sc.environment.y &&
+                back.environment.z == sc.environment.z);
+    scene_desc_free(&desc);
+    pt_scene_free(&back);
+    pt_scene_free(&sc);
+    const char *suffixes[] = {".scene", ".obj", ".mtl"};
+    for (int k = 0; k < 3; k++) {
+        snprintf(path, sizeof path, "%s/%s%s", dir, name, suffixes[k]);
+        unlink(path);
+    }
+}
+
 static void test_the_benchmark_scenes_are_what_they_say(void **state)
 {
     (void)state;
-    const char *names[] = {"cornell", "cornell-10k", "cornell-100k", "glossy-glass"};
-    const int triangles[] = {32, 32 + 10240, 32 + 102400, 22 + 5120};
-    for (int k = 0; k < 4; k++) {
+    const char *names[] = {"cornell", "cornell-10k", "cornell-100k", "glossy-glass", "open-100k"};
+    const int triangles[] = {32, 32 + 10240, 32 + 102400, 22 + 5120, 4 + 102400};
+    for (int k = 0; k < 5; k++) {
         pt_scene sc;
         assert_true(bench_scene_build(&sc, names[k]));
         assert_int_equal(sc.triangles.count, triangles[k]);
         assert_int_equal(sc.sphere_count, 0);
+        /* only the open scene has a sky, and every scene a light */
+        assert_true((sc.environment.x > 0.0f) == (k == 4));
+        assert_true(sc.emitter_count > 0);
         if (k == 1 || k == 2) {
             /* the torus (faces 32 on) is closed and above the short block's top, y = 165 */
             assert_true(faces_closed(&sc.geometry, 32));
@@ -2600,38 +2644,15 @@ static void test_the_benchmark_scenes_are_what_they_say(void **state)
     assert_false(faces_closed(&sc.geometry, 32));
     sc.geometry.face_count++;
     assert_false(bench_scene_build(&sc, "no-such-scene")); /* sc untouched */
-
-    /* What make bench writes loads back as the same triangles and paints. */
-    char dir[] = "/tmp/test_ch13_bench.XXXXXX", path[256], err[1024];
-    assert_non_null(mkdtemp(dir));
-    assert_true(bench_scene_write(dir, "cornell-10k", err, sizeof err));
-    snprintf(path, sizeof path, "%s/cornell-10k.scene", dir);
-    scene_desc desc;
-    scene_desc_init(&desc);
-    pt_scene back;
-    pt_scene_report_materials(NULL);
-    assert_true(scene_desc_load(&desc, path, err, sizeof err));
-    assert_true(pt_scene_from_desc(&back, &desc, "test", err, sizeof err));
-    assert_int_equal(back.triangles.count, sc.triangles.count);
-    for (int i = 0; i < sc.geometry.face_count; i++) {
-        for (int c = 0; c < 3; c++) {
-            vec3 p = mesh_vertex(&sc.geometry, i, c), q = mesh_vertex(&back.geometry, i, c);
-            assert_true(p.x == q.x && p.y == q.y && p.z == q.z);
-        }
-        vec3 a = sc.materials[sc.geometry.faces[i].material].albedo;
-        vec3 b = back.materials[back.geometry.faces[i].material].albedo;
-        assert_true(a.x == b.x && a.y == b.y && a.z == b.z);
-    }
-    assert_true(back.eye.z == sc.eye.z && back.vertical_fov_degrees == sc.vertical_fov_degrees);
-    assert_int_equal(back.emitter_count, sc.emitter_count);
-    scene_desc_free(&desc);
-    pt_scene_free(&back);
     pt_scene_free(&sc);
-    const char *files[] = {"cornell-10k.scene", "cornell-10k.obj", "cornell-10k.mtl"};
-    for (int k = 0; k < 3; k++) {
-        snprintf(path, sizeof path, "%s/%s", dir, files[k]);
-        unlink(path);
-    }
+
+    /* What make bench writes loads back as the same triangles, paints and
+     * sky: the room with a mesh, and the open scene, whose sky the scene
+     * file carries (OBJ has none). */
+    char dir[] = "/tmp/test_ch13_bench.XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    written_scene_loads_back(dir, "cornell-10k");
+    written_scene_loads_back(dir, "open-100k");
     rmdir(dir);
 }
 

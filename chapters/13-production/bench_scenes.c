@@ -7,13 +7,15 @@
 
 #include "atomic_file.h"
 
-const char *const BENCH_SCENE_NAMES[] = {"cornell", "cornell-10k", "cornell-100k", "cornell-1m", "glossy-glass", NULL};
+const char *const BENCH_SCENE_NAMES[] = {"cornell", "cornell-10k", "cornell-100k", "cornell-1m", "glossy-glass",
+                                        "open-100k", NULL};
 const char *const BENCH_SCENE_NOTES[] = {
     "chapter 09's Cornell box, 32 triangles",
     "the box with a bumpy torus of 10,240 triangles",
     "the box with a bumpy torus of 102,400 triangles",
     "the box with a bumpy torus of 1,048,576 triangles",
     "a GGX copper block and a glass ball of 5,120 triangles",
+    "sixteen gold tori of 102,400 triangles over a ground, under a sky: no room",
     NULL};
 
 /* The torus's grid, U x V, for each mesh size: 2 U V triangles, the sizes
@@ -89,6 +91,36 @@ static void build_glossy_glass(pt_scene *sc)
     pt_scene_finish(sc);
 }
 
+/* A scene unlike the box: what a student exports from a modelling
+ * program, objects over a ground plane under a sky, lit by the sky and one
+ * small lamp. Most paths leave the scene within a few bounces, the lamp
+ * is a small part of the light, and no room surrounds the camera (the
+ * walls' shortcut finds only the ground). The objects are the Embree
+ * harness's tori field (16 interlocking tori, 102,400 triangles) in GGX
+ * gold, so most bounces go through chapter 09's glossy BSDF. */
+static void build_open(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int ground = pt_scene_add_material(sc, pt_diffuse(vec3_make(0.5f, 0.5f, 0.45f)));
+    int gold = pt_scene_add_material(sc, pt_glossy(vec3_make(1.0f, 0.78f, 0.34f), 0.25f));
+    int lamp = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_make(30.0f, 27.0f, 22.0f)));
+    const float y = -1.6f, h = 20.0f; /* the field spans about [-1.5, 1.5] in each axis */
+    pt_scene_add_quad(sc, vec3_make(-h, y, h), vec3_make(h, y, h), vec3_make(h, y, -h), vec3_make(-h, y, -h),
+                      ground); /* facing up */
+    pt_scene_add_quad(sc, vec3_make(0.0f, 3.5f, 0.0f), vec3_make(1.0f, 3.5f, 0.0f), vec3_make(1.0f, 3.5f, 1.0f),
+                      vec3_make(0.0f, 3.5f, 1.0f), lamp); /* facing down */
+    int first = sc->geometry.face_count;
+    mesh_tori_field(&sc->geometry, 102400);
+    for (int i = first; i < sc->geometry.face_count; i++)
+        sc->geometry.faces[i].material = gold;
+    sc->environment = vec3_make(0.45f, 0.55f, 0.75f);
+    sc->eye = vec3_make(0.0f, 0.8f, 6.5f);
+    sc->target = vec3_make(0.0f, -0.3f, 0.0f);
+    sc->up = vec3_make(0.0f, 1.0f, 0.0f);
+    sc->vertical_fov_degrees = 40.0f;
+    pt_scene_finish(sc);
+}
+
 bool bench_scene_build(pt_scene *sc, const char *name)
 {
     if (strcmp(name, "cornell") == 0)
@@ -101,6 +133,8 @@ bool bench_scene_build(pt_scene *sc, const char *name)
         build_torus_box(sc, 2);
     else if (strcmp(name, "glossy-glass") == 0)
         build_glossy_glass(sc);
+    else if (strcmp(name, "open-100k") == 0)
+        build_open(sc);
     else
         return false;
     return true;
@@ -119,7 +153,10 @@ bool bench_scene_write(const char *dir, const char *name, char *err, size_t err_
             note = BENCH_SCENE_NOTES[i];
     char obj_path[4096];
     snprintf(obj_path, sizeof obj_path, "%s/%s.obj", dir, name);
-    bool ok = pt_scene_write_obj(&sc, obj_path, err, err_size);
+    /* OBJ holds no environment: the scene file's background line does. */
+    pt_scene surfaces = sc;
+    surfaces.environment = vec3_splat(0.0f);
+    bool ok = pt_scene_write_obj(&surfaces, obj_path, err, err_size);
     char scene_name[512];
     snprintf(scene_name, sizeof scene_name, "%s.scene", name);
     atomic_file f;
@@ -132,6 +169,9 @@ bool bench_scene_write(const char *dir, const char *name, char *err, size_t err_
                 name, note, name, name, (double)sc.eye.x, (double)sc.eye.y, (double)sc.eye.z,
                 (double)sc.target.x, (double)sc.target.y, (double)sc.target.z, (double)sc.up.x, (double)sc.up.y,
                 (double)sc.up.z, (double)sc.vertical_fov_degrees, name);
+        vec3 sky = sc.environment;
+        if (sky.x != 0.0f || sky.y != 0.0f || sky.z != 0.0f)
+            fprintf(f.stream, "background %.9g %.9g %.9g\n", (double)sky.x, (double)sky.y, (double)sky.z);
         ok = atomic_file_commit(&f, err, err_size);
     }
     pt_scene_free(&sc);

@@ -8,6 +8,9 @@
  *   cornell-1m     ... of 1,048,576 triangles
  *   glossy-glass   chapter 09's materials scene (a GGX copper block, a glass
  *                  ball), the ball as 5,120 flat triangles (OBJ has no spheres)
+ *   open-100k      no room: the Embree harness's tori field (102,400
+ *                  triangles) in GGX gold over a ground, under a sky, with
+ *                  one small lamp (the scene file's `background`)
  *
  * The torus is the same surface at every size (a grid of U x V quads, two
  * triangles each; the sizes of the Embree harness's tori field), so the

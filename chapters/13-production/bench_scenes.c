@@ -95,7 +95,7 @@ static void build_glossy_glass(pt_scene *sc)
  * program, objects over a ground plane under a sky, lit by the sky and one
  * small lamp. Most paths leave the scene within a few bounces, the lamp
  * is a small part of the light, and no room surrounds the camera (the
- * walls' shortcut finds only the ground). The objects are the Embree
+ * walls' shortcut finds only the ground and the lamp). The objects are the Embree
  * harness's tori field (16 interlocking tori, 102,400 triangles) in GGX
  * gold, so most bounces go through chapter 09's glossy BSDF. */
 static void build_open(pt_scene *sc)

@@ -85,7 +85,8 @@ effects_report effects_analyse(const scene_desc *d)
     int surfaces = d->shape_count + area_lights;
     /* A mesh with its own MTL materials is not read here: it may emit (Ke),
      * so it counts as a light that may cast shadows, as it counts as glass
-     * that may reflect and refract below. Kept, never dropped on a guess. */
+     * that may reflect and refract and as metal that may be glossy below.
+     * Kept, never dropped on a guess. */
     bool sampled_lights = point_lights + area_lights + emitting_shapes + own_mtl_meshes > 0;
     const char *mtl_note = own_mtl_meshes > 0 ? " (a mesh with its own MTL materials may hold them: kept)" : "";
 
@@ -123,9 +124,9 @@ effects_report effects_analyse(const scene_desc *d)
     } else {
         snprintf(e.why[2], EFFECT_REASON_SIZE, "no glass (no dielectric), so no refraction ray");
     }
-    if (uses[SCENE_MATERIAL_GLOSSY] > 0) {
+    if (uses[SCENE_MATERIAL_GLOSSY] > 0 || own_mtl_meshes > 0) { /* an MTL's Ks above Kd is GGX metal */
         e.needed |= EFFECT_GLOSSY;
-        snprintf(e.why[3], EFFECT_REASON_SIZE, "%d glossy shapes", uses[SCENE_MATERIAL_GLOSSY]);
+        snprintf(e.why[3], EFFECT_REASON_SIZE, "%d glossy shapes%s", uses[SCENE_MATERIAL_GLOSSY], mtl_note);
     } else {
         snprintf(e.why[3], EFFECT_REASON_SIZE, "no glossy material");
     }

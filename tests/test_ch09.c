@@ -1051,6 +1051,67 @@ static void test_point_light_in_a_sphere_needs_no_shadow_ray(void **state)
 }
 
 
+/* A mesh whose MTL holds a GGX metal (Ks above Kd), in a scene file that
+ * names no material of its own. The analysis reads only the scene file, so
+ * it must keep glossy bounces on for such a mesh, as it keeps reflection
+ * and refraction: under a sky and no lamp, the metal shows the sky only
+ * through them. The render with the analysed effects is the render with
+ * every effect, bit for bit. The twin, glossy bounces off, renders the
+ * metal black: what every chapter program drew of a student's OBJ metal
+ * before the analysis counted such meshes. */
+static void write_text(const char *dir, const char *name, const char *text)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    assert_int_equal(fclose(f), 0);
+}
+
+static void test_effects_keep_glossy_for_a_mesh_with_its_own_mtl(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/test_ch09_mtl_metal.XXXXXX", path[512];
+    assert_non_null(mkdtemp(dir));
+    write_text(dir, "metal.mtl", "newmtl gold\nKd 0 0 0\nKs 1 0.78 0.34\nNs 30\nillum 2\n");
+    write_text(dir, "metal.obj", "mtllib metal.mtl\nusemtl gold\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                                 "f 1 2 3 4\n");
+    write_text(dir, "metal.scene", "camera eye 0.3 0.2 3 target 0 0 0 fov 40\nbackground 1 1 1\n"
+                                   "mesh path \"metal.obj\"\n");
+    snprintf(path, sizeof path, "%s/metal.scene", dir);
+    pt_scene sc;
+    unsigned effects;
+    pt_scene_report_materials(NULL);
+    load_scene_file(&sc, &effects, path, NULL);
+    assert_int_equal(sc.materials[sc.geometry.faces[0].material].kind, BSDF_GLOSSY);
+    assert_true(effects & EFFECT_GLOSSY);
+    path_tracer analysed = tracer(&sc, PT_MIS, RR_FIXED), forced = tracer(&sc, PT_MIS, RR_FIXED);
+    path_tracer twin = tracer(&sc, PT_MIS, RR_FIXED);
+    analysed.effects = effects;
+    twin.effects = EFFECT_ALL & ~EFFECT_GLOSSY;
+    ray_counters c_analysed, c_forced;
+    assert_same_render(&analysed, &forced, &c_analysed, &c_forced);
+    render_result full = render(&forced, 48, 48, 2, 7, 2), dark = render(&twin, 48, 48, 2, 7, 2);
+    double sum_full = 0.0, sum_dark = 0.0;
+    for (int i = 0; i < 48 * 48 * 3; i++) {
+        sum_full += full.mean.rgb[i];
+        sum_dark += dark.mean.rgb[i];
+    }
+    print_message("metal from an MTL under a sky: image sum %.1f with glossy bounces, %.1f without (twin)\n",
+                  sum_full, sum_dark);
+    assert_true(sum_dark < 0.5 * sum_full);
+    render_result_free(&full);
+    render_result_free(&dark);
+    pt_scene_free(&sc);
+    const char *files[] = {"metal.mtl", "metal.obj", "metal.scene"};
+    for (int k = 0; k < 3; k++) {
+        snprintf(path, sizeof path, "%s/%s", dir, files[k]);
+        unlink(path);
+    }
+    rmdir(dir);
+}
+
 /* ---- shadow rays ---------------------------------------------------------------- */
 
 /* The answer without the walls shortcut: every triangle, every sphere. */
@@ -1775,6 +1836,7 @@ int main(void)
         cmocka_unit_test(test_lecture_rung_sees_the_lamp_directly),
         cmocka_unit_test(test_explain_shows_each_rungs_light_sample),
         cmocka_unit_test(test_scene_files_render_the_built_in_scenes),
+        cmocka_unit_test(test_effects_keep_glossy_for_a_mesh_with_its_own_mtl),
         cmocka_unit_test(test_direct_light_only_equals_depth_one),
         cmocka_unit_test(test_point_light_in_a_sphere_needs_no_shadow_ray),
         cmocka_unit_test(test_furnace_truncated_at_depth_is_the_partial_sum),

@@ -596,7 +596,10 @@ static void test_bvh4_room_walls_get_leaves_of_their_own(void **state)
         vec3 origin = vec3_make(20.0f + 510.0f * pcg32_float(&rng), 20.0f + 500.0f * pcg32_float(&rng),
                                 20.0f + 520.0f * pcg32_float(&rng));
         vec3 direction = vec3_make(2 * pcg32_float(&rng) - 1, 2 * pcg32_float(&rng) - 1, 2 * pcg32_float(&rng) - 1);
-        if (vec3_dot(direction, direction) > 1.0f || vec3_dot(direction, direction) < 1e-4f)
+        /* inside the unit ball (directions uniform over the sphere), and not
+         * so short that its normalising amplifies float rounding */
+        const float shortest_squared = 1e-4f;
+        if (vec3_dot(direction, direction) > 1.0f || vec3_dot(direction, direction) < shortest_squared)
             continue;
         ray r = ray_make(origin, direction);
         rays++;

@@ -14,9 +14,8 @@
 # sqrt(2 / (Ns + 2))), else Lambertian Kd. Matched settings: CPU device,
 # no denoiser, no adaptive sampling, no clamping, no glossy filter, no
 # light threshold, a 1-pixel box filter, the scene's uniform world (black
-# unless it has a background line), the same eye, target
-# and vertical field of view, --max-bounces on every kind of bounce, a
-# fixed seed. Cycles keeps what makes it Cycles: its sampler, its Russian
+# unless it has a background line), the same eye, target and vertical
+# field of view, --max-bounces on every kind of bounce, a fixed seed. Cycles keeps what makes it Cycles: its sampler, its Russian
 # roulette, its light sampling.
 #
 # Appends 'cycles,SCENE,SPP,THREADS,SEED,CPU_S,WALL_S,OUT' to --manifest:

@@ -1057,8 +1057,8 @@ static void test_point_light_in_a_sphere_needs_no_shadow_ray(void **state)
  * and refraction: under a sky and no lamp, the metal shows the sky only
  * through them. The render with the analysed effects is the render with
  * every effect, bit for bit. The twin, glossy bounces off, renders the
- * metal black: what every chapter program drew of a student's OBJ metal
- * before the analysis counted such meshes. */
+ * metal black: what every chapter program would draw of a student's OBJ
+ * metal if the analysis dropped glossy bounces for such a mesh. */
 static void write_text(const char *dir, const char *name, const char *text)
 {
     char path[512];

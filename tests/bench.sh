@@ -49,12 +49,19 @@ else
 fi
 
 CYCLES_SCENES=${SCENES:-$CYCLES_SCENES}
+ALL_SCENES="cornell cornell-10k cornell-100k cornell-1m glossy-glass open-100k"
+for s in $CYCLES_SCENES; do
+    case " $ALL_SCENES " in
+    *" $s "*) ;;
+    *) echo "bench.sh: SCENES names '$s', not a benchmark scene (the scenes: $ALL_SCENES)" >&2; exit 2 ;;
+    esac
+done
 
 echo "== make bench ($MODE): $(nproc) processors, load average $(cut -d' ' -f1-3 /proc/loadavg)"
 START=$(date +%s)
 
 # The scene set, written once (the 1M mesh takes a few seconds).
-for s in cornell cornell-10k cornell-100k cornell-1m glossy-glass open-100k; do
+for s in $ALL_SCENES; do
     [ -f "$OUT/scenes/$s.scene" ] && [ "$OUT/scenes/$s.scene" -nt "$BIN/bench_scenes" ] ||
         "$BIN/bench_scenes" --write "$OUT/scenes" --scenes "$s" || exit 1
 done

@@ -911,6 +911,54 @@ static void test_ggx_sampling_matches_its_pdf(void **state)
 }
 
 
+/* The weight f cos(theta_i) / pdf of a GGX sample is F G1(wi) (ggx_pdf in
+ * bsdf.c says why): at most 1 for a metal of F0 = 1, whatever wo, grazing
+ * included. The twin draws h from D(h) cos(theta_h), as renderers long did,
+ * whose weight F G (wo . h) / (cos(theta_o) cos(theta_h)) grows as wo grazes:
+ * its largest weight must pass 2, or the bound above would prove nothing. */
+static float ggx_weight_from_d_cos(const pt_material *m, vec3 n, vec3 wo, vec2 u)
+{
+    float a2 = m->roughness * m->roughness;
+    float cos2 = (1.0f - u.x) / (1.0f + (a2 - 1.0f) * u.x);
+    float cos_h = sqrtf(fmaxf(0.0f, cos2)), sin_h = sqrtf(fmaxf(0.0f, 1.0f - cos2));
+    float phi = 2.0f * (float)PI * u.y;
+    vec3 h = frame_to_world(n, vec3_make(sin_h * cosf(phi), sin_h * sinf(phi), cos_h));
+    vec3 wi = vec3_reflect(vec3_neg(wo), h);
+    float cos_i = vec3_dot(n, wi), wo_h = vec3_dot(wo, h);
+    if (cos_i <= 0.0f || wo_h <= 0.0f)
+        return 0.0f;
+    float pdf = ggx_distribution(cos_h, m->roughness) * cos_h / (4.0f * wo_h);
+    return bsdf_eval(m, n, wo, wi).x * cos_i / pdf;
+}
+
+static void test_ggx_weights_never_exceed_one(void **state)
+{
+    (void)state;
+    pt_material m = pt_glossy(vec3_splat(1.0f), 0.25f);
+    vec3 n = vec3_make(0, 0, 1);
+    pcg32 rng = pcg32_for_pixel(test_seed(5), 6);
+    const float cosines[] = {1.0f, 0.7f, 0.3f, 0.1f, 0.03f, 0.01f};
+    float largest = 0.0f, largest_twin = 0.0f;
+    long samples = 0;
+    for (int c = 0; c < 6; c++) {
+        vec3 wo = vec3_make(sqrtf(1.0f - cosines[c] * cosines[c]), 0.0f, cosines[c]);
+        for (int k = 0; k < 4000; k++) {
+            vec2 u = vec2_make(pcg32_float(&rng), pcg32_float(&rng));
+            bsdf_sample_result s;
+            if (bsdf_sample(&m, n, wo, u, 0.5f, true, &s)) {
+                largest = fmaxf(largest, fmaxf(s.weight.x, fmaxf(s.weight.y, s.weight.z)));
+                samples++;
+            }
+            largest_twin = fmaxf(largest_twin, ggx_weight_from_d_cos(&m, n, wo, u));
+        }
+    }
+    print_message("GGX weights over %ld samples, wo from normal to grazing: largest %.6f (visible normals), "
+                  "%.1f (D cos, the twin)\n", samples, (double)largest, (double)largest_twin);
+    assert_true(samples > 20000);
+    assert_true(largest <= 1.0f + 1e-5f);
+    assert_true(largest_twin > 2.0f);
+}
+
 /* ---- scene files and effects ------------------------------------------------------ */
 
 /* A scene file as the program loads it: converted, effects analysed. */
@@ -1853,6 +1901,7 @@ int main(void)
         cmocka_unit_test(test_no_glass_no_refraction_and_no_nan),
         cmocka_unit_test(test_one_sided_emitter),
         cmocka_unit_test(test_ggx_sampling_matches_its_pdf),
+        cmocka_unit_test(test_ggx_weights_never_exceed_one),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
         cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),

@@ -57,13 +57,40 @@ static vec3 ggx_eval(const pt_material *m, vec3 n, vec3 wo, vec3 wi)
 /* Sampling h from D(h) cos(theta_h), then reflecting wo about it: the pdf of
  * wi is D cos(theta_h) / (4 |wo . h|) (the 1/(4 wo.h) is the Jacobian of the
  * reflection). */
+/* Sampling GGX: h is drawn from the normals wo can see, D_wo(h) =
+ * G1(wo) max(0, wo . h) D(h) / cos(theta_o) (Heitz 2018), and wi is wo
+ * reflected about h (Jacobian 1 / (4 wo . h)), so
+ *   pdf(wi) = G1(wo) D(h) / (4 cos(theta_o))
+ * and the sample's weight f cos(theta_i) / pdf is F G1(wi): never above 1.
+ * Drawing h from D(h) cos(theta_h) instead gives the weight
+ * F G (wo . h) / (cos(theta_o) cos(theta_h)), which grows without bound as wo
+ * grazes: rare, bright samples on every rough metal seen at an angle. */
 static float ggx_pdf(const pt_material *m, vec3 n, vec3 wo, vec3 wi)
 {
-    if (vec3_dot(n, wo) <= 0.0f || vec3_dot(n, wi) <= 0.0f)
+    float cos_o = vec3_dot(n, wo);
+    if (cos_o <= 0.0f || vec3_dot(n, wi) <= 0.0f)
         return 0.0f;
     vec3 h = vec3_normalize(vec3_add(wo, wi));
-    float cos_h = vec3_dot(n, h);
-    return ggx_distribution(cos_h, m->roughness) * cos_h / (4.0f * fabsf(vec3_dot(wo, h)));
+    return ggx_smith_g1(cos_o, m->roughness) * ggx_distribution(vec3_dot(n, h), m->roughness) / (4.0f * cos_o);
+}
+
+/* A visible normal for wo (local frame, z the normal) from u: stretch the
+ * ellipsoid of microfacets into a hemisphere (the view direction with it),
+ * pick a point of the projected disk the stretched view sees, uniformly (the
+ * disk's far half foreshortened by (1 + v_z) / 2), lift it onto the
+ * hemisphere, and unstretch the normal there. */
+static vec3 ggx_sample_visible_normal(vec3 wo, float alpha, vec2 u)
+{
+    vec3 v = vec3_normalize(vec3_make(alpha * wo.x, alpha * wo.y, wo.z));
+    float length2 = v.x * v.x + v.y * v.y;
+    vec3 t1 = length2 > 0.0f ? vec3_scale(vec3_make(-v.y, v.x, 0.0f), 1.0f / sqrtf(length2)) : vec3_make(1, 0, 0);
+    vec3 t2 = vec3_cross(v, t1);
+    float r = sqrtf(u.x), phi = 2.0f * (float)PI * u.y;
+    float p1 = r * cosf(phi), p2 = r * sinf(phi), s = 0.5f * (1.0f + v.z);
+    p2 = (1.0f - s) * sqrtf(fmaxf(0.0f, 1.0f - p1 * p1)) + s * p2;
+    float p3 = sqrtf(fmaxf(0.0f, 1.0f - p1 * p1 - p2 * p2));
+    vec3 h = vec3_add(vec3_add(vec3_scale(t1, p1), vec3_scale(t2, p2)), vec3_scale(v, p3));
+    return vec3_normalize(vec3_make(alpha * h.x, alpha * h.y, fmaxf(0.0f, h.z)));
 }
 
 /* ---- the interface ------------------------------------------------------------- */
@@ -117,12 +144,13 @@ bool bsdf_sample(const pt_material *m, vec3 n, vec3 wo, vec2 u, float u_lobe, bo
         return true;
     }
     case BSDF_GLOSSY: {
-        /* h from D(h) cos(theta_h): cos^2(theta_h) = (1 - u1) / (1 + (alpha^2 - 1) u1) */
-        float a2 = m->roughness * m->roughness;
-        float cos2 = (1.0f - u.x) / (1.0f + (a2 - 1.0f) * u.x);
-        float cos_h = sqrtf(fmaxf(0.0f, cos2)), sin_h = sqrtf(fmaxf(0.0f, 1.0f - cos2));
-        float phi = 2.0f * (float)PI * u.y;
-        vec3 h = frame_to_world(n, vec3_make(sin_h * cosf(phi), sin_h * sinf(phi), cos_h));
+        /* h among the normals wo sees (ggx_pdf above) */
+        vec3 t, b;
+        vec3_basis(n, &t, &b);
+        vec3 wo_local = vec3_make(vec3_dot(wo, t), vec3_dot(wo, b), vec3_dot(wo, n));
+        if (!(wo_local.z > 0.0f))
+            return false;
+        vec3 h = frame_to_world(n, ggx_sample_visible_normal(wo_local, m->roughness, u));
         vec3 wi = vec3_reflect(vec3_neg(wo), h);
         float pdf = ggx_pdf(m, n, wo, wi);
         if (!(pdf > 0.0f))

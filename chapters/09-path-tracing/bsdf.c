@@ -54,9 +54,6 @@ static vec3 ggx_eval(const pt_material *m, vec3 n, vec3 wo, vec3 wi)
     return vec3_scale(f, d * g / (4.0f * cos_o * cos_i));
 }
 
-/* Sampling h from D(h) cos(theta_h), then reflecting wo about it: the pdf of
- * wi is D cos(theta_h) / (4 |wo . h|) (the 1/(4 wo.h) is the Jacobian of the
- * reflection). */
 /* Sampling GGX: h is drawn from the normals wo can see, D_wo(h) =
  * G1(wo) max(0, wo . h) D(h) / cos(theta_o) (Heitz 2018), and wi is wo
  * reflected about h (Jacobian 1 / (4 wo . h)), so

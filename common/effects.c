@@ -124,7 +124,7 @@ effects_report effects_analyse(const scene_desc *d)
     } else {
         snprintf(e.why[2], EFFECT_REASON_SIZE, "no glass (no dielectric), so no refraction ray");
     }
-    if (uses[SCENE_MATERIAL_GLOSSY] > 0 || own_mtl_meshes > 0) { /* an MTL's Ks above Kd is GGX metal */
+    if (uses[SCENE_MATERIAL_GLOSSY] > 0 || own_mtl_meshes > 0) { /* an MTL may hold GGX metals */
         e.needed |= EFFECT_GLOSSY;
         snprintf(e.why[3], EFFECT_REASON_SIZE, "%d glossy shapes%s", uses[SCENE_MATERIAL_GLOSSY], mtl_note);
     } else {

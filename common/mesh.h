@@ -34,13 +34,17 @@ typedef struct {
 /* What an MTL file gives a material: the colours (Kd, Ks, Ke), shininess
  * (Ns), index of refraction (Ni), and whether light passes through it
  * (d, the dissolve; Tr = 1 - d, its other spelling; illum, the illumination
- * model: 4, 6, 7 and 9 are the transparent ones). */
+ * model: 4, 6, 7 and 9 are the transparent ones; 3 is "reflection on",
+ * Blender's mark of a metal), and the PBR extension's metallic (Pm) and
+ * roughness (Pr). */
 typedef struct {
     char name[MESH_NAME_SIZE];
     vec3 diffuse, specular, emission;
     float shininess, ior;
-    float dissolve; /* d: 1 opaque (the default), 0 fully transparent */
-    int illum;      /* -1 if not given */
+    float dissolve;  /* d: 1 opaque (the default), 0 fully transparent */
+    int illum;       /* -1 if not given */
+    float metallic;  /* Pm, 0 to 1; -1 if not given */
+    float roughness; /* Pr, 0 to 1 (alpha = Pr^2, as Blender and glTF mean it); -1 if not given */
 } mesh_material;
 
 /* Does the MTL say light passes through (illum 4, 6, 7 or 9, or d < 1)?

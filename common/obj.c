@@ -27,6 +27,7 @@
  *   Ns s, Ni n             shininess, index of refraction
  *   d a, Tr t              dissolve (1 opaque), transparency (Tr = 1 - d), in [0, 1]
  *   illum n                illumination model 0-10 (4, 6, 7, 9: transparent)
+ *   Pm m, Pr r             the PBR extension's metallic and roughness, in [0, 1]
  *   Ka Tf map_* bump ...   ignored (common, and nothing here uses them)
  *
  * Any other statement is an error rather than silently skipped: a typo such
@@ -291,6 +292,8 @@ static const mesh_material default_material = {
     .ior = 1.0f,
     .dissolve = 1.0f,
     .illum = -1,
+    .metallic = -1.0f,
+    .roughness = -1.0f,
 };
 
 bool mesh_material_transparent(const mesh_material *m)
@@ -308,8 +311,8 @@ bool mesh_material_emits(const mesh_material *m)
  * them. A name not here and not handled is an error, as in the OBJ reader. */
 static bool mtl_ignored(field keyword)
 {
-    static const char *const words[] = {"Ka",   "Tf",   "sharpness", "bump", "disp", "decal", "refl", "norm",
-                                        "Pr",   "Pm",   "Ps",        "Pc",   "Pcr",  "aniso", "anisor"};
+    static const char *const words[] = {"Ka",   "Tf",  "sharpness", "bump",  "disp",  "decal",
+                                        "refl", "norm", "Ps",       "Pc",    "Pcr",   "aniso", "anisor"};
     for (size_t i = 0; i < sizeof words / sizeof words[0]; i++)
         if (field_is(keyword, words[i]))
             return true;
@@ -367,7 +370,8 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
 
     bool colour = field_is(keyword, "Kd") || field_is(keyword, "Ks") || field_is(keyword, "Ke");
     bool scalar = field_is(keyword, "Ns") || field_is(keyword, "Ni") || field_is(keyword, "Tr") ||
-                  field_is(keyword, "d") || field_is(keyword, "illum");
+                  field_is(keyword, "d") || field_is(keyword, "illum") || field_is(keyword, "Pm") ||
+                  field_is(keyword, "Pr");
     /* An unknown word before the first newmtl: the file is of another kind
      * (an OBJ, an image, or any file an OBJ names, such as a private key).
      * Say so without printing what it holds; after newmtl it is a typo. */
@@ -376,7 +380,7 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
                           "statement)");
     if (!colour && !scalar)
         return fail_at(s, "unknown statement '%s'", quote(keyword.start, keyword.length, shown));
-    /* keyword is one of the eight words above: safe to print as a string. */
+    /* keyword is one of the ten words above: safe to print as a string. */
     char word[6] = {0};
     memcpy(word, keyword.start, keyword.length);
     if (mtl->current < 0)
@@ -398,7 +402,7 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
         float value = 0.0f;
         if (!mtl_scalar(s, r, word, &value))
             return false;
-        bool fraction = word[0] == 'd' || word[0] == 'T';
+        bool fraction = word[0] == 'd' || word[0] == 'T' || word[0] == 'P';
         if (fraction && !(value >= 0.0f && value <= 1.0f))
             return fail_at(s, "'%s %g': expected a number from 0 to 1", word, (double)value);
         if (word[0] == 'i' && !(value >= 0.0f && value <= 10.0f && value == (float)(int)value))
@@ -409,6 +413,8 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
             material->dissolve = 1.0f - value;
         else if (word[0] == 'i')
             material->illum = (int)value;
+        else if (word[0] == 'P')
+            *(word[1] == 'm' ? &material->metallic : &material->roughness) = value;
         else if (word[1] == 's')
             material->shininess = value;
         else

@@ -10,8 +10,10 @@
 # OBJ file; the OBJ's MTL gives the materials, read here by the rules the
 # project's loader follows (docs/scene-format.md, chapter 09): Ke > 0 an
 # emitter from its front face (Kd its albedo), illum 4/6/7/9 or d < 1 smooth
-# glass of index Ni, Ks larger than Kd GGX metal (F0 = Ks, alpha =
-# sqrt(2 / (Ns + 2))), else Lambertian Kd. Matched settings: CPU device,
+# glass of index Ni, Pm >= 0.5 GGX metal (F0 = Kd, alpha = Pr^2), Ks
+# larger than Kd GGX metal (F0 = Ks, alpha = sqrt(2 / (Ns + 2))), illum 3
+# without Pm a metal as Blender writes one (F0 = Kd, alpha = r^2 where
+# Ns = 1000 (1 - r)^2), else Lambertian Kd. Matched settings: CPU device,
 # no denoiser, no adaptive sampling, no clamping, no glossy filter, no
 # light threshold, a 1-pixel box filter, the scene's uniform world (black
 # unless it has a background line), the same eye, target and vertical
@@ -84,10 +86,11 @@ def read_mtl(path):
                 continue
             if words[0] == "newmtl":
                 current = materials.setdefault(words[1], {"Kd": (0.8, 0.8, 0.8), "Ks": (0, 0, 0), "Ke": (0, 0, 0),
-                                                          "Ns": 0.0, "Ni": 1.0, "d": 1.0, "illum": -1})
+                                                          "Ns": 0.0, "Ni": 1.0, "d": 1.0, "illum": -1,
+                                                          "Pm": -1.0, "Pr": -1.0})
             elif current is not None and words[0] in ("Kd", "Ks", "Ke"):
                 current[words[0]] = tuple(float(w) for w in words[1:4])
-            elif current is not None and words[0] in ("Ns", "Ni", "d"):
+            elif current is not None and words[0] in ("Ns", "Ni", "d", "Pm", "Pr"):
                 current[words[0]] = float(words[1])
             elif current is not None and words[0] == "Tr":
                 current["d"] = 1.0 - float(words[1])
@@ -99,6 +102,19 @@ def read_mtl(path):
 def to_blender(p):
     """OBJ's +Y up to Blender's +Z up, as the importer maps it (forward -Z, up Y)."""
     return Vector((p[0], -p[2], p[1]))
+
+
+def metal_of(m):
+    """(F0, alpha) of a GGX metal, as chapter 09's pt_material_from_mtl decides, or None."""
+    phong = min(1.0, max(0.001, math.sqrt(2.0 / (max(m["Ns"], 0.0) + 2.0))))
+    if m["Pm"] >= 0.5:
+        return m["Kd"], max(0.001, m["Pr"] ** 2) if m["Pr"] >= 0.0 else phong
+    if max(m["Ks"]) > max(m["Kd"]):
+        return m["Ks"], phong
+    if m["Pm"] < 0.0 and m["illum"] == 3:
+        r = 1.0 - math.sqrt(min(1.0, max(m["Ns"], 0.0) / 1000.0))
+        return m["Kd"], min(1.0, max(0.001, r * r))
+    return None
 
 
 def build_material(mat, m):
@@ -133,11 +149,11 @@ def build_material(mat, m):
         glass.inputs["Color"].default_value = (1, 1, 1, 1)
         glass.inputs["IOR"].default_value = m["Ni"] if m["Ni"] > 1.0 else 1.5
         links.new(glass.outputs["BSDF"], out.inputs["Surface"])
-    elif max(m["Ks"]) > max(m["Kd"]):
-        alpha = min(1.0, max(0.001, math.sqrt(2.0 / (max(m["Ns"], 0.0) + 2.0))))
+    elif metal_of(m) is not None:
+        f0, alpha = metal_of(m)
         metal = nodes.new("ShaderNodeBsdfPrincipled")
         metal.distribution = "GGX"
-        metal.inputs["Base Color"].default_value = rgba(m["Ks"])
+        metal.inputs["Base Color"].default_value = rgba(f0)
         metal.inputs["Metallic"].default_value = 1.0
         metal.inputs["Roughness"].default_value = math.sqrt(alpha)  # Cycles' alpha is roughness^2
         metal.inputs["Specular"].default_value = 0.5

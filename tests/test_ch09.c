@@ -1684,6 +1684,84 @@ static void test_mtl_materials_as_the_format_means_them(void **state)
     rmdir(dir);
 }
 
+/* Metals as exporters write them. Blender 3.4 (these lines are its own,
+ * from a Principled BSDF of metallic 1, 0.5 and 0, roughness 0.3, 0.8,
+ * 0.4, 0.5 and 0.05) gives a metal illum 3, its base colour as Kd, its
+ * fixed specular 0.5 as Ks and Ns = 1000 (1 - roughness)^2; the PBR
+ * extension says Pm and Pr. Each metal must become GGX with F0 = Kd and
+ * alpha = roughness^2; the plastics (illum 2, and illum 3 under Pm 0)
+ * stay diffuse. The twin is the rule before it, "GGX only where Ks
+ * outweighs Kd": it makes every one of these metals diffuse (asserted
+ * below on the MTL values themselves). */
+static const char BLENDER_METALS_MTL[] =
+    "# Blender 3.4.1 MTL File: 'None'\n# www.blender.org\n\n"
+    "newmtl gold_metal\nNs 490.000000\nKa 1.000000 1.000000 1.000000\nKd 1.000000 0.766000 0.336000\n"
+    "Ks 0.500000 0.500000 0.500000\nKe 0.000000 0.000000 0.000000\nNi 1.450000\nd 1.000000\nillum 3\n\n"
+    "newmtl rough_iron\nNs 39.999996\nKa 1.000000 1.000000 1.000000\nKd 0.560000 0.570000 0.580000\n"
+    "Ks 0.500000 0.500000 0.500000\nKe 0.000000 0.000000 0.000000\nNi 1.450000\nd 1.000000\nillum 3\n\n"
+    "newmtl half_metal\nNs 360.000000\nKa 0.500000 0.500000 0.500000\nKd 0.500000 0.500000 0.900000\n"
+    "Ks 0.500000 0.500000 0.500000\nKe 0.000000 0.000000 0.000000\nNi 1.450000\nd 1.000000\nillum 3\n\n"
+    "newmtl default_plastic\nNs 250.000000\nKa 1.000000 1.000000 1.000000\nKd 0.800000 0.800000 0.800000\n"
+    "Ks 0.500000 0.500000 0.500000\nKe 0.000000 0.000000 0.000000\nNi 1.450000\nd 1.000000\nillum 2\n\n"
+    "newmtl shiny_plastic\nNs 902.500000\nKa 1.000000 1.000000 1.000000\nKd 0.800000 0.100000 0.100000\n"
+    "Ks 0.500000 0.500000 0.500000\nKe 0.000000 0.000000 0.000000\nNi 1.450000\nd 1.000000\nillum 2\n\n"
+    "newmtl pbr_copper\nKd 0.95 0.64 0.54\nKs 0.5 0.5 0.5\nNs 250\nPm 1\nPr 0.4\nillum 2\n\n"
+    "newmtl pbr_plastic\nKd 0.2 0.6 0.2\nKs 0.5 0.5 0.5\nPm 0\nPr 0.4\nillum 3\n";
+
+static void test_mtl_metals_as_exporters_write_them(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/test_ch09_metal.XXXXXX", obj[256], mtl[256];
+    assert_non_null(mkdtemp(dir));
+    snprintf(mtl, sizeof mtl, "%s/metals.mtl", dir);
+    snprintf(obj, sizeof obj, "%s/metals.obj", dir);
+    FILE *f = fopen(mtl, "w");
+    assert_non_null(f);
+    fputs(BLENDER_METALS_MTL, f);
+    fclose(f);
+    f = fopen(obj, "w");
+    assert_non_null(f);
+    fputs("mtllib metals.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl gold_metal\nf 1 2 3\n", f);
+    fclose(f);
+    mesh m;
+    mesh_init(&m);
+    char err[MESH_ERROR_SIZE];
+    assert_true(mesh_load_obj(&m, obj, err, sizeof err));
+    assert_int_equal(m.material_count, 7);
+    /* kind, and alpha = roughness^2 for the metals */
+    static const bsdf_kind expected[7] = {BSDF_GLOSSY, BSDF_GLOSSY, BSDF_GLOSSY, BSDF_DIFFUSE,
+                                          BSDF_DIFFUSE, BSDF_GLOSSY, BSDF_DIFFUSE};
+    static const float roughness[7] = {0.3f, 0.8f, 0.4f, 0, 0, 0.4f, 0};
+    for (int i = 0; i < 7; i++) {
+        const mesh_material *mm = &m.materials[i];
+        char note[256];
+        pt_material p = pt_material_from_mtl(mm, note, sizeof note);
+        print_message("%s: %s\n", mm->name, note);
+        assert_int_equal(p.kind, expected[i]);
+        assert_true(vec3_max_component(vec3_abs(vec3_sub(p.albedo, mm->diffuse))) == 0.0f); /* F0 = Kd, or albedo Kd */
+        if (p.kind == BSDF_GLOSSY)
+            assert_close(p.roughness, roughness[i] * roughness[i], 2e-3);
+        /* the twin, "GGX only where Ks outweighs Kd", makes each diffuse */
+        assert_true(vec3_max_component(mm->specular) <= vec3_max_component(mm->diffuse));
+    }
+    assert_true(m.materials[5].metallic == 1.0f && m.materials[5].roughness == 0.4f);
+    assert_true(m.materials[0].metallic < 0.0f && m.materials[0].roughness < 0.0f); /* not given */
+    mesh_free(&m);
+    /* Pm and Pr outside [0, 1] are refused, naming the file and line */
+    f = fopen(mtl, "w");
+    assert_non_null(f);
+    fputs("newmtl bad\nKd 1 1 1\nPm 2\n", f);
+    fclose(f);
+    mesh_init(&m);
+    assert_false(mesh_load_obj(&m, obj, err, sizeof err));
+    print_message("%s\n", err);
+    assert_non_null(strstr(err, "metals.mtl:3"));
+    mesh_free(&m);
+    remove(obj);
+    remove(mtl);
+    rmdir(dir);
+}
+
 /* The GAMES101 assignment 7 scene file reads the assignment's OBJ files
  * from models/cornellbox/ next to itself. Stand-ins (the measured Cornell
  * box's faces, split as the assignment splits them) in a folder with a copy
@@ -1947,6 +2025,7 @@ int main(void)
         cmocka_unit_test(test_a_scene_without_light_is_reported),
         cmocka_unit_test(test_games101_assignment_7_scene_file),
         cmocka_unit_test(test_mtl_materials_as_the_format_means_them),
+        cmocka_unit_test(test_mtl_metals_as_exporters_write_them),
         cmocka_unit_test(test_an_emitting_mesh_casts_shadows),
         cmocka_unit_test(test_chapter_06s_bvh_is_what_chapter_09_traces),
         cmocka_unit_test(test_furnace_every_pixel_is_one),

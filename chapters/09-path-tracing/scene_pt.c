@@ -506,6 +506,43 @@ static float alpha_from_shininess(float ns)
     return fminf(1.0f, fmaxf(0.001f, alpha));
 }
 
+/* A metal's alpha from Blender's Ns: its exporter writes a Principled
+ * BSDF's roughness r as Ns = 1000 (1 - r)^2, and its GGX alpha is r^2. */
+static float alpha_from_blender_shininess(float ns)
+{
+    float r = 1.0f - sqrtf(fminf(1.0f, fmaxf(ns, 0.0f) / 1000.0f));
+    return fminf(1.0f, fmaxf(0.001f, r * r));
+}
+
+/* A metal: GGX with F0 = Kd, the base colour a metallic workflow keeps
+ * there. Said by the PBR extension (Pm at least 0.5, roughness Pr), or in
+ * the way Blender's exporter writes a metal without it: illum 3
+ * ("reflection on", its mark of a Principled BSDF with metallic above 0),
+ * the base colour as Kd and the fixed 0.5 of its specular slider as Ks.
+ * Read as the format means it, that would be a diffuse Kd, so every
+ * exported metal rendered as coloured plaster. */
+static bool mtl_metal(const mesh_material *mm, char *note, size_t note_size, pt_material *out)
+{
+    const vec3 kd = mm->diffuse;
+    float alpha;
+    if (mm->metallic >= 0.5f) {
+        bool pr = mm->roughness >= 0.0f;
+        alpha = pr ? fmaxf(0.001f, mm->roughness * mm->roughness) : alpha_from_shininess(mm->shininess);
+        snprintf(note, note_size, "glossy GGX, a metal (Pm %g), F0 = Kd %g %g %g, alpha %.3g from %s",
+                 (double)mm->metallic, (double)kd.x, (double)kd.y, (double)kd.z, (double)alpha, pr ? "Pr" : "Ns");
+    } else if (mm->metallic < 0.0f && mm->illum == 3) {
+        alpha = alpha_from_blender_shininess(mm->shininess);
+        snprintf(note, note_size,
+                 "glossy GGX, a metal (illum 3, as Blender writes one), F0 = Kd %g %g %g, alpha %.3g from Ns %g "
+                 "(Blender's Ns = 1000 (1 - roughness)^2); Ks dropped",
+                 (double)kd.x, (double)kd.y, (double)kd.z, (double)alpha, (double)mm->shininess);
+    } else {
+        return false;
+    }
+    *out = pt_glossy(kd, alpha);
+    return true;
+}
+
 pt_material pt_material_from_mtl(const mesh_material *mm, char *note, size_t note_size)
 {
     float kd = vec3_max_component(mm->diffuse), ks = vec3_max_component(mm->specular);
@@ -521,12 +558,17 @@ pt_material pt_material_from_mtl(const mesh_material *mm, char *note, size_t not
                  mm->dissolve < 1.0f ? "d < 1" : "a transparent illum", mm->ior > 1.0f ? "" : "; no Ni > 1: 1.5");
         return pt_glass(ior);
     }
+    pt_material metal;
+    if (mm->metallic >= 0.5f && mtl_metal(mm, note, note_size, &metal))
+        return metal;
     if (ks > kd) {
         float alpha = alpha_from_shininess(mm->shininess);
         snprintf(note, note_size, "glossy GGX, F0 = Ks %g %g %g, alpha %.3g from Ns %g", (double)mm->specular.x,
                  (double)mm->specular.y, (double)mm->specular.z, (double)alpha, (double)mm->shininess);
         return pt_glossy(mm->specular, alpha);
     }
+    if (mtl_metal(mm, note, note_size, &metal))
+        return metal;
     snprintf(note, note_size, "diffuse, Kd %g %g %g%s%s", (double)mm->diffuse.x, (double)mm->diffuse.y,
              (double)mm->diffuse.z, ks > 0.0f ? "; Ks dropped (the diffuse part is larger: no layered material here)" : "",
              mm->ior > 1.0f ? "; Ni ignored (opaque)" : "");

@@ -259,8 +259,11 @@ bool pt_scene_build_builtin(pt_scene *sc, const char *name);
 
 /* An MTL material as the path tracer's, as the format means it: an
  * emitter where Ke > 0; glass where the MTL says light passes through
- * (illum 4, 6, 7, 9 or d < 1), with Ni (1.5 without one); GGX glossy with
- * F0 = Ks where Ks outweighs Kd, its roughness from Ns; else diffuse Kd.
+ * (illum 4, 6, 7, 9 or d < 1), with Ni (1.5 without one); a GGX metal with
+ * F0 = Kd where the PBR extension says metallic (Pm >= 0.5, alpha = Pr^2);
+ * GGX glossy with F0 = Ks where Ks outweighs Kd, its roughness from Ns; a
+ * GGX metal with F0 = Kd for illum 3 without Pm (how Blender writes a
+ * metal); else diffuse Kd.
  * An Ni alone makes nothing glass: exporters write one on every material.
  * *note receives a line saying what it became and what was dropped. */
 pt_material pt_material_from_mtl(const mesh_material *mm, char *note, size_t note_size);

@@ -1514,6 +1514,84 @@ static void test_objects_too_small_for_their_place_are_named(void **state)
     free(text);
 }
 
+/* A floor (8 x 8, facing up) under a lamp quad at height 2 that faces up
+ * (`lamp_up`) or down, with a ceiling at 2.5 facing down if asked; or a
+ * glowing closed ball alone. pt_scene_check_lights must warn of the lamp
+ * facing the sky over the floor, and only of it: a lamp facing the floor,
+ * a lamp facing a ceiling (its light reaches the room off the ceiling),
+ * a glowing ball (its back faces see only its own inside) and the Cornell
+ * box are the twins. */
+static int light_warnings(const pt_scene *sc, char **text)
+{
+    size_t size = 0;
+    FILE *out = open_memstream(text, &size);
+    assert_non_null(out);
+    int n = pt_scene_check_lights(sc, "test", out);
+    fclose(out);
+    return n;
+}
+
+static void build_lamp_over_floor(pt_scene *sc, bool lamp_up, bool ceiling)
+{
+    pt_scene_init(sc);
+    int grey = pt_scene_add_material(sc, pt_diffuse(vec3_splat(0.5f)));
+    int lamp = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_splat(10.0f)));
+    pt_scene_add_quad(sc, vec3_make(-4, 0, 4), vec3_make(4, 0, 4), vec3_make(4, 0, -4), vec3_make(-4, 0, -4), grey);
+    if (ceiling)
+        pt_scene_add_quad(sc, vec3_make(-4, 2.5f, -4), vec3_make(4, 2.5f, -4), vec3_make(4, 2.5f, 4),
+                          vec3_make(-4, 2.5f, 4), grey);
+    vec3 a = vec3_make(-0.5f, 2, 0.5f), b = vec3_make(0.5f, 2, 0.5f), c = vec3_make(0.5f, 2, -0.5f),
+         d = vec3_make(-0.5f, 2, -0.5f);
+    if (lamp_up)
+        pt_scene_add_quad(sc, a, b, c, d, lamp);
+    else
+        pt_scene_add_quad(sc, d, c, b, a, lamp);
+    sc->environment = vec3_splat(0.0f);
+    pt_scene_finish(sc);
+}
+
+static void test_lights_facing_away_are_named(void **state)
+{
+    (void)state;
+    char *text = NULL;
+    pt_scene sc;
+    build_lamp_over_floor(&sc, true, false);
+    assert_int_equal(sc.emitter_count, 2);
+    assert_true(vec3_dot(sc.emitter_normals[0], vec3_make(0, 1, 0)) > 0.99f); /* it does face up */
+    assert_int_equal(light_warnings(&sc, &text), 1);
+    print_message("%s", text);
+    assert_non_null(strstr(text, "test: warning: the light of material #1 (2 triangles around (0, 2, 0)) faces away"));
+    assert_non_null(strstr(text, "of the light leaving its front, 0 % meets a surface"));
+    free(text);
+    pt_scene_free(&sc);
+    /* the twins */
+    build_lamp_over_floor(&sc, false, false);
+    assert_int_equal(light_warnings(&sc, &text), 0);
+    free(text);
+    pt_scene_free(&sc);
+    build_lamp_over_floor(&sc, true, true);
+    assert_int_equal(light_warnings(&sc, &text), 0);
+    free(text);
+    pt_scene_free(&sc);
+    pt_scene_init(&sc);
+    int glow = pt_scene_add_material(&sc, pt_emitter(vec3_splat(0.5f), vec3_splat(1.0f)));
+    mesh ball;
+    mesh_init(&ball);
+    mesh_icosphere(&ball, vec3_splat(0.0f), 1.0f, 1, glow);
+    for (int f = 0; f < ball.face_count; f++)
+        pt_scene_add_triangle(&sc, mesh_vertex(&ball, f, 0), mesh_vertex(&ball, f, 1), mesh_vertex(&ball, f, 2), glow);
+    mesh_free(&ball);
+    pt_scene_finish(&sc);
+    assert_int_equal(sc.emitter_count, 80);
+    assert_int_equal(light_warnings(&sc, &text), 0);
+    free(text);
+    pt_scene_free(&sc);
+    pt_scene_build_cornell_box(&sc);
+    assert_int_equal(light_warnings(&sc, &text), 0);
+    free(text);
+    pt_scene_free(&sc);
+}
+
 /* Signed distance of p from the plane of triangle t, in long double: the
  * edges are exact there (differences of floats) and their products carry
  * 64-bit rounding, far finer than the float test's. */
@@ -2055,6 +2133,7 @@ int main(void)
         cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
         cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),
         cmocka_unit_test(test_objects_too_small_for_their_place_are_named),
+        cmocka_unit_test(test_lights_facing_away_are_named),
         cmocka_unit_test(test_an_exported_scene_reads_back_the_same),
     };
     return cmocka_run_group_tests_name("ch09 path tracing", tests, NULL, NULL);

@@ -74,6 +74,7 @@ static int load(cli_options *opts, const chapter_flags *f, pt_scene *sc, path_tr
         pt_scene_use_accel(sc, pt_accel_builder_named(cli_choice_name(&f->accel)), NULL);
     program_note_accel(sc->bvh->stats.name);
     pt_scene_check_scale(sc, PROGRAM, stderr);
+    pt_scene_check_lights(sc, PROGRAM, stderr);
     *pt = path_tracer_defaults(sc);
     pt->effects = f->data != NULL ? EFFECT_ALL : effects_decide(&e, EFFECT_ALL);
     pt->integrator = integrator;

@@ -9,7 +9,9 @@
 #include "04-uniform-grid/grid.h"
 #include "05-kd-tree/kdtree.h"
 #include "06-bvh/bvh.h"
+#include "08-monte-carlo/sampling.h"
 #include "memory.h"
+#include "rng.h"
 
 void pt_scene_init(pt_scene *sc)
 {
@@ -240,6 +242,101 @@ int pt_scene_check_scale(const pt_scene *sc, const char *label, FILE *out)
                 vec3_max_component(sc->materials[m].emission) > 0.0f ? ", a light" : "", first, (double)lo.x,
                 (double)lo.y, (double)lo.z, (double)hi.x, (double)hi.y, (double)hi.z);
         warn_too_small(out, extent, magnitude);
+        warnings++;
+    }
+    return warnings;
+}
+
+/* ---- lights that face away -------------------------------------------------- */
+
+/* The check's rays per side, its fixed seed, and when it warns: less than
+ * a quarter of the front's light meets anything while at least half of
+ * the back's would. A lamp in a room meets a wall on either side; a lamp
+ * over an open scene facing the sky meets nothing in front and the
+ * ground behind. */
+enum { LIGHT_CHECK_RAYS = 256, LIGHT_CHECK_SEED = 0x11647 };
+static const double LIGHT_CHECK_FRONT_BELOW = 0.25, LIGHT_CHECK_BACK_ABOVE = 0.5;
+
+/* Of `rays` cosine-distributed rays leaving the emitting triangles of
+ * `material` (picked by area) from their front (side 1) or back (side -1),
+ * the fraction that meets a surface of another material: what a light
+ * lights, its own body (the inside of a glowing closed mesh) aside. */
+static double fraction_lit(const pt_scene *sc, int material, float side, int rays)
+{
+    /* this light's triangles, and the running sum of their areas */
+    int *index = memory_allocate((size_t)sc->emitter_count, sizeof *index);
+    double *cdf = memory_allocate((size_t)sc->emitter_count, sizeof *cdf), area = 0.0;
+    int count = 0;
+    for (int e = 0; e < sc->emitter_count; e++) {
+        const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
+        if (sc->geometry.faces[sc->emitters[e]].material != material)
+            continue;
+        area += 0.5 * (double)vec3_length(vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0)));
+        index[count] = e;
+        cdf[count++] = area;
+    }
+    pcg32 rng = pcg32_for_pixel(LIGHT_CHECK_SEED, (uint64_t)material);
+    ray_counters counters = {0};
+    int met = 0;
+    for (int k = 0; k < rays; k++) {
+        double target = (double)pcg32_float(&rng) * area;
+        int pick = 0;
+        while (pick < count - 1 && cdf[pick] <= target)
+            pick++;
+        int e = index[pick];
+        const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
+        /* a uniform point on it, as pt_scene_sample_emitter draws one */
+        float s1 = sqrtf(pcg32_float(&rng)), u2 = pcg32_float(&rng);
+        vec3 e1 = vec3_sub(t->p1, t->p0), e2 = vec3_sub(t->p2, t->p0);
+        vec3 point = vec3_add(t->p0, vec3_add(vec3_scale(e1, (1.0f - u2) * s1), vec3_scale(e2, u2 * s1)));
+        vec3 n = vec3_scale(sc->emitter_normals[e], side), tangent, bitangent;
+        float point_error = ray_point_error(point, n, triangle_edge_size(e1, e2));
+        vec3_basis(n, &tangent, &bitangent);
+        vec3 local = sample_cosine_hemisphere(vec2_make(pcg32_float(&rng), pcg32_float(&rng)));
+        vec3 direction = vec3_add(vec3_add(vec3_scale(tangent, local.x), vec3_scale(bitangent, local.y)),
+                                  vec3_scale(n, local.z));
+        hit_record hit;
+        if (pt_scene_intersect(sc, ray_spawn(point, point_error, n, direction), &hit, &counters) &&
+            hit.material_id != material)
+            met++;
+    }
+    free(index);
+    free(cdf);
+    return count > 0 ? (double)met / rays : 1.0;
+}
+
+int pt_scene_check_lights(const pt_scene *sc, const char *label, FILE *out)
+{
+    int warnings = 0;
+    for (int m = 0; m < sc->material_count; m++) {
+        if (vec3_max_component(sc->materials[m].emission) <= 0.0f)
+            continue;
+        int count = 0;
+        vec3 lo = vec3_splat(INFINITY), hi = vec3_splat(-INFINITY);
+        for (int e = 0; e < sc->emitter_count; e++) {
+            const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
+            if (sc->geometry.faces[sc->emitters[e]].material != m)
+                continue;
+            count++;
+            lo = vec3_min(lo, vec3_min(t->p0, vec3_min(t->p1, t->p2)));
+            hi = vec3_max(hi, vec3_max(t->p0, vec3_max(t->p1, t->p2)));
+        }
+        if (count == 0)
+            continue;
+        double front = fraction_lit(sc, m, 1.0f, LIGHT_CHECK_RAYS), back = fraction_lit(sc, m, -1.0f, LIGHT_CHECK_RAYS);
+        if (!(front < LIGHT_CHECK_FRONT_BELOW && back >= LIGHT_CHECK_BACK_ABOVE))
+            continue;
+        vec3 c = vec3_scale(vec3_add(lo, hi), 0.5f);
+        /* an OBJ's own materials keep their MTL names (pt_scene_load_obj) */
+        const char *name = m < sc->geometry.material_count ? sc->geometry.materials[m].name : "";
+        fprintf(out,
+                "%s: warning: the light of material #%d%s%s%s (%d triangle%s around (%.4g, %.4g, %.4g)) faces away "
+                "from the scene: of the light leaving its front, %.0f %% meets a surface; from its back, %.0f %% "
+                "would. Lights here emit from their front only, the side from which their corners run "
+                "counter-clockwise (Blender's emit from both): if it should face the other way, flip it (in "
+                "Blender: Mesh > Normals > Flip)\n",
+                label, m, name[0] ? " '" : "", name, name[0] ? "'" : "", count, count == 1 ? "" : "s", (double)c.x,
+                (double)c.y, (double)c.z, 100.0 * front, 100.0 * back);
         warnings++;
     }
     return warnings;

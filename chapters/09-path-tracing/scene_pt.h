@@ -117,6 +117,16 @@ void pt_scene_transform(pt_scene *sc, float scale, vec3 offset);
  * returns how many. The programs of chapters 09-13 call it before
  * rendering. */
 int pt_scene_check_scale(const pt_scene *sc, const char *label, FILE *out);
+/* Lights that face away from the scene: for each emitting material, 256
+ * rays leave its triangles from the front and 256 from the back (cosine
+ * distributed, a fixed seed); where less than a quarter of the front's
+ * meet another material's surface and at least half of the back's would,
+ * it writes "label: warning: the light of material #M ... faces away from
+ * the scene ... flip it" to `out`. Returns how many. An emitter here
+ * emits from its front only (Blender's emit from both, so a lamp plane
+ * that lights a Blender scene may light nothing here). The programs of
+ * chapters 09-13 call it before rendering. */
+int pt_scene_check_lights(const pt_scene *sc, const char *label, FILE *out);
 /* The structures of chapters 03-06 as builders: --accel's brute, grid,
  * kdtree and bvh (the default), by name; NULL for an unknown name. The
  * names, NULL-terminated, for --help and messages. */

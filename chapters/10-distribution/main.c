@@ -154,6 +154,7 @@ int main(int argc, char **argv)
     if (status != 0)
         return status;
     pt_scene_check_scale(&ms.base, spec.program, stderr); /* the still part; moving objects are not checked */
+    pt_scene_check_lights(&ms.base, spec.program, stderr);
     status = f.data != NULL ? run_experiments(&ms, opts.threads, f.quick, f.data, spec.program)
                             : render(&opts, spec.program, &ms, &f, effects);
     motion_scene_free(&ms);

@@ -263,6 +263,7 @@ int main(int argc, char **argv)
     if (status != 0)
         return status;
     pt_scene_check_scale(&sc, spec.program, stderr);
+    pt_scene_check_lights(&sc, spec.program, stderr);
     status = render(&opts, spec.program, &sc, &f, max_depth, only_s, only_t);
     pt_scene_free(&sc);
     return status;

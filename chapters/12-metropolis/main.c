@@ -208,8 +208,10 @@ int main(int argc, char **argv)
     }
     pt_scene sc;
     int status = load_scene(&sc, &opts, spec.program, &f);
-    if (status == 0)
+    if (status == 0) {
         pt_scene_check_scale(&sc, spec.program, stderr);
+        pt_scene_check_lights(&sc, spec.program, stderr);
+    }
     if (status != 0)
         return status;
     if (f.data != NULL) {

@@ -108,6 +108,7 @@ static int render(cli_options *opts, const production_flags *f)
         return 1;
     }
     pt_scene_check_scale(&sc, "13-production", stderr);
+    pt_scene_check_lights(&sc, "13-production", stderr);
     if (!from_file)
         pt_scene_describe(&sc, &desc);
     camera_override_apply(&f->view, &sc.eye, &sc.target, &sc.vertical_fov_degrees);

@@ -1721,25 +1721,45 @@ static const char BLENDER_MTL[] =
     "newmtl Clear\nKd 0.8 0.8 0.8\nNi 1.45\nd 0.2\nillum 2\n\n"
     "newmtl Metal\nNs 900\nKd 0.1 0.1 0.1\nKs 0.9 0.8 0.7\nNi 1.45\nd 1\nillum 3\n";
 
+/* A one-triangle OBJ of material `first` beside an MTL of `text`, in a
+ * new directory, read with mesh_load_obj (true if it loads; err says why
+ * not). mtl_files_remove() cleans up. */
+typedef struct {
+    char dir[64], obj[256], mtl[256];
+} mtl_files;
+
+static void mtl_files_write(mtl_files *f, const char *text, const char *first)
+{
+    snprintf(f->dir, sizeof f->dir, "/tmp/test_ch09_mtl.XXXXXX");
+    assert_non_null(mkdtemp(f->dir));
+    snprintf(f->mtl, sizeof f->mtl, "%s/materials.mtl", f->dir);
+    snprintf(f->obj, sizeof f->obj, "%s/model.obj", f->dir);
+    FILE *out = fopen(f->mtl, "w");
+    assert_non_null(out);
+    fputs(text, out);
+    fclose(out);
+    out = fopen(f->obj, "w");
+    assert_non_null(out);
+    fprintf(out, "mtllib materials.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl %s\nf 1 2 3\n", first);
+    fclose(out);
+}
+
+static void mtl_files_remove(const mtl_files *f)
+{
+    remove(f->obj);
+    remove(f->mtl);
+    rmdir(f->dir);
+}
+
 static void test_mtl_materials_as_the_format_means_them(void **state)
 {
     (void)state;
-    char dir[] = "/tmp/test_ch09_mtl.XXXXXX", obj[256], mtl[256];
-    assert_non_null(mkdtemp(dir));
-    snprintf(mtl, sizeof mtl, "%s/blender.mtl", dir);
-    snprintf(obj, sizeof obj, "%s/blender.obj", dir);
-    FILE *f = fopen(mtl, "w");
-    assert_non_null(f);
-    fputs(BLENDER_MTL, f);
-    fclose(f);
-    f = fopen(obj, "w");
-    assert_non_null(f);
-    fputs("mtllib blender.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl Material\nf 1 2 3\n", f);
-    fclose(f);
+    mtl_files files;
+    mtl_files_write(&files, BLENDER_MTL, "Material");
     mesh m;
     mesh_init(&m);
     char err[MESH_ERROR_SIZE];
-    assert_true(mesh_load_obj(&m, obj, err, sizeof err));
+    assert_true(mesh_load_obj(&m, files.obj, err, sizeof err));
     assert_int_equal(m.material_count, 5);
     static const bsdf_kind expected[5] = {BSDF_DIFFUSE, BSDF_DIFFUSE, BSDF_GLASS, BSDF_GLASS, BSDF_GLOSSY};
     for (int i = 0; i < 5; i++) {
@@ -1757,9 +1777,7 @@ static void test_mtl_materials_as_the_format_means_them(void **state)
     assert_true(m.materials[0].ior > 1.0f);
     assert_false(mesh_material_transparent(&m.materials[0]));
     mesh_free(&m);
-    remove(obj);
-    remove(mtl);
-    rmdir(dir);
+    mtl_files_remove(&files);
 }
 
 /* Metals as exporters write them. Blender 3.4 (these lines are its own,
@@ -1789,22 +1807,12 @@ static const char BLENDER_METALS_MTL[] =
 static void test_mtl_metals_as_exporters_write_them(void **state)
 {
     (void)state;
-    char dir[] = "/tmp/test_ch09_metal.XXXXXX", obj[256], mtl[256];
-    assert_non_null(mkdtemp(dir));
-    snprintf(mtl, sizeof mtl, "%s/metals.mtl", dir);
-    snprintf(obj, sizeof obj, "%s/metals.obj", dir);
-    FILE *f = fopen(mtl, "w");
-    assert_non_null(f);
-    fputs(BLENDER_METALS_MTL, f);
-    fclose(f);
-    f = fopen(obj, "w");
-    assert_non_null(f);
-    fputs("mtllib metals.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl gold_metal\nf 1 2 3\n", f);
-    fclose(f);
+    mtl_files files;
+    mtl_files_write(&files, BLENDER_METALS_MTL, "gold_metal");
     mesh m;
     mesh_init(&m);
     char err[MESH_ERROR_SIZE];
-    assert_true(mesh_load_obj(&m, obj, err, sizeof err));
+    assert_true(mesh_load_obj(&m, files.obj, err, sizeof err));
     assert_int_equal(m.material_count, 7);
     /* kind, and alpha = roughness^2 for the metals */
     static const bsdf_kind expected[7] = {BSDF_GLOSSY, BSDF_GLOSSY, BSDF_GLOSSY, BSDF_DIFFUSE,
@@ -1825,19 +1833,15 @@ static void test_mtl_metals_as_exporters_write_them(void **state)
     assert_true(m.materials[5].metallic == 1.0f && m.materials[5].roughness == 0.4f);
     assert_true(m.materials[0].metallic < 0.0f && m.materials[0].roughness < 0.0f); /* not given */
     mesh_free(&m);
+    mtl_files_remove(&files);
     /* Pm and Pr outside [0, 1] are refused, naming the file and line */
-    f = fopen(mtl, "w");
-    assert_non_null(f);
-    fputs("newmtl bad\nKd 1 1 1\nPm 2\n", f);
-    fclose(f);
+    mtl_files_write(&files, "newmtl bad\nKd 1 1 1\nPr 0.5\nPm 2\n", "bad");
     mesh_init(&m);
-    assert_false(mesh_load_obj(&m, obj, err, sizeof err));
+    assert_false(mesh_load_obj(&m, files.obj, err, sizeof err));
     print_message("%s\n", err);
-    assert_non_null(strstr(err, "metals.mtl:3"));
+    assert_non_null(strstr(err, "materials.mtl:4"));
     mesh_free(&m);
-    remove(obj);
-    remove(mtl);
-    rmdir(dir);
+    mtl_files_remove(&files);
 }
 
 /* The GAMES101 assignment 7 scene file reads the assignment's OBJ files

@@ -1844,6 +1844,35 @@ static void test_mtl_metals_as_exporters_write_them(void **state)
     mtl_files_remove(&files);
 }
 
+/* An OBJ with no emitting material is lit by a white sky, and the loader
+ * says so, naming why (Blender writes no lamp to OBJ); its twin, the same
+ * OBJ with an emitting material, keeps a black sky and says nothing. */
+static void test_an_obj_without_lights_says_it_is_sky_lit(void **state)
+{
+    (void)state;
+    static const char *const texts[2] = {"newmtl grey\nKd 0.5 0.5 0.5\n", "newmtl grey\nKd 0 0 0\nKe 1 1 1\n"};
+    for (int emits = 0; emits < 2; emits++) {
+        mtl_files files;
+        mtl_files_write(&files, texts[emits], "grey");
+        char *text = NULL, err[256];
+        size_t size = 0;
+        FILE *out = open_memstream(&text, &size);
+        assert_non_null(out);
+        pt_scene_report_materials(out);
+        pt_scene sc;
+        bool loaded = pt_scene_load_obj(&sc, files.obj, err, sizeof err);
+        fclose(out);
+        pt_scene_report_materials(NULL);
+        assert_true(loaded);
+        print_message("%s", text);
+        assert_true(vec3_max_component(sc.environment) == (emits ? 0.0f : 1.0f));
+        assert_true((strstr(text, "no material emits (Ke): lit by a white sky") != NULL) == !emits);
+        free(text);
+        pt_scene_free(&sc);
+        mtl_files_remove(&files);
+    }
+}
+
 /* The GAMES101 assignment 7 scene file reads the assignment's OBJ files
  * from models/cornellbox/ next to itself. Stand-ins (the measured Cornell
  * box's faces, split as the assignment splits them) in a folder with a copy
@@ -2108,6 +2137,7 @@ int main(void)
         cmocka_unit_test(test_games101_assignment_7_scene_file),
         cmocka_unit_test(test_mtl_materials_as_the_format_means_them),
         cmocka_unit_test(test_mtl_metals_as_exporters_write_them),
+        cmocka_unit_test(test_an_obj_without_lights_says_it_is_sky_lit),
         cmocka_unit_test(test_an_emitting_mesh_casts_shadows),
         cmocka_unit_test(test_chapter_06s_bvh_is_what_chapter_09_traces),
         cmocka_unit_test(test_furnace_every_pixel_is_one),

@@ -708,8 +708,16 @@ bool pt_scene_load_obj(pt_scene *sc, const char *path, char *err, size_t err_siz
     sc->eye = vec3_add(centre, vec3_make(0, 0.3f * radius, 2.8f * radius));
     sc->vertical_fov_degrees = 45.0f;
     pt_scene_finish(sc);
-    if (sc->emitter_count == 0 && sc->point_light_count == 0)
+    if (sc->emitter_count == 0 && sc->point_light_count == 0) {
         sc->environment = vec3_splat(1.0f); /* nothing emits: light it with a white sky */
+        FILE *out = material_report_set ? material_report : stdout;
+        if (out != NULL)
+            fprintf(out,
+                    "%s: no material emits (Ke): lit by a white sky of radiance 1 instead. Blender writes no lamp "
+                    "to OBJ; to light it as you lit it, give a face an Emission material, or use a scene file "
+                    "(docs/scene-format.md)\n",
+                    path);
+    }
     return true;
 }
 

@@ -594,13 +594,17 @@ void pt_scene_report_materials(FILE *out)
     material_report_set = true;
 }
 
+/* The sharpest GGX lobe an MTL makes: at alpha 0, D(h) is 0 / 0 at its
+ * peak; at 0.001 its peak 1 / (pi alpha^2), 3e5, is far inside float. */
+static const float MTL_ALPHA_MIN = 0.001f;
+
 /* The MTL's shininess Ns as GGX's alpha: a Blinn-Phong lobe of exponent p
  * is close to a microfacet lobe of alpha = sqrt(2 / (p + 2)) (Walter et al.
  * 2007), kept within what the glossy BSDF takes. */
 static float alpha_from_shininess(float ns)
 {
     float alpha = sqrtf(2.0f / (fmaxf(ns, 0.0f) + 2.0f));
-    return fminf(1.0f, fmaxf(0.001f, alpha));
+    return fminf(1.0f, fmaxf(MTL_ALPHA_MIN, alpha));
 }
 
 /* A metal's alpha from Blender's Ns: its exporter writes a Principled
@@ -608,7 +612,7 @@ static float alpha_from_shininess(float ns)
 static float alpha_from_blender_shininess(float ns)
 {
     float r = 1.0f - sqrtf(fminf(1.0f, fmaxf(ns, 0.0f) / 1000.0f));
-    return fminf(1.0f, fmaxf(0.001f, r * r));
+    return fminf(1.0f, fmaxf(MTL_ALPHA_MIN, r * r));
 }
 
 /* A metal: GGX with F0 = Kd, the base colour a metallic workflow keeps
@@ -624,7 +628,7 @@ static bool mtl_metal(const mesh_material *mm, char *note, size_t note_size, pt_
     float alpha;
     if (mm->metallic >= 0.5f) {
         bool pr = mm->roughness >= 0.0f;
-        alpha = pr ? fmaxf(0.001f, mm->roughness * mm->roughness) : alpha_from_shininess(mm->shininess);
+        alpha = pr ? fmaxf(MTL_ALPHA_MIN, mm->roughness * mm->roughness) : alpha_from_shininess(mm->shininess);
         snprintf(note, note_size, "glossy GGX, a metal (Pm %g), F0 = Kd %g %g %g, alpha %.3g from %s",
                  (double)mm->metallic, (double)kd.x, (double)kd.y, (double)kd.z, (double)alpha, pr ? "Pr" : "Ns");
     } else if (mm->metallic < 0.0f && mm->illum == 3) {

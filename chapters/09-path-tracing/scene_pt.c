@@ -10,6 +10,7 @@
 #include "05-kd-tree/kdtree.h"
 #include "06-bvh/bvh.h"
 #include "08-monte-carlo/sampling.h"
+#include "09-path-tracing/bsdf.h"
 #include "memory.h"
 #include "rng.h"
 
@@ -279,22 +280,26 @@ static double fraction_lit(const pt_scene *sc, int material, float side, int ray
     ray_counters counters = {0};
     int met = 0;
     for (int k = 0; k < rays; k++) {
+        /* the first triangle whose running sum passes u x area (binary search) */
         double target = (double)pcg32_float(&rng) * area;
-        int pick = 0;
-        while (pick < count - 1 && cdf[pick] <= target)
-            pick++;
-        int e = index[pick];
+        int lo = 0, hi = count - 1;
+        while (lo < hi) {
+            int mid = (lo + hi) / 2;
+            if (cdf[mid] <= target)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        int e = index[lo];
         const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
         /* a uniform point on it, as pt_scene_sample_emitter draws one */
         float s1 = sqrtf(pcg32_float(&rng)), u2 = pcg32_float(&rng);
         vec3 e1 = vec3_sub(t->p1, t->p0), e2 = vec3_sub(t->p2, t->p0);
         vec3 point = vec3_add(t->p0, vec3_add(vec3_scale(e1, (1.0f - u2) * s1), vec3_scale(e2, u2 * s1)));
-        vec3 n = vec3_scale(sc->emitter_normals[e], side), tangent, bitangent;
+        vec3 n = vec3_scale(sc->emitter_normals[e], side);
         float point_error = ray_point_error(point, n, triangle_edge_size(e1, e2));
-        vec3_basis(n, &tangent, &bitangent);
         vec3 local = sample_cosine_hemisphere(vec2_make(pcg32_float(&rng), pcg32_float(&rng)));
-        vec3 direction = vec3_add(vec3_add(vec3_scale(tangent, local.x), vec3_scale(bitangent, local.y)),
-                                  vec3_scale(n, local.z));
+        vec3 direction = frame_to_world(n, local);
         hit_record hit;
         if (pt_scene_intersect(sc, ray_spawn(point, point_error, n, direction), &hit, &counters) &&
             hit.material_id != material)

@@ -20,6 +20,9 @@
 #   make plots       draw every figure (gnuplot) from data the programs write
 #   make docs        the book: one HTML page per chapter, woven by pandoc, in build/docs/
 #   make test-docs   render every page of the book in headless Chromium and check it
+#   make exercise CH=NN [EX=name]  hand out chapter NN's exercises (stubs); make solution CH=NN takes them back
+#   make grade [CH=NN]  run the suites on your code: one table, exercise by exercise
+#   make check-exercises  every exercise's stub fails a test and builds; make solution restores it
 #   make deps        install the Debian packages the build needs that are missing
 #   make clean       remove everything generated (build/)
 #   make help        this list
@@ -31,6 +34,7 @@
 #   mk/bench.mk      make bench
 #   mk/plots.mk      make plots
 #   mk/docs.mk       make docs, test-docs
+#   mk/exercises.mk  make exercise, solution, grade, exercises, check-exercises
 #
 # Everything generated goes under build/.
 
@@ -45,6 +49,7 @@ include mk/mpi.mk
 include mk/bench.mk
 include mk/plots.mk
 include mk/docs.mk
+include mk/exercises.mk
 
 help:
 	@sed -n '4,/^# Everything/s/^# \{0,1\}//p' Makefile

@@ -16,12 +16,14 @@ camera camera_look_at(vec3 eye, vec3 target, vec3 up, float vertical_fov_degrees
 
 ray camera_ray(const camera *cam, float px, float py)
 {
+    /* exercise: eye_ray */
     /* Pixel position -> [-1, 1] on the image plane (y up), then scaled by
      * the half extents of the plane at distance 1 in front of the eye. */
     float sx = (2.0f * px / (float)cam->width - 1.0f) * cam->half_width;
     float sy = (1.0f - 2.0f * py / (float)cam->height) * cam->half_height;
     vec3 d = vec3_add(cam->forward, vec3_add(vec3_scale(cam->right, sx), vec3_scale(cam->up, sy)));
     return ray_make(cam->eye, vec3_normalize(d));
+    /* end of exercise eye_ray */
 }
 
 void camera_override_apply(const camera_override *o, vec3 *eye, vec3 *target, float *vertical_fov_degrees)

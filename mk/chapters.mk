@@ -65,6 +65,7 @@ $(BUILD)/tests/test_ch$$($(1)_NUM): $$(call obj,tests/test_ch$$($(1)_NUM).c) $$(
 ch$$($(1)_NUM): $(BUILD)/bin/$(1)
 	@mkdir -p $(BUILD)/out
 	$(BUILD)/bin/$(1) --out $(BUILD)/out/ch$$($(1)_NUM).exr $$(ARGS)
+	@if [ -d .exercises ]; then $$(EXERCISE_TOOL) picture $$($(1)_NUM) --build $(BUILD) -- --out $(BUILD)/out/ch$$($(1)_NUM).exr $$(ARGS); fi
 
 test-ch$$($(1)_NUM): $(BUILD)/tests/test_ch$$($(1)_NUM)
 	@$(BUILD)/tests/test_ch$$($(1)_NUM)
@@ -95,7 +96,7 @@ $(DOC_PROGRAMS): $(BUILD)/bin/%: $(BUILD)/obj/docs/figures/%.o $(ALL_LIBS)
 	@mkdir -p $(dir $@)
 	$(CC) $(LDFLAGS) $^ $(LDLIBS) -o $@
 
-all: $(PROGRAMS) $(TESTS) $(DOC_PROGRAMS)
+all: $(PROGRAMS) $(TESTS) $(DOC_PROGRAMS) $(BUILD)/bin/image_compare
 	@mkdir -p $(BUILD)/out
 
 demo: $(PROGRAMS)

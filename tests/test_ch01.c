@@ -24,11 +24,39 @@ static ray ray_from(float ox, float oy, float oz, float dx, float dy, float dz)
     return ray_make(vec3_make(ox, oy, oz), vec3_make(dx, dy, dz));
 }
 
+/* ---- eye rays ---------------------------------------------------------------
+ * A camera at the origin looking down -z with a 90 degree field of view
+ * (tan 45 = 1) and a 4x2 image: the plane at distance 1 spans x in [-2, 2],
+ * y in [-1, 1]. The centre of pixel (0, 0), at (0.5, 0.5), is the point
+ * (-1.5, 0.5, -1) of that plane; the image's centre, (2, 1), is straight
+ * ahead. */
+static void test_eye_ray_goes_through_the_pixel_centre(void **state)
+{
+    (void)state;
+    exercise_checks("eye_ray");
+    camera cam = camera_look_at(vec3_make(0, 0, 0), vec3_make(0, 0, -1), vec3_make(0, 1, 0), 90.0f, 4, 2);
+    ray corner = camera_ray(&cam, 0.5f, 0.5f);
+    float length = sqrtf(1.5f * 1.5f + 0.5f * 0.5f + 1.0f);
+    assert_close(corner.origin.x, 0.0, 0.0);
+    assert_close(corner.direction.x, -1.5 / length, 1e-6);
+    assert_close(corner.direction.y, 0.5 / length, 1e-6);
+    assert_close(corner.direction.z, -1.0 / length, 1e-6);
+    ray centre = camera_ray(&cam, 2.0f, 1.0f);
+    assert_close(centre.direction.x, 0.0, 1e-6);
+    assert_close(centre.direction.y, 0.0, 1e-6);
+    assert_close(centre.direction.z, -1.0, 1e-6);
+    /* The bottom-right pixel's centre, (3.5, 1.5): right and down. */
+    ray bottom_right = camera_ray(&cam, 3.5f, 1.5f);
+    assert_close(bottom_right.direction.x, 1.5 / length, 1e-6);
+    assert_close(bottom_right.direction.y, -0.5 / length, 1e-6);
+}
+
 /* ---- ray-sphere ----------------------------------------------------------- */
 
 static void test_sphere_hit_from_outside(void **state)
 {
     (void)state;
+    exercise_checks("ray_sphere");
     sphere s = {vec3_make(0, 0, 0), 1.0f};
     hit_record hit;
     assert_true(sphere_intersect(&s, ray_from(0, 0, -5, 0, 0, 1), &hit));
@@ -41,6 +69,7 @@ static void test_sphere_hit_from_outside(void **state)
 static void test_sphere_hit_from_inside_returns_the_exit(void **state)
 {
     (void)state;
+    exercise_checks("ray_sphere");
     sphere s = {vec3_make(0, 0, 0), 2.0f};
     hit_record hit;
     assert_true(sphere_intersect(&s, ray_from(0, 0, 0, 1, 0, 0), &hit));
@@ -52,6 +81,7 @@ static void test_sphere_hit_from_inside_returns_the_exit(void **state)
 static void test_sphere_tangent_and_miss(void **state)
 {
     (void)state;
+    exercise_checks("ray_sphere");
     sphere s = {vec3_make(0, 0, 0), 1.0f};
     hit_record hit;
     /* Tangent: the ray grazes the sphere at (1, 0, 0). */
@@ -70,6 +100,7 @@ static void test_sphere_tangent_and_miss(void **state)
 static void test_far_small_sphere_is_hit_at_the_right_distance(void **state)
 {
     (void)state;
+    exercise_checks("ray_sphere");
     sphere s = {vec3_make(0, 0, 1e4f), 1.0f};
     hit_record hit;
     assert_true(sphere_intersect(&s, ray_from(0, 0, 0, 0, 0, 1), &hit));
@@ -113,6 +144,7 @@ static const triangle unit_triangle = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
 static void test_triangle_hit_point_is_the_barycentric_combination(void **state)
 {
     (void)state;
+    exercise_checks("moller_trumbore");
     triangle tri = {{1, 2, 3}, {4, 2.5f, 3}, {2, 5, 4}};
     pcg32 rng = pcg32_for_pixel(1, 1);
     for (int i = 0; i < 1000; i++) {
@@ -154,6 +186,7 @@ static void test_triangle_ray_in_its_plane_gives_no_hit_and_no_nan(void **state)
 static void test_tiny_triangle_is_hit(void **state)
 {
     (void)state;
+    exercise_checks("moller_trumbore");
     /* Side 2e-4: its determinant is ~1e-8, which a "|det| < 1e-8" cut-off
      * would refuse. */
     const float side = 2e-4f;
@@ -171,6 +204,7 @@ static void test_tiny_triangle_is_hit(void **state)
 static void test_triangle_back_face_and_outside(void **state)
 {
     (void)state;
+    exercise_checks("moller_trumbore");
     hit_record hit;
     assert_true(triangle_intersect(&unit_triangle, ray_from(0.25f, 0.25f, 1, 0, 0, -1), &hit));
     assert_true(hit.front_face); /* counter-clockwise seen from +z */
@@ -256,6 +290,7 @@ static void test_watertight_triangles_do_not_leak_at_shared_edges(void **state)
 static void test_watertight_agrees_with_moller_trumbore_inside(void **state)
 {
     (void)state;
+    exercise_checks("moller_trumbore");
     triangle tri = {{1, 2, 3}, {4, 2.5f, 3}, {2, 5, 4}};
     pcg32 rng = pcg32_for_pixel(test_seed(4), 4);
     for (int i = 0; i < 10000; i++) {
@@ -1450,6 +1485,7 @@ static void test_scene_file_mesh_and_area_light_convert(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_eye_ray_goes_through_the_pixel_centre),
         cmocka_unit_test(test_sphere_hit_from_outside),
         cmocka_unit_test(test_sphere_hit_from_inside_returns_the_exit),
         cmocka_unit_test(test_sphere_tangent_and_miss),

@@ -49,6 +49,7 @@ bool sphere_intersect_naive(const sphere *s, ray r, hit_record *hit)
  * false if the ray's line misses the sphere. */
 static bool sphere_roots(vec3 center, float radius, ray r, float *t0, float *t1)
 {
+    /* exercise: ray_sphere */
     float length = vec3_length(r.direction);
     vec3 d = vec3_scale(r.direction, 1.0f / length);
     vec3 f = vec3_sub(r.origin, center);
@@ -65,6 +66,7 @@ static bool sphere_roots(vec3 center, float radius, ray r, float *t0, float *t1)
     *t0 = fminf(near, far) / length;
     *t1 = fmaxf(near, far) / length;
     return true;
+    /* end of exercise ray_sphere */
 }
 
 bool sphere_intersect(const sphere *s, ray r, hit_record *hit)

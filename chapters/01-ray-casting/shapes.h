@@ -57,6 +57,7 @@ bool triangle_intersect(const triangle *tri, ray r, hit_record *hit);
 static inline bool triangle_intersect_edges(vec3 p0, vec3 e1, vec3 e2, const ray *r, float t_max, float *t_out,
                                             float *b1_out, float *b2_out)
 {
+    /* exercise: moller_trumbore */
     vec3 s1 = vec3_cross(r->direction, e2);
     float determinant = vec3_dot(s1, e1);
     /* Only an exactly zero determinant (the ray lies parallel to the plane)
@@ -84,6 +85,7 @@ static inline bool triangle_intersect_edges(vec3 p0, vec3 e1, vec3 e2, const ray
     *b1_out = b1;
     *b2_out = b2;
     return true;
+    /* end of exercise moller_trumbore */
 }
 
 /* The same test returning only t and the barycentrics (b1, b2), the way an

@@ -47,7 +47,12 @@ static inline int vec3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y)
 static inline float vec3_luminance(vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 /* Mirror reflection of incident direction d about unit normal n: d - 2 (d.n) n. */
-static inline vec3 vec3_reflect(vec3 d, vec3 n) { return vec3_sub(d, vec3_scale(n, 2.0f * vec3_dot(d, n))); }
+static inline vec3 vec3_reflect(vec3 d, vec3 n)
+{
+    /* exercise: reflect */
+    return vec3_sub(d, vec3_scale(n, 2.0f * vec3_dot(d, n)));
+    /* end of exercise reflect */
+}
 
 /* An orthonormal basis (t, b, n) around unit n, without a branchy "pick an
  * axis" step: Duff et al., "Building an Orthonormal Basis, Revisited" (2017). */

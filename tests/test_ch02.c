@@ -31,11 +31,33 @@ static vec3 random_unit(pcg32 *rng)
 
 /* ---- Fresnel ---------------------------------------------------------------- */
 
+/* Mirror reflection keeps the part of d along the surface and flips the
+ * part along n: at 45 degrees onto the floor, (1, -1, 0)/sqrt 2 leaves as
+ * (1, 1, 0)/sqrt 2; at any angle the angle out equals the angle in, r stays
+ * unit and in the plane of d and n. */
+static void test_reflection_keeps_the_angle_and_flips_the_normal_part(void **state)
+{
+    (void)state;
+    exercise_checks("reflect");
+    float h = 1.0f / sqrtf(2.0f);
+    vec3 r = vec3_reflect(vec3_make(h, -h, 0), vec3_make(0, 1, 0));
+    assert_close(r.x, h, 1e-6);
+    assert_close(r.y, h, 1e-6);
+    assert_close(r.z, 0.0, 1e-6);
+    vec3 n = vec3_normalize(vec3_make(0.3f, 0.9f, -0.2f));
+    vec3 d = vec3_normalize(vec3_make(0.5f, -0.7f, 0.4f));
+    vec3 t = vec3_reflect(d, n);
+    assert_close(vec3_length(t), 1.0, 1e-6);
+    assert_close(vec3_dot(t, n), -vec3_dot(d, n), 1e-6);             /* the angle out is the angle in */
+    assert_close(vec3_dot(vec3_cross(d, n), t), 0.0, 1e-6);            /* in the plane of d and n */
+}
+
 /* R at normal incidence is ((eta_i - eta_t) / (eta_i + eta_t))^2 = (0.5 / 2.5)^2 = 0.04,
  * the same from either side. */
 static void test_fresnel_is_four_percent_at_normal_incidence(void **state)
 {
     (void)state;
+    exercise_checks("fresnel");
     assert_close(fresnel_dielectric(1.0f, 1.0f, GLASS), 0.04, 1e-6);
     assert_close(fresnel_dielectric(1.0f, GLASS, 1.0f), 0.04, 1e-6);
     /* cos_i < 0: the light comes from the eta_t side; still normal incidence. */
@@ -47,6 +69,7 @@ static void test_fresnel_is_four_percent_at_normal_incidence(void **state)
 static void test_fresnel_is_one_beyond_the_critical_angle(void **state)
 {
     (void)state;
+    exercise_checks("fresnel");
     double critical = asin(1.0 / GLASS);
     assert_close(critical / DEG, 41.81, 0.005);
     for (double degrees = 41.9; degrees < 90.0; degrees += 0.5) {
@@ -105,6 +128,7 @@ static double energy_error(fresnel_fn fresnel, double eta_i, double eta_t)
 static void test_fresnel_reflected_plus_transmitted_is_one(void **state)
 {
     (void)state;
+    exercise_checks("fresnel");
     assert_close(energy_error(fresnel_dielectric, 1.0, 1.5), 0.0, 1e-5);
     assert_close(energy_error(fresnel_dielectric, 1.5, 1.0), 0.0, 1e-5);
     assert_close(energy_error(fresnel_dielectric, 1.0, 2.4), 0.0, 1e-5);
@@ -192,6 +216,7 @@ static double snell_violation(refract_fn refract, float eta_ratio, uint64_t seed
 static void test_refraction_obeys_snells_law(void **state)
 {
     (void)state;
+    exercise_checks("refract");
     const float ratios[] = {1.0f / GLASS, GLASS, 1.0f / 1.33f, 1.33f, 1.0f};
     for (size_t k = 0; k < sizeof ratios / sizeof ratios[0]; k++)
         assert_close(snell_violation(refract_direction, ratios[k], 100 + k), 0.0, 1e-5);
@@ -203,6 +228,7 @@ static void test_refraction_obeys_snells_law(void **state)
 static void test_refraction_at_normal_incidence_goes_straight(void **state)
 {
     (void)state;
+    exercise_checks("refract");
     vec3 t;
     assert_true(refract_direction(vec3_make(0, -1, 0), vec3_make(0, 1, 0), 1.0f / GLASS, &t));
     assert_close(t.x, 0.0, 0.0);
@@ -244,6 +270,7 @@ static bool through_slab(const scene *sc, vec3 origin, vec3 d, bool exit_swaps_i
 static void test_glass_slab_exits_parallel_to_the_entering_ray(void **state)
 {
     (void)state;
+    exercise_checks("refract");
     scene sc;
     scene_init(&sc);
     int glass = scene_add_material(&sc, material_glass(GLASS));
@@ -280,6 +307,7 @@ static void test_glass_slab_exits_parallel_to_the_entering_ray(void **state)
 static void test_refraction_is_refused_beyond_the_critical_angle(void **state)
 {
     (void)state;
+    exercise_checks("refract");
     vec3 n = vec3_make(0, 1, 0);
     double critical = asin(1.0 / GLASS);
     for (double degrees = 0.0; degrees < 90.0; degrees += 0.25) {
@@ -563,6 +591,7 @@ static void test_narrowing_reflection_equals_a_scene_without_the_mirror(void **s
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_reflection_keeps_the_angle_and_flips_the_normal_part),
         cmocka_unit_test(test_fresnel_is_four_percent_at_normal_incidence),
         cmocka_unit_test(test_default_scene_file_renders_the_built_in_image),
         cmocka_unit_test(test_no_glass_means_no_refraction_rays),

@@ -31,6 +31,7 @@ static ray ray_from(float ox, float oy, float oz, float dx, float dy, float dz)
 static void test_slab_hit_from_outside_gives_enter_and_exit(void **state)
 {
     (void)state;
+    exercise_checks("slab_test");
     float t0, t1;
     /* From (-1, 0.5, 0.5) along +x: enters at x = 0 (t = 1), leaves at x = 1 (t = 2). */
     assert_true(slab(&unit_box, ray_from(-1, 0.5f, 0.5f, 1, 0, 0), &t0, &t1));
@@ -45,6 +46,7 @@ static void test_slab_hit_from_outside_gives_enter_and_exit(void **state)
 static void test_slab_miss_and_box_behind(void **state)
 {
     (void)state;
+    exercise_checks("slab_test");
     float t0, t1;
     assert_false(slab(&unit_box, ray_from(-1, 2, 0.5f, 1, 0, 0), &t0, &t1));
     /* The box behind the origin: t_exit < 0. */
@@ -58,6 +60,7 @@ static void test_slab_miss_and_box_behind(void **state)
 static void test_slab_origin_inside_enters_at_t_min(void **state)
 {
     (void)state;
+    exercise_checks("slab_test");
     float t0, t1;
     assert_true(slab(&unit_box, ray_from(0.5f, 0.5f, 0.5f, 0, 0, -1), &t0, &t1));
     assert_close(t0, 0.0, 0.0);
@@ -69,6 +72,7 @@ static void test_slab_origin_inside_enters_at_t_min(void **state)
 static void test_slab_signed_zero_directions(void **state)
 {
     (void)state;
+    exercise_checks("slab_test");
     float t0, t1;
     const float zeros[2] = {0.0f, -0.0f};
     for (int i = 0; i < 2; i++) {
@@ -88,6 +92,7 @@ static void test_slab_signed_zero_directions(void **state)
 static void test_slab_origin_on_a_plane_with_zero_direction(void **state)
 {
     (void)state;
+    exercise_checks("slab_test");
     float t0, t1;
     const float zeros[2] = {0.0f, -0.0f};
     for (int i = 0; i < 2; i++) {
@@ -108,6 +113,7 @@ static void test_slab_origin_on_a_plane_with_zero_direction(void **state)
 static void test_slab_flat_box_is_hit(void **state)
 {
     (void)state;
+    exercise_checks("slab_test");
     const aabb flat = {{-1, 0.3f, -1}, {1, 0.3f, 1}};
     float t0, t1;
     ray r = ray_from(0.1f, 1.3f, 0.2f, 0, -1, 0);
@@ -137,6 +143,7 @@ static void test_slab_flat_box_is_hit(void **state)
 static void test_slab_touching_an_edge_counts_as_hit(void **state)
 {
     (void)state;
+    exercise_checks("slab_test");
     float t0, t1;
     /* Along the edge x = 1, y = 1 of the box. */
     assert_true(slab(&unit_box, ray_from(1, 1, -1, 0, 0, 1), &t0, &t1));

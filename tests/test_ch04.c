@@ -106,6 +106,7 @@ static accel *build_grid(const triangle_set *s) { return grid_build(s, GRID_DEFA
 static void test_grid_agrees_with_brute_force(void **state)
 {
     (void)state;
+    exercise_checks("dda_step");
     accel_check_all(build_grid, 15000, "grid");
 }
 
@@ -180,6 +181,7 @@ static void test_resolution_follows_the_lecture_heuristic(void **state)
 static void test_rays_starting_outside_and_inside_the_grid(void **state)
 {
     (void)state;
+    exercise_checks("dda_step");
     const vec3 tris[4][3] = {{corner_low[0], corner_low[1], corner_low[2]},
                              {corner_high[0], corner_high[1], corner_high[2]},
                              {{1.2f, 2.2f, 2.5f}, {1.8f, 2.2f, 2.5f}, {1.5f, 2.8f, 2.5f}},
@@ -250,6 +252,7 @@ static void test_rays_starting_outside_and_inside_the_grid(void **state)
 static void test_zero_direction_components_along_a_cell_boundary(void **state)
 {
     (void)state;
+    exercise_checks("dda_step");
     const vec3 tris[4][3] = {{corner_low[0], corner_low[1], corner_low[2]},
                              {corner_high[0], corner_high[1], corner_high[2]},
                              {{1.5f, 1.5f, 2.5f}, {2.7f, 1.6f, 2.5f}, {1.6f, 2.7f, 2.5f}},
@@ -291,6 +294,7 @@ static void test_zero_direction_components_along_a_cell_boundary(void **state)
 static void test_negative_coordinates(void **state)
 {
     (void)state;
+    exercise_checks("dda_step");
     const vec3 tris[4][3] = {
         {{-10, -10, -10}, {-9.9f, -10, -10}, {-10, -9.9f, -10}},
         {{-6, -6, -6}, {-6.1f, -6, -6}, {-6, -6.1f, -6}},
@@ -349,6 +353,7 @@ static const vec3 spans_tris[4][3] = {
 static void test_object_spanning_later_cells_does_not_end_the_walk(void **state)
 {
     (void)state;
+    exercise_checks("dda_step");
     scene s;
     scene_make(&s, spans_tris, 4, FOUR_CUBED_DENSITY, grid_build);
     assert_resolution(s.grid, 4, 4, 4);

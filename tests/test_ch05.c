@@ -124,6 +124,7 @@ static int find_split_node(const kd_tree *tree, uint32_t node, int axis, float p
 static void test_kdtree_agrees_with_brute_force(void **state)
 {
     (void)state;
+    exercise_checks("kd_front_to_back");
     accel_check_all(kdtree_build, 15000, "kd-tree");
 }
 
@@ -333,6 +334,7 @@ static const int TRI_L0 = 0, TRI_R0 = PLANE_PAIRS, TRI_S = 2 * PLANE_PAIRS;
 static void test_ray_in_split_plane_finds_triangles_on_both_sides(void **state)
 {
     (void)state;
+    exercise_checks("kd_front_to_back");
     scene s;
     make_split_plane_scene(&s);
     /* d_x = +0 and d_x = -0: 1/d_x = +inf or -inf, and either way NaN. */
@@ -391,6 +393,7 @@ static void test_ray_in_split_plane_does_not_stop_in_the_first_child(void **stat
 static void test_ray_parallel_to_split_plane_stays_on_its_side(void **state)
 {
     (void)state;
+    exercise_checks("kd_front_to_back");
     scene s;
     make_split_plane_scene(&s);
     const float zeros[2] = {0.0f, -0.0f};
@@ -450,6 +453,7 @@ static void make_straddle_scene(scene *s)
 static void test_straddling_triangle_hit_in_far_cell_is_found(void **state)
 {
     (void)state;
+    exercise_checks("kd_front_to_back");
     scene s;
     make_straddle_scene(&s);
     trace_result got = trace(s.tree, ray_between(8, 0.8f, 0, -1, 0, 0, 0, INFINITY));
@@ -466,6 +470,7 @@ static void test_straddling_triangle_hit_in_far_cell_is_found(void **state)
 static void test_closer_triangle_in_far_cell_beats_the_straddler_found_first(void **state)
 {
     (void)state;
+    exercise_checks("kd_front_to_back");
     scene s;
     make_straddle_scene(&s);
     expect_hit(&s, ray_between(8, 0, 0, -1, 0, 0, 0, INFINITY), 1, 5.75);

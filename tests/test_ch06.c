@@ -114,6 +114,7 @@ static void test_median_bvh_agrees_with_brute_force(void **state)
 static void test_sah_bvh_agrees_with_brute_force(void **state)
 {
     (void)state;
+    exercise_checks("sah_split");
     accel_check_all(build_sah, 15000, "bvh sah");
 }
 
@@ -147,6 +148,7 @@ static void test_every_triangle_in_exactly_one_leaf_and_boxes_nest(void **state)
 static void test_sah_tree_is_cheaper_than_median_tree_on_the_tori_field(void **state)
 {
     (void)state;
+    exercise_checks("sah_split");
     mesh m;
     mesh_init(&m);
     mesh_tori_field(&m, 10240);
@@ -283,6 +285,7 @@ static void test_centroid_on_the_bounds_maximum_goes_to_the_last_bin(void **stat
 static void test_sah_build_with_a_centroid_on_the_maximum(void **state)
 {
     (void)state;
+    exercise_checks("sah_split");
     mesh m;
     mesh_init(&m);
     for (int i = 0; i < 3; i++) {
@@ -633,6 +636,7 @@ enum { RECURSIVE_CHECK_RAYS = 2000 };
 static void test_recursive_traversal_equals_brute_force(void **state)
 {
     (void)state;
+    exercise_checks("bvh_intersect");
     long hits;
     long mismatches = recursive_mismatches(bvh_closest_hit_recursive, RECURSIVE_CHECK_RAYS, &hits);
     print_message("recursive traversal: %ld of %d rays differ from brute force (%ld hits)\n", mismatches,
@@ -668,6 +672,7 @@ static void test_recursive_twin_returning_the_first_hit_is_caught(void **state)
 static void test_recursive_traversal_visits_at_least_as_many_nodes(void **state)
 {
     (void)state;
+    exercise_checks("bvh_intersect");
     mesh m;
     triangle_set set;
     make_overlap_scene(&m, &set);
@@ -833,6 +838,7 @@ static void test_slab_test_matches_chapter_03(void **state)
 static void test_empty_set_builds_and_misses(void **state)
 {
     (void)state;
+    exercise_checks("bvh_intersect");
     mesh m;
     mesh_init(&m);
     triangle_set set;

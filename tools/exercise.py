@@ -11,7 +11,9 @@ comment line at each end of its body:
         /* end of exercise sphere_roots */
     }
 
-and the chapter's README says what it asks, where its text explains it:
+(a struct whose zero is not "nothing" names its stub's value in the first
+line: "/* exercise: NAME; a stub returns EXPR */"), and the chapter's
+README says what it asks, where its text explains it:
 
     > **Exercise `sphere_roots`** (GAMES101 assignment 5): ...
     >
@@ -50,7 +52,7 @@ import sys
 import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-START = re.compile(r'^(\s*)/\* exercise: (\w+) \*/\s*$')
+START = re.compile(r'^(\s*)/\* exercise: (\w+)(?:; a stub returns (.*?))? \*/\s*$')
 END = re.compile(r'^\s*/\* end of exercise (\w+) \*/\s*$')
 README_BLOCK = re.compile(r'^> \*\*Exercise `(\w+)`\*\*(.*)$')
 HEADING = re.compile(r'^(#{1,6})\s+(.*?)\s*#*\s*$')
@@ -261,7 +263,8 @@ def static_helpers(lines, body):
 
 
 def make_stub(ex, lines, start, end, rel):
-    indent = START.match(lines[start]).group(1)
+    marker = START.match(lines[start])
+    indent = marker.group(1)
     ret, function, params, local_names = signature(lines, start, rel)
     body = lines[start + 1:end]
     out = ['%s/* Write %s() here: "%s" in %s explains it.\n' % (indent, function, ex['section'], ex['readme'])]
@@ -274,7 +277,7 @@ def make_stub(ex, lines, start, end, rel):
         out.append('%s/* helpers of this file the reference calls: %s */\n' % (indent, ', '.join(helpers)))
     for name in params + local_names + helpers:
         out.append('%s(void)%s;\n' % (indent, name))
-    value = neutral_return(ret)
+    value = marker.group(3) or neutral_return(ret)
     if value is not None:
         out.append('%sreturn %s;\n' % (indent, value))
     return out

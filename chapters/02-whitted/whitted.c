@@ -17,6 +17,7 @@
 
 bool refract_direction(vec3 d, vec3 n, float eta_ratio, vec3 *out)
 {
+    /* exercise: refract */
     /* Snell's law: eta_i sin(theta_i) = eta_t sin(theta_t) */
     float cos_i = -vec3_dot(d, n);
     float sin2_i = fmaxf(0.0f, 1.0f - cos_i * cos_i);
@@ -30,12 +31,14 @@ bool refract_direction(vec3 d, vec3 n, float eta_ratio, vec3 *out)
      * for the sines); the part along -n is whatever keeps t unit length. */
     *out = vec3_add(vec3_scale(d, eta_ratio), vec3_scale(n, eta_ratio * cos_i - cos_t));
     return true;
+    /* end of exercise refract */
 }
 
 /* ---- Fresnel ------------------------------------------------------------ */
 
 float fresnel_dielectric(float cos_i, float eta_i, float eta_t)
 {
+    /* exercise: fresnel */
     cos_i = fminf(1.0f, fmaxf(-1.0f, cos_i));
     /* Entering or leaving: a negative cosine means the light comes from the
      * eta_t side, so the two media trade places. */
@@ -60,6 +63,7 @@ float fresnel_dielectric(float cos_i, float eta_i, float eta_t)
     float r_s = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
     float r_p = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
     return 0.5f * (r_s * r_s + r_p * r_p);
+    /* end of exercise fresnel */
 }
 
 /* Schlick's approximation: R0 + (1 - R0) (1 - cos(theta))^5

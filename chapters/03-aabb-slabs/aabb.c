@@ -37,6 +37,7 @@ static const float SLAB_ROUNDING_PAD = 1.0f + 2.0f * (3.0f * 0x1.0p-24f) / (1.0f
 bool aabb_slab_test(const aabb *box, const slab_ray *r, float ray_t_min, float ray_t_max, float *t_enter,
                     float *t_exit)
 {
+    /* exercise: slab_test */
     float enter = ray_t_min, exit = ray_t_max;
     for (int axis = 0; axis < 3; axis++) {
         float inverse = vec3_axis(r->inverse_direction, axis);
@@ -70,6 +71,7 @@ bool aabb_slab_test(const aabb *box, const slab_ray *r, float ray_t_min, float r
     *t_enter = enter;
     *t_exit = exit;
     return true;
+    /* end of exercise slab_test */
 }
 
 bool aabb_slab_test_naive(const aabb *box, ray r, float *t_enter, float *t_exit)

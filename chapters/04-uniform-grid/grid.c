@@ -244,6 +244,39 @@ typedef enum {
     WALK_NAIVE_EXIT, /* wrong on purpose: stop after the first cell with any hit */
 } walk_rule;
 
+/* The walk's state, the paper's names: along axis a the ray is in cell
+ * cell[a], crosses the next boundary at t_max[a], takes t_delta[a] to cross
+ * one cell, and has left the grid when cell[a] = just_out[a]; step[a] is +1
+ * or -1 (0 for an axis the ray runs parallel to, whose t_max is infinite),
+ * stride[a] what a step adds to c, the current cell's index. */
+typedef struct {
+    int cell[3], step[3], just_out[3];
+    long stride[3], c;
+    double t_max[3], t_delta[3];
+} dda_walk;
+
+/* Step to the next cell, across the nearest of the three next boundaries;
+ * the current cell ends there, at t_exit = that t_max. A hit counts only if
+ * it lies inside this cell, t <= t_exit: a triangle stored here may be hit
+ * at a point in a later cell, and a closer hit may then be waiting in the
+ * next cell. Such a hit stays the candidate (t_best) and the walk goes on.
+ * The same test ends the walk when the ray itself ends in this cell. False
+ * when the walk ends: here, or by leaving the grid. */
+static inline bool dda_step(dda_walk *w, double t_best)
+{
+    /* exercise: dda_step */
+    int a = w->t_max[0] < w->t_max[1] && w->t_max[0] < w->t_max[2] ? 0 : w->t_max[1] < w->t_max[2] ? 1 : 2;
+    if (t_best <= w->t_max[a]) /* the closest hit lies in this cell */
+        return false;
+    w->cell[a] += w->step[a];
+    if (w->cell[a] == w->just_out[a]) /* left the grid */
+        return false;
+    w->c += w->stride[a];
+    w->t_max[a] += w->t_delta[a];
+    return true;
+    /* end of exercise dda_step */
+}
+
 /* Walks r through the cells it pierces, in order, and tests the triangles
  * stored in them; returns the closest hit triangle (-1: none), with its t in
  * r->t_max and its barycentrics in b1, b2. The names are the paper's: along
@@ -272,40 +305,32 @@ static inline int grid_walk(const grid *g, ray *r, walk_rule rule, triangle_test
     double origin[3] = {r->origin.x, r->origin.y, r->origin.z};
     double direction[3] = {r->direction.x, r->direction.y, r->direction.z};
     long cell_stride[3] = {1, g->n[0], (long)g->n[0] * g->n[1]};
-    int cell[3], step[3], just_out[3];
-    long stride[3];
-    double t_max[3], t_delta[3];
+    dda_walk w;
     for (int a = 0; a < 3; a++) {
-        cell[a] = grid_cell_coordinate(g, a, origin[a] + (double)t_enter * direction[a]);
+        w.cell[a] = grid_cell_coordinate(g, a, origin[a] + (double)t_enter * direction[a]);
         if (direction[a] == 0.0) {
             /* A zero component (+0 or -0): the ray never crosses a boundary
              * along this axis. t_max = inf, so the axis is never stepped
              * (computing it as (boundary - o) / d would give 0 * inf = NaN
              * for an origin on a boundary). */
-            step[a] = 0;
-            just_out[a] = -1;
-            t_max[a] = t_delta[a] = INFINITY;
+            w.step[a] = 0;
+            w.just_out[a] = -1;
+            w.t_max[a] = w.t_delta[a] = INFINITY;
         } else {
             /* t_max: where the ray crosses the cell's next boundary (its
              * upper one going up, its lower one going down), computed from
              * the cell index; t_delta = cell size / |d| */
             bool up = direction[a] > 0.0;
             double inverse = 1.0 / direction[a];
-            double boundary = g->lo[a] + (double)(cell[a] + up) * g->cell_size[a];
-            step[a] = up ? 1 : -1;
-            just_out[a] = up ? g->n[a] : -1;
-            t_max[a] = (boundary - origin[a]) * inverse;
-            t_delta[a] = g->cell_size[a] * fabs(inverse);
+            double boundary = g->lo[a] + (double)(w.cell[a] + up) * g->cell_size[a];
+            w.step[a] = up ? 1 : -1;
+            w.just_out[a] = up ? g->n[a] : -1;
+            w.t_max[a] = (boundary - origin[a]) * inverse;
+            w.t_delta[a] = g->cell_size[a] * fabs(inverse);
         }
-        stride[a] = step[a] * cell_stride[a];
+        w.stride[a] = w.step[a] * cell_stride[a];
     }
-    int x = cell[0], y = cell[1], z = cell[2];
-    const int step_x = step[0], step_y = step[1], step_z = step[2];
-    const int just_out_x = just_out[0], just_out_y = just_out[1], just_out_z = just_out[2];
-    const long stride_x = stride[0], stride_y = stride[1], stride_z = stride[2];
-    double t_max_x = t_max[0], t_max_y = t_max[1], t_max_z = t_max[2];
-    const double t_delta_x = t_delta[0], t_delta_y = t_delta[1], t_delta_z = t_delta[2];
-    long c = x + cell_stride[1] * y + cell_stride[2] * z;
+    w.c = w.cell[0] + cell_stride[1] * w.cell[1] + cell_stride[2] * w.cell[2];
 
     const triangle *triangles = set->triangles;
     /* the watertight triangle test's part for the ray, once (chapter 01) */
@@ -318,6 +343,7 @@ static inline int grid_walk(const grid *g, ray *r, walk_rule rule, triangle_test
     for (;;) {
         cells_visited++;
         /* Test the triangles stored in this cell */
+        long c = w.c;
         if (occupied[c >> 6] >> (c & 63) & 1) {
             uint32_t begin = cell_start[c], end = cell_start[c + 1];
             tests += end - begin;
@@ -341,38 +367,9 @@ static inline int grid_walk(const grid *g, ray *r, walk_rule rule, triangle_test
             if (rule == WALK_NAIVE_EXIT && hit_here)
                 break;
         }
-        /* Step to the next cell, across the nearest of the three next
-         * boundaries; the current cell ends there, at t_exit = that t_max.
-         * A hit counts only if it lies inside this cell, t <= t_exit: a
-         * triangle stored here may be hit at a point in a later cell, and a
-         * closer hit may then be waiting in the next cell. Such a hit stays
-         * the candidate (t_best) and the walk goes on. The same test ends
-         * the walk when the ray itself ends in this cell. */
-        if (t_max_x < t_max_y && t_max_x < t_max_z) {
-            if (t_best <= t_max_x)
-                break;
-            x += step_x;
-            if (x == just_out_x) /* left the grid */
-                break;
-            c += stride_x;
-            t_max_x += t_delta_x;
-        } else if (t_max_y < t_max_z) {
-            if (t_best <= t_max_y)
-                break;
-            y += step_y;
-            if (y == just_out_y)
-                break;
-            c += stride_y;
-            t_max_y += t_delta_y;
-        } else {
-            if (t_best <= t_max_z)
-                break;
-            z += step_z;
-            if (z == just_out_z)
-                break;
-            c += stride_z;
-            t_max_z += t_delta_z;
-        }
+        /* Step to the next cell; a hit counts only inside its cell (dda_step) */
+        if (!dda_step(&w, t_best))
+            break;
     }
 done:
     counters->box_tests += cells_visited;

@@ -48,6 +48,30 @@ static const float SPLIT_SLACK = 2.0f * (3.0f * 0x1.0p-24f) / (1.0f - 3.0f * 0x1
 static const float HIT_MARGIN = 0x1.0p-16f;
 
 
+/* Front to back at an interior node: the ray's interval [t_enter, t_exit]
+ * in the node, cut by the split plane at t_split into [t_enter, t_split] in
+ * the near child and [t_split, t_exit] in the far child; whether the ray
+ * reaches each child, and those two intervals. */
+typedef struct {
+    bool near, far;
+    float near_exit, far_enter;
+} kd_children;
+
+static inline kd_children kd_front_to_back(float t_split, float t_enter, float t_exit)
+{
+    /* exercise: kd_front_to_back */
+    kd_children c;
+    /* The near child unless the plane comes before t_enter, the far one
+     * unless it comes after t_exit, each with SPLIT_SLACK; written as "not
+     * before" and "not after" so that NaN (a ray in the plane) visits both. */
+    c.near = !(t_split < t_enter - fabsf(t_enter) * SPLIT_SLACK);
+    c.far = !(t_split > t_exit + fabsf(t_exit) * SPLIT_SLACK);
+    c.near_exit = t_split < t_exit ? t_split : t_exit;
+    c.far_enter = t_split > t_enter ? t_split : t_enter;
+    return c;
+    /* end of exercise kd_front_to_back */
+}
+
 typedef struct {
     uint32_t node;
     uint32_t in_plane; /* pushed by a ray lying in the split plane: see below */
@@ -116,11 +140,10 @@ static inline int kdtree_walk(const kd_tree *tree, ray *ray_io, bool any, triang
                  * in front of the other then: a hit in the first does not
                  * mean the second holds nothing closer, so the stop test
                  * waits until that one has been popped (in_plane_pending). */
-                bool visit_near = !(t_split < t_enter - fabsf(t_enter) * SPLIT_SLACK);
-                bool visit_far = !(t_split > t_exit + fabsf(t_exit) * SPLIT_SLACK);
+                kd_children reached = kd_front_to_back(t_split, t_enter, t_exit);
+                bool visit_near = reached.near, visit_far = reached.far;
                 bool in_plane = isnan(t_split);
-                float near_exit = t_split < t_exit ? t_split : t_exit;
-                float far_enter = t_split > t_enter ? t_split : t_enter;
+                float near_exit = reached.near_exit, far_enter = reached.far_enter;
                 /* Visit the near child now, push the far child with its
                  * interval [t_split, t_exit].
                  *

@@ -36,8 +36,11 @@ typedef enum { BVH_SPLIT_MEDIAN, BVH_SPLIT_SAH } bvh_split;
  *                        node's split axis (the sign of d on that axis)
  *   BVH_ORDER_DISTANCE   test both children's boxes, visit the one the ray
  *                        enters first; skip the other if it starts beyond
- *                        the closest hit found by then */
-typedef enum { BVH_ORDER_AXIS_SIGN, BVH_ORDER_DISTANCE } bvh_order;
+ *                        the closest hit found by then
+ *   BVH_ORDER_RECURSIVE  the slide's Intersect(ray, node): both children,
+ *                        recursively, the closer of their hits (any hit
+ *                        too: a shadow ray asks for the closest) */
+typedef enum { BVH_ORDER_AXIS_SIGN, BVH_ORDER_DISTANCE, BVH_ORDER_RECURSIVE } bvh_order;
 
 /* One node, 32 bytes: its box (6 floats) and two ints.
  *   interior: first = index of the first child (the second is first + 1),

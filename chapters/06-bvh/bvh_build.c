@@ -200,6 +200,51 @@ typedef struct {
     int count;
 } sah_bin;
 
+/* The best split so far: its cost (times the node's area), the axis, and the
+ * plane (after bin `plane`: bins 0 .. plane go left). */
+typedef struct {
+    float cost;
+    int axis, plane;
+} sah_choice;
+
+/* The surface area heuristic on one axis: sweep the planes between the
+ * bins, and keep in *best the cheapest split so far,
+ *   C = C_t A + C_i (A_L N_L + A_R N_R)
+ * (traversal_area = C_t A; N counted in blocks, sah_blocks). Once from the
+ * right, to know the area and count of bins k .. end, then from the left,
+ * where each plane's cost is computed; a plane with an empty side is not a
+ * split. */
+static void sah_sweep(const builder *b, const sah_bin *bins, int bin_count, float traversal_area, int axis,
+                      sah_choice *best)
+{
+    /* exercise: sah_split */
+    /* from the right: area and count of bins k .. end */
+    float right_area[BVH_SAH_BINS];
+    int right_count[BVH_SAH_BINS];
+    box3 right = box3_empty();
+    int n = 0;
+    for (int k = bin_count - 1; k > 0; k--) {
+        box3_grow(&right, bins[k].box.lo, bins[k].box.hi);
+        n += bins[k].count;
+        right_area[k] = box3_area(&right);
+        right_count[k] = n;
+    }
+    /* from the left: the plane after bin k */
+    box3 left = box3_empty();
+    n = 0;
+    for (int k = 0; k < bin_count - 1; k++) {
+        box3_grow(&left, bins[k].box.lo, bins[k].box.hi);
+        n += bins[k].count;
+        if (n == 0 || right_count[k + 1] == 0)
+            continue; /* one side empty: not a split */
+        float cost = traversal_area + BVH_SAH_INTERSECTION_COST * (box3_area(&left) * sah_blocks(b, n) +
+                                                                   right_area[k + 1] * sah_blocks(b, right_count[k + 1]));
+        if (cost < best->cost)
+            *best = (sah_choice){cost, axis, k};
+    }
+    /* end of exercise sah_split */
+}
+
 /* Split where the SAH's expected cost of a ray,
  *     cost = C_t + (A_L N_L + A_R N_R) / A * C_i,
  * is lowest, among the planes between bins on all three axes, if that beats
@@ -263,38 +308,13 @@ static bool split_sah(builder *b, int begin, int end, const box3 *box, const box
         float traversal_cost = b->sah.top_area_fraction > 0.0f && node_area >= b->sah.top_area_fraction * b->root_area
                                    ? b->sah.top_traversal_cost
                                    : b->sah.traversal_cost;
-        for (int axis = 0; axis < 3; axis++) {
-            if (!binned[axis])
-                continue;
-            /* from the right: area and count of bins k .. end */
-            float right_area[BVH_SAH_BINS];
-            int right_count[BVH_SAH_BINS];
-            box3 right = box3_empty();
-            int n = 0;
-            for (int k = bin_count - 1; k > 0; k--) {
-                box3_grow(&right, bins[axis][k].box.lo, bins[axis][k].box.hi);
-                n += bins[axis][k].count;
-                right_area[k] = box3_area(&right);
-                right_count[k] = n;
-            }
-            /* from the left: the plane after bin k */
-            box3 left = box3_empty();
-            n = 0;
-            for (int k = 0; k < bin_count - 1; k++) {
-                box3_grow(&left, bins[axis][k].box.lo, bins[axis][k].box.hi);
-                n += bins[axis][k].count;
-                if (n == 0 || right_count[k + 1] == 0)
-                    continue; /* one side empty: not a split */
-                float cost = traversal_cost * node_area +
-                             BVH_SAH_INTERSECTION_COST * (box3_area(&left) * sah_blocks(b, n) +
-                                                          right_area[k + 1] * sah_blocks(b, right_count[k + 1]));
-                if (cost < best_cost) {
-                    best_cost = cost;
-                    best_axis = axis;
-                    best_plane = k;
-                }
-            }
-        }
+        sah_choice best = {INFINITY, -1, -1};
+        for (int axis = 0; axis < 3; axis++)
+            if (binned[axis])
+                sah_sweep(b, bins[axis], bin_count, traversal_cost * node_area, axis, &best);
+        best_cost = best.cost;
+        best_axis = best.axis;
+        best_plane = best.plane;
     }
 
     /* Stop when necessary: when a leaf is cheaper, and small enough */

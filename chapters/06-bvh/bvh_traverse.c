@@ -247,6 +247,7 @@ static bvh_found closer(bvh_found hit1, bvh_found hit2)
 static bvh_found intersect(const bvh *b, const ray *r, const slab_ray *sr, const watertight_ray *wr,
                            int node_index, ray_counters *counters)
 {
+    /* exercise: bvh_intersect; a stub returns (bvh_found){-1, r->t_max, 0.0f, 0.0f} */
     const bvh_node *node = &b->nodes[node_index];
     const bvh_found none = {-1, r->t_max, 0.0f, 0.0f};
     float t_enter, t_exit;
@@ -268,6 +269,7 @@ static bvh_found intersect(const bvh *b, const ray *r, const slab_ray *sr, const
     bvh_found hit1 = intersect(b, r, sr, wr, node->first, counters);     /* child1 */
     bvh_found hit2 = intersect(b, r, sr, wr, node->first + 1, counters); /* child2 */
     return closer(hit1, hit2);
+    /* end of exercise bvh_intersect */
 }
 
 bool bvh_closest_hit_recursive(const bvh *b, ray r, hit_record *hit, ray_counters *counters)
@@ -340,12 +342,27 @@ static void bvh_destroy(accel *a)
     free(b);
 }
 
+static bool closest_hit_recursive(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    return bvh_closest_hit_recursive((const bvh *)a, r, hit, counters);
+}
+
+static bool any_hit_recursive(const accel *a, ray r, ray_counters *counters)
+{
+    hit_record hit;
+    return bvh_closest_hit_recursive((const bvh *)a, r, &hit, counters);
+}
+
 const accel_ops bvh_ops_axis_sign = {closest_hit_axis_sign, any_hit_axis_sign, bvh_destroy, bvh_use_triangle_test};
 const accel_ops bvh_ops_distance = {closest_hit_distance, any_hit_distance, bvh_destroy, bvh_use_triangle_test};
+static const accel_ops bvh_ops_recursive = {closest_hit_recursive, any_hit_recursive, bvh_destroy,
+                                            bvh_use_triangle_test};
 
 void bvh_set_order(accel *a, bvh_order order)
 {
     bvh *b = (bvh *)a;
     b->order = order;
-    b->base.ops = order == BVH_ORDER_AXIS_SIGN ? &bvh_ops_axis_sign : &bvh_ops_distance;
+    b->base.ops = order == BVH_ORDER_AXIS_SIGN ? &bvh_ops_axis_sign
+                  : order == BVH_ORDER_DISTANCE ? &bvh_ops_distance
+                                                : &bvh_ops_recursive;
 }

@@ -29,9 +29,10 @@ typedef struct {
 static const char *const SPLITS[] = {"median", "sah", NULL};
 static const char *const SPLIT_NOTES[] = {"longest axis, median object (the lecture)",
                                           "surface area heuristic (default)", NULL};
-static const char *const ORDERS[] = {"sign", "distance", NULL};
+static const char *const ORDERS[] = {"sign", "distance", "recursive", NULL};
 static const char *const ORDER_NOTES[] = {"near child first by the sign of d on the split axis (default)",
-                                          "near child first by where the ray enters its box", NULL};
+                                          "near child first by where the ray enters its box",
+                                          "the slide's Intersect(ray, node): both children, recursively", NULL};
 static const char *const MESHES[] = {"tori", "stadium", "icosphere", NULL};
 
 /* What the tree is: its size, shape and the SAH's estimate of its cost. */

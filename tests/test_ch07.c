@@ -127,6 +127,7 @@ static void test_midpoint_error_falls_as_h_squared_and_the_estimate_covers_it(vo
 static void test_solid_angle_of_the_sphere_is_4pi(void **state)
 {
     (void)state;
+    exercise_checks("solid_angle_integral");
     double one = 1.0;
     assert_agrees(integrate_over_sphere(constant, &one, QUADRATURE_GAUSS_LEGENDRE, N_DIRECTIONS), 4.0 * PI);
 }
@@ -134,6 +135,7 @@ static void test_solid_angle_of_the_sphere_is_4pi(void **state)
 static void test_solid_angle_of_cones_up_to_half_angle_pi(void **state)
 {
     (void)state;
+    exercise_checks("solid_angle_integral");
     double one = 1.0;
     const double alphas[] = {deg(1), deg(10), deg(45), deg(90), deg(135), deg(179), PI};
     for (int i = 0; i < 7; i++) {
@@ -298,6 +300,7 @@ static void test_closed_cube_solid_angles_sum_to_4pi_inside_and_0_outside(void *
 static void test_flux_is_the_integral_of_intensity(void **state)
 {
     (void)state;
+    exercise_checks("solid_angle_integral");
     double flux = 100.0, I = intensity_isotropic_point(flux);
     assert_agrees(integrate_over_sphere(constant, &I, QUADRATURE_GAUSS_LEGENDRE, N_DIRECTIONS), flux);
     assert_agrees(flux_lambertian_emitter_numeric(2.0, 3.0, N_DIRECTIONS), flux_lambertian_emitter(2.0, 3.0));
@@ -312,6 +315,7 @@ static void test_flux_is_the_integral_of_intensity(void **state)
 static void test_uniform_sky_gives_pi_L(void **state)
 {
     (void)state;
+    exercise_checks("solid_angle_integral");
     for (double L = 0.5; L <= 8.0; L *= 2.0)
         assert_agrees(irradiance_from_cone(L, UP, UP, 0.5 * PI, QUADRATURE_GAUSS_LEGENDRE, N_DIRECTIONS),
                       irradiance_uniform_sky(L));
@@ -434,6 +438,7 @@ enum { VIEWS = 5 };
 static void test_lambertian_albedo_is_rho_at_every_angle(void **state)
 {
     (void)state;
+    exercise_checks("solid_angle_integral");
     const double rhos[] = {0.2, 0.8, 1.0};
     for (int r = 0; r < 3; r++) {
         brdf f = brdf_lambertian(rhos[r]);

@@ -251,6 +251,7 @@ static void test_round_trip_catches_a_wrong_inverse(void **state)
 static void test_piecewise_constant_1d_round_trip_and_zero_bins(void **state)
 {
     (void)state;
+    exercise_checks("invert_cdf");
     piecewise_constant_1d d = make_table();
     /* The 1D table is double: the same ten-operation argument gives ~1e-15;
      * 1e-12 leaves room and still catches any wrong bin (>= 1/8 off). */
@@ -849,6 +850,7 @@ static chi2_case table_chi2(const char *name, bool (*draw)(pcg32 *, const void *
 static void test_chi_square_piecewise_constant_1d(void **state)
 {
     (void)state;
+    exercise_checks("invert_cdf");
     piecewise_constant_1d d = make_table();
     chi2_case c = table_chi2("1D piecewise-constant table", draw_table, &d);
     assert_chi2_passes(&c, 130);
@@ -930,6 +932,7 @@ static bool looks_unbiased(estimate_fn fn, const void *ctx, double exact, uint64
 static void test_every_estimator_is_unbiased(void **state)
 {
     (void)state;
+    exercise_checks("mc_estimator");
     experiment_catalogue cat;
     experiment_catalogue_init(&cat);
     int tests = 0;
@@ -1021,6 +1024,7 @@ static const double ZERO_VARIANCE_RELATIVE_TOLERANCE = 1e-6;
 static void test_p_proportional_to_f_has_zero_variance(void **state)
 {
     (void)state;
+    exercise_checks("mc_estimator");
     const sampling_strategy cosine = {"cosine", warp_cosine_hemisphere, NULL};
     const sampling_strategy uniform = {"uniform", warp_uniform_hemisphere, NULL};
     pcg32 rng = pcg32_for_pixel(test_seed(310), 0);
@@ -1090,6 +1094,7 @@ static double estimate_x_squared_reseeded(const void *ctx, int n, pcg32 *rng)
 static void test_variance_of_independent_samples_falls_as_one_over_n(void **state)
 {
     (void)state;
+    exercise_checks("mc_estimator");
     double slope = variance_slope(estimate_x_squared_uniform, NULL, INDEPENDENT_NS, 400);
     print_message("independent, x^2: slope of log Var against log N = %.3f (theory -1)\n", slope);
     assert_close(slope, -1.0, SLOPE_TOLERANCE);

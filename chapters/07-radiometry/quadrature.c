@@ -112,6 +112,7 @@ static void check_points(int n)
 static grid_sum cone_grid(direction_fn f, const void *ctx, dvec3 axis, double alpha, quadrature_rule rule,
                           int n_theta, int n_phi)
 {
+    /* exercise: solid_angle_integral */
     double *theta = memory_allocate((size_t)n_theta, sizeof *theta);
     double *w_theta = memory_allocate((size_t)n_theta, sizeof *w_theta);
     double *phi = memory_allocate((size_t)n_phi, sizeof *phi);
@@ -137,6 +138,7 @@ static grid_sum cone_grid(direction_fn f, const void *ctx, dvec3 axis, double al
     free(phi);
     free(w_phi);
     return g;
+    /* end of exercise solid_angle_integral */
 }
 
 quadrature_result integrate_over_cone(direction_fn f, const void *ctx, dvec3 axis, double alpha,

@@ -237,6 +237,7 @@ void points_generate(point_set kind, pcg32 *rng, int n, int dimension, double *u
 
 double monte_carlo_estimate(const integrand *f, const sampling_strategy *s, const double *u, int n)
 {
+    /* exercise: mc_estimator */
     double sum = 0.0;
     for (int i = 0; i < n; i++) {
         double x[3];
@@ -247,6 +248,7 @@ double monte_carlo_estimate(const integrand *f, const sampling_strategy *s, cons
     }
     /* (1/N) sum */
     return sum / n;
+    /* end of exercise mc_estimator */
 }
 
 double estimator_estimate(const integrand *f, const estimator *e, int n, pcg32 *rng, double *scratch)

@@ -276,6 +276,7 @@ void piecewise_constant_1d_free(piecewise_constant_1d *d)
  * empty bins because their cdf does not rise), then go linearly inside it. */
 double sample_piecewise_constant_1d(const piecewise_constant_1d *d, double u, double *pdf)
 {
+    /* exercise: invert_cdf */
     int lo = 0, hi = d->count; /* invariant: cdf[lo] <= u < cdf[hi] */
     while (hi - lo > 1) {
         int mid = lo + (hi - lo) / 2;
@@ -293,6 +294,7 @@ double sample_piecewise_constant_1d(const piecewise_constant_1d *d, double u, do
     if (pdf != NULL)
         *pdf = d->func[lo] / d->integral;
     return x;
+    /* end of exercise invert_cdf */
 }
 
 static int piecewise_constant_1d_bin(const piecewise_constant_1d *d, double x)

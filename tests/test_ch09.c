@@ -20,6 +20,7 @@
 #include "06-bvh/bvh.h"
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/experiments.h"
+#include "09-path-tracing/light_transport.h"
 #include "09-path-tracing/path_tracer.h"
 #include "09-path-tracing/sobol_sampler.h"
 #include "08-monte-carlo/estimators.h"
@@ -1259,6 +1260,82 @@ static void build_box_scene(pt_scene *sc, int scene)
         pt_scene_build_cornell_box_materials(sc);
 }
 
+/* ---- the light transport pieces (light_transport.h) ---------------------------
+ * The lecture's light sample in the slide's area form and the later rungs'
+ * in the solid-angle form are one integrand written two ways: at random
+ * points of the Cornell box's walls, seen from random directions, with
+ * random points on its light, the two agree to rounding (the forms order
+ * their products differently: LIGHT_FORMS_TOLERANCE relative), add light
+ * for the same samples and hand back the same shadow segment, bit for bit.
+ * The density light_pdf_from() gives the emission a BSDF sample finds is
+ * the light sample's own pdf_light, bit for bit, so the two MIS weights of
+ * one path weigh the same densities and add up to 1. The twin, the area
+ * form without cos(theta') (the slip the slide's formula invites), is
+ * caught. */
+static const float LIGHT_FORMS_TOLERANCE = 1e-5f;
+
+static bool light_forms_agree(vec3 a, vec3 b)
+{
+    float scale = fmaxf(vec3_max_component(a), vec3_max_component(b));
+    return vec3_max_component(vec3_abs(vec3_sub(a, b))) <= LIGHT_FORMS_TOLERANCE * scale;
+}
+
+static void test_light_sample_forms_agree(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    pcg32 rng = pcg32_for_pixel(test_seed(157), 0);
+    enum { VERTICES = 4000 };
+    int lit = 0, wrong = 0, twin_caught = 0;
+    for (int i = 0; i < VERTICES; i++) {
+        int t;
+        do
+            t = (int)pcg32_bounded(&rng, (uint32_t)sc.triangles.count);
+        while (vec3_max_component(sc.materials[sc.geometry.faces[t].material].emission) > 0.0f);
+        const triangle *tri = &sc.triangles.triangles[t];
+        const pt_material *m = &sc.materials[sc.geometry.faces[t].material];
+        float r1 = sqrtf(pcg32_float(&rng)), r2 = pcg32_float(&rng);
+        hit_record p = {0};
+        p.point = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - r1), vec3_scale(tri->p1, r1 * (1.0f - r2))),
+                           vec3_scale(tri->p2, r1 * r2));
+        p.normal_shading = p.normal_geometric =
+            vec3_normalize(vec3_cross(vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0)));
+        float u_z = pcg32_float(&rng), u_phi = pcg32_float(&rng);
+        vec3 wo = frame_to_world(p.normal_shading, sample_uniform_hemisphere(vec2_make(u_z, u_phi)));
+        pt_light_sample x;
+        memset(&x, 0, sizeof x); /* assert_true may return: the compiler cannot know it stops the test */
+        float u_pick = pcg32_float(&rng), u1 = pcg32_float(&rng), u2 = pcg32_float(&rng);
+        assert_true(pt_scene_sample_light(&sc, u_pick, u1, u2, &x));
+        light_contribution area = direct_light_area(m, &p, wo, &x);
+        light_contribution solid = direct_light_solid_angle(m, &p, wo, &x, 1, 1);
+        if (area.adds != solid.adds) {
+            wrong++;
+            continue;
+        }
+        if (!area.adds)
+            continue;
+        lit++;
+        vec3 wi = vec3_normalize(vec3_sub(x.point, p.point));
+        float pdf_bsdf = bsdf_pdf(m, p.normal_shading, wo, wi);
+        float weight = power_heuristic(solid.pdf_light, pdf_bsdf);
+        float pdf_found = light_pdf_from(p.point, x.point, x.normal, vec3_neg(wi), x.pdf_light);
+        bool same = light_forms_agree(area.radiance, vec3_scale(solid.radiance, 1.0f / solid.weight)) &&
+                    memcmp(&area.shadow, &solid.shadow, sizeof area.shadow) == 0 && solid.weight == weight &&
+                    memcmp(&pdf_found, &solid.pdf_light, sizeof pdf_found) == 0 &&
+                    fabsf(weight + power_heuristic(pdf_bsdf, pdf_found) - 1.0f) <= LIGHT_FORMS_TOLERANCE;
+        wrong += !same;
+        twin_caught += !light_forms_agree(vec3_scale(area.radiance, 1.0f / area.cos_theta_light),
+                                          vec3_scale(solid.radiance, 1.0f / solid.weight));
+    }
+    print_message("light sample, area and solid-angle forms: %d of %d vertices differ (%d add light); "
+                  "twin without cos(theta'): %d differ\n", wrong, VERTICES, lit, twin_caught);
+    assert_int_equal(wrong, 0);
+    assert_true(lit > VERTICES / 4);
+    assert_true(twin_caught > lit / 2);
+    pt_scene_free(&sc);
+}
+
 /* Skipping the walls changes no answer: for shadow rays between surface
  * points and for segments that leave the room, pt_scene_occluded equals
  * the test against every triangle and sphere. The twin: a check that
@@ -2172,6 +2249,7 @@ int main(void)
         cmocka_unit_test(test_ggx_sampling_matches_its_pdf),
         cmocka_unit_test(test_ggx_weights_never_exceed_one),
         cmocka_unit_test(test_ggx_samples_follow_their_pdf_at_an_angle),
+        cmocka_unit_test(test_light_sample_forms_agree),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
         cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "09-path-tracing/bsdf.h"
+#include "09-path-tracing/light_transport.h"
 #include "09-path-tracing/sobol_sampler.h"
 #include "explain.h"
 
@@ -93,14 +94,6 @@ static void explain_pt_hit(const pt_scene *sc, const hit_record *hit, int depth)
                  hit->front_face ? "" : " (back face)");
 }
 
-/* The power heuristic (Veach 1997) with exponent 2: the weight of a sample
- * drawn with density a, when density b could have drawn it too. */
-static float power_heuristic(float a, float b)
-{
-    float a2 = a * a, b2 = b * b;
-    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
-}
-
 /* Does this hit count its own emission? Emitters are one-sided. */
 static vec3 emitted(const pt_scene *sc, const hit_record *hit)
 {
@@ -108,34 +101,36 @@ static vec3 emitted(const pt_scene *sc, const hit_record *hit)
     return hit->front_face ? m->emission : vec3_splat(0.0f);
 }
 
+/* ---- the shadow-ray hook ------------------------------------------------------
+ * Does the shadow ray get through its segment? With the shadows effect off
+ * (nothing in the scene can block a light), without a shadow ray. */
+static bool light_visible(const path_tracer *pt, const ray *shadow, ray_counters *counters)
+{
+    return !(pt->effects & EFFECT_SHADOWS) || pt_scene_segment_clear(pt->scene, *shadow, counters);
+}
+
 /* ---- lights without area ----------------------------------------------------
  * Point lights: a delta in position, so only light sampling finds them:
- * L_dir = f_r I cos(theta) / r^2. Not on the slide; every rung adds them. */
+ * L_dir = f_r I cos(theta) / r^2 (direct_light_point). Not on the slide;
+ * every rung adds them. */
 static vec3 point_lights(const path_tracer *pt, const hit_record *p, vec3 wo, const pt_material *m,
                          int explain_depth, ray_counters *counters)
 {
     const pt_scene *sc = pt->scene;
     vec3 radiance = vec3_splat(0.0f);
     for (int i = 0; i < sc->point_light_count; i++) {
-        const pt_point_light *light = &sc->point_lights[i];
-        vec3 to_light = vec3_sub(light->position, p->point);
-        float distance2 = vec3_length_squared(to_light);
-        vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-        float cos_theta = vec3_dot(p->normal_shading, wi);
-        vec3 f = cos_theta > 0.0f ? bsdf_eval(m, p->normal_shading, wo, wi) : vec3_splat(0.0f);
-        if (vec3_is_black(f))
+        light_contribution l = direct_light_point(m, p, wo, &sc->point_lights[i]);
+        if (!l.adds)
             continue;
-        const vec3 no_surface = vec3_splat(0.0f); /* nothing to stop short of at a point light */
-        if ((pt->effects & EFFECT_SHADOWS) && !pt_scene_visible(sc, p, &light->position, 0.0f, &no_surface, counters)) {
+        if (!light_visible(pt, &l.shadow, counters)) {
             explain_line(explain_depth, "point light %d: shadow ray blocked", i);
             continue;
         }
-        vec3 contribution = vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2);
-        radiance = vec3_add(radiance, contribution);
+        radiance = vec3_add(radiance, l.radiance);
         char cb[64];
         if (explain_on())
-            explain_line(explain_depth, "point light %d: visible, cos %.4g, r^2 %.4g, adds %s", i, (double)cos_theta,
-                         (double)distance2, explain_vec3(cb, contribution));
+            explain_line(explain_depth, "point light %d: visible, cos %.4g, r^2 %.4g, adds %s", i,
+                         (double)l.cos_theta, (double)l.distance2, explain_vec3(cb, l.radiance));
     }
     return radiance;
 }
@@ -159,39 +154,29 @@ static bool sample_light(const pt_scene *sc, pt_random *rng, pt_light_sample *x)
 static vec3 sample_direct_light(const path_tracer *pt, const hit_record *hit, vec3 wo, const pt_material *m,
                                 bool with_mis, int explain_depth, pt_random *rng, ray_counters *counters)
 {
-    const pt_scene *sc = pt->scene;
-    vec3 n = hit->normal_shading;
     vec3 radiance = point_lights(pt, hit, wo, m, explain_depth, counters);
     pt_light_sample x;
-    if (!sample_light(sc, rng, &x))
+    if (!sample_light(pt->scene, rng, &x))
         return radiance;
-    vec3 to_light = vec3_sub(x.point, hit->point);
-    float distance2 = vec3_length_squared(to_light);
-    vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-    float cos_theta = vec3_dot(n, wi), cos_theta_light = -vec3_dot(x.normal, wi);
-    /* A light seen from behind (one-sided) or below the surface adds
-     * nothing: no shadow ray needed to know it. */
-    vec3 f = cos_theta_light > 0.0f && cos_theta > 0.0f ? bsdf_eval(m, n, wo, wi) : vec3_splat(0.0f);
-    if (vec3_is_black(f)) {
+    /* with MIS, weighed against the one BSDF sample drawn next */
+    light_contribution l = direct_light_solid_angle(m, hit, wo, &x, 1, with_mis ? 1 : 0);
+    if (!l.adds) {
         explain_line(explain_depth, "light sample: faces away, lies below the surface or f = 0: no shadow ray");
         return radiance;
     }
-    if ((pt->effects & EFFECT_SHADOWS) && !pt_scene_visible(sc, hit, &x.point, x.point_error, &x.normal, counters)) {
+    if (!light_visible(pt, &l.shadow, counters)) {
         explain_line(explain_depth, "light sample: shadow ray blocked");
         return radiance;
     }
-    float pdf_light = distance2 * x.pdf_light / cos_theta_light; /* per steradian */
-    float weight = with_mis ? power_heuristic(pdf_light, bsdf_pdf(m, n, wo, wi)) : 1.0f;
-    vec3 contribution = vec3_scale(vec3_mul(x.emission, f), cos_theta / pdf_light * weight);
     if (explain_on()) {
         char xb[64], cb[64], wb[32] = "";
         if (with_mis) /* the weight only where MIS weighs: the other rungs use none */
-            snprintf(wb, sizeof wb, ", MIS weight %.3g", (double)weight);
+            snprintf(wb, sizeof wb, ", MIS weight %.3g", (double)l.weight);
         explain_line(explain_depth, "light sample at %s: visible, pdf %.4g per sr, cos %.4g%s, adds %s",
-                     explain_vec3(xb, x.point), (double)pdf_light, (double)cos_theta, wb,
-                     explain_vec3(cb, contribution));
+                     explain_vec3(xb, x.point), (double)l.pdf_light, (double)l.cos_theta, wb,
+                     explain_vec3(cb, l.radiance));
     }
-    return vec3_add(radiance, contribution);
+    return vec3_add(radiance, l.radiance);
 }
 
 /* --explain: the roulette's draw and what it decided. */
@@ -215,16 +200,7 @@ static void count_continuation(ray_counters *counters, const bsdf_sample_result 
 }
 
 /* ---- the hooks the lecture's shade() calls, one line each --------------------
- * Is the light sample x seen from p? With the shadows effect off (nothing
- * in the scene can block a light), without a shadow ray. */
-static bool light_visible(const path_tracer *pt, const hit_record *p, const pt_light_sample *x,
-                          ray_counters *counters)
-{
-    return !(pt->effects & EFFECT_SHADOWS) ||
-           pt_scene_visible(pt->scene, p, &x->point, x->point_error, &x->normal, counters);
-}
-
-/* Does the path go on from p (bounce depth + 1 to a vertex whose light
+ * light_visible (above), and: does the path go on from p (bounce depth + 1 to a vertex whose light
  * sample, bounce depth + 2, still counts; the effects ask for it; the
  * roulette lets it)? The probability P_RR it went on with, or 0 if it
  * ends here. */
@@ -266,15 +242,15 @@ static void explain_shade(const path_tracer *pt, int depth, const char *what, ve
 }
 
 /* --explain: the lecture's light sample in the slide's area form. */
-static void explain_light_sample(int depth, const pt_light_sample *x, float cos_theta, float cos_theta_x,
-                                 float distance2, vec3 l_x)
+static void explain_light_sample(int depth, const pt_light_sample *x, const light_contribution *l_x)
 {
     if (!explain_on())
         return;
     char xb[64], cb[64];
     explain_line(2 * depth + 2, "light sample at x' = %s: visible, cos theta %.4g, cos theta' %.4g, |x' - p|^2 %.4g, "
-                 "pdf_light %.4g per unit area, adds %s", explain_vec3(xb, x->point), (double)cos_theta,
-                 (double)cos_theta_x, (double)distance2, (double)x->pdf_light, explain_vec3(cb, l_x));
+                 "pdf_light %.4g per unit area, adds %s", explain_vec3(xb, x->point), (double)l_x->cos_theta,
+                 (double)l_x->cos_theta_light, (double)l_x->distance2, (double)x->pdf_light,
+                 explain_vec3(cb, l_x->radiance));
 }
 
 static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth, vec3 throughput, pt_random *rng,
@@ -340,16 +316,11 @@ static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth
     vec3 l_dir = point_lights(pt, p, wo, m, 2 * depth + 2, counters); /* lights without area (above) */
     pt_light_sample x;
     if (sample_light(sc, rng, &x)) {
-        vec3 to_light = vec3_sub(x.point, p->point);
-        float distance2 = vec3_length_squared(to_light); /* |x' - p|^2 */
-        vec3 ws = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-        float cos_theta = vec3_dot(n, ws), cos_theta_x = -vec3_dot(x.normal, ws);
-        /* if the ray from p to x' is not blocked in the middle: L_i f_r cos(theta) cos(theta') / |x' - p|^2 / pdf */
-        if (cos_theta > 0.0f && cos_theta_x > 0.0f && light_visible(pt, p, &x, counters)) {
-            vec3 l_x = vec3_scale(vec3_mul(x.emission, bsdf_eval(m, n, wo, ws)),
-                                  cos_theta * cos_theta_x / distance2 / x.pdf_light);
-            l_dir = vec3_add(l_dir, l_x);
-            explain_light_sample(depth, &x, cos_theta, cos_theta_x, distance2, l_x);
+        /* L_i f_r cos(theta) cos(theta') / |x' - p|^2 / pdf_light, and the ray from p to x' */
+        light_contribution l_x = direct_light_area(m, p, wo, &x);
+        if (l_x.adds && light_visible(pt, &l_x.shadow, counters)) { /* not blocked in the middle */
+            l_dir = vec3_add(l_dir, l_x.radiance);
+            explain_light_sample(depth, &x, &l_x);
         } else {
             explain_line(2 * depth + 2, "light sample: faces away, lies below the surface or is blocked: adds 0");
         }
@@ -430,9 +401,8 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_co
                 explain_line(indent, "emission counted in full (%s)",
                              emission_counts ? "seen directly or through a delta bounce" : "not in the light table");
             } else if (mis) {
-                float distance2 = vec3_length_squared(vec3_sub(hit.point, previous_point));
-                float cos_light = fabsf(vec3_dot(hit.normal_geometric, wo));
-                float pdf_light = distance2 * pt_scene_emitter_pdf_area(sc, hit.material_id) / cos_light;
+                float pdf_light = light_pdf_from(previous_point, hit.point, hit.normal_geometric, wo,
+                                                 pt_scene_emitter_pdf_area(sc, hit.material_id));
                 float weight = power_heuristic(previous_pdf, pdf_light);
                 radiance = vec3_add(radiance, vec3_scale(vec3_mul(throughput, le), weight));
                 explain_line(indent, "emission found by the BSDF sample: MIS weight %.3g (BSDF pdf %.4g, light pdf %.4g)",
@@ -479,7 +449,7 @@ static vec3 trace_iterative(const path_tracer *pt, ray r, pt_random *rng, ray_co
             s.pdf = cosine_hemisphere_pdf(local.z);
             if (!(s.pdf > 0.0f))
                 break;
-            s.weight = vec3_scale(bsdf_eval(m, n, wo, s.wi), local.z / s.pdf);
+            s.weight = bounce_weight(m, n, wo, s.wi, local.z, s.pdf);
             s.is_delta = false;
             s.is_transmission = false;
         }

@@ -395,13 +395,19 @@ static bool occluded(const pt_scene *sc, const ray *r, ray_counters *counters)
 
 bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters) { return occluded(sc, &r, counters); }
 
+bool pt_scene_segment_clear(const pt_scene *sc, ray shadow, ray_counters *counters)
+{
+    counters->shadow_rays++;
+    return !occluded(sc, &shadow, counters);
+}
+
 bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, float target_error,
                       const vec3 *target_normal, ray_counters *counters)
 {
-    ray shadow = ray_spawn_to(from->point, from->point_error, from->normal_geometric, *target, target_error,
-                              *target_normal);
-    counters->shadow_rays++;
-    return !occluded(sc, &shadow, counters);
+    return pt_scene_segment_clear(sc,
+                                  ray_spawn_to(from->point, from->point_error, from->normal_geometric, *target,
+                                               target_error, *target_normal),
+                                  counters);
 }
 
 float pt_scene_emitter_pdf_area(const pt_scene *sc, int material)

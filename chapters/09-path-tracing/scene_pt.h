@@ -154,6 +154,10 @@ bool pt_scene_occluded(const pt_scene *sc, ray r, ray_counters *counters);
  * *target_normal) (ray.h), counted in counters->shadow_rays. */
 bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *target, float target_error,
                       const vec3 *target_normal, ray_counters *counters);
+/* Does a shadow ray get through: is nothing hit on its segment (a ray of
+ * ray_spawn_to(), light_transport.h's `shadow`)? Counted in
+ * counters->shadow_rays. */
+bool pt_scene_segment_clear(const pt_scene *sc, ray shadow, ray_counters *counters);
 
 /* A point on the emitting triangles, with its error bound (ray.h's
  * ray_point_error, as a hit there would have), the emitter's front normal

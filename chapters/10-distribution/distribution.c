@@ -4,6 +4,7 @@
 
 #include "02-whitted/whitted.h"
 #include "09-path-tracing/bsdf.h"
+#include "09-path-tracing/light_transport.h"
 #include "effects.h"
 #include "explain.h"
 
@@ -62,15 +63,6 @@ double distribution_glossy_rays_per_camera_ray(int glossy_samples, int max_depth
 }
 
 
-/* The power heuristic for a sample of technique a, taken n_a times, when
- * technique b (n_b samples) could also have drawn it (Veach 1997, 9.2.4:
- * the counts multiply the densities). */
-static float power_heuristic(int n_a, float pdf_a, int n_b, float pdf_b)
-{
-    float a = (float)n_a * pdf_a, b = (float)n_b * pdf_b;
-    return a * a + b * b > 0.0f ? a * a / (a * a + b * b) : 0.0f;
-}
-
 /* How a ray came to be traced: does the emission it finds count in full
  * (seen from the eye, or through a mirror or glass, where no light sample
  * could have found it), or was it drawn from a glossy lobe with density
@@ -82,6 +74,16 @@ typedef struct {
     vec3 from;
 } arrival;
 
+/* Does a light sample's shadow ray, at the ray's instant, get through? (With
+ * the shadows effect off, without a shadow ray.) */
+static bool lit_at(const distribution_tracer *dt, const light_contribution *l, float time, ray_counters *counters)
+{
+    if (!(dt->effects & EFFECT_SHADOWS))
+        return true;
+    counters->shadow_rays++;
+    return !motion_scene_occluded(dt->scene, (timed_ray){l->shadow, time}, counters);
+}
+
 /* ---- soft shadows: N_light samples of the area lights ---------------------------
  * L_dir = integral over the lights' area A of
  *         L_e f_r cos(theta) cos(theta') / |x' - p|^2 V(p, x') dA
@@ -91,61 +93,30 @@ typedef struct {
  * V needs a shadow ray per sample, at the ray's instant: the penumbra is the
  * fraction of the light each point sees. Point lights (a delta in position)
  * need one ray each. With `mis`, each sample is weighted against the
- * N_glossy lobe samples that could also have found the light. */
+ * N_glossy lobe samples that could also have found the light (the power
+ * heuristic with Veach's counts, 9.2.4: the counts multiply the densities).
+ * What each sample adds, and the segment its shadow ray tests, is chapter
+ * 09's (light_transport.h); only the rays' instant is this chapter's. */
 static vec3 direct_light(const distribution_tracer *dt, const hit_record *hit, vec3 wo, const pt_material *m,
                          float time, bool mis, pcg32 *rng, ray_counters *counters)
 {
     const pt_scene *sc = &dt->scene->base;
-    vec3 n = hit->normal_shading;
     vec3 sum = vec3_splat(0.0f);
     for (int k = 0; k < dt->light_samples; k++) {
-        vec3 x_light, n_light;
-        float x_error;
-        int light_material;
+        pt_light_sample x;
         float u_pick = pcg32_float(rng), u1 = pcg32_float(rng), u2 = pcg32_float(rng);
-        if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &x_error, &n_light, &light_material))
+        if (!pt_scene_sample_light(sc, u_pick, u1, u2, &x))
             break;
-        vec3 to_light = vec3_sub(x_light, hit->point);
-        float distance2 = vec3_length_squared(to_light);
-        vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-        float cos_theta = vec3_dot(n, wi), cos_light = -vec3_dot(n_light, wi);
-        if (!(cos_theta > 0.0f && cos_light > 0.0f))
-            continue; /* the light faces away, or lies below the surface */
-        vec3 f = bsdf_eval(m, n, wo, wi);
-        if (vec3_is_black(f))
-            continue;
-        if (dt->effects & EFFECT_SHADOWS) {
-            counters->shadow_rays++;
-            timed_ray shadow = {
-                ray_spawn_to(hit->point, hit->point_error, hit->normal_geometric, x_light, x_error, n_light), time};
-            if (motion_scene_occluded(dt->scene, shadow, counters))
-                continue;
-        }
-        float pdf_light = distance2 * pt_scene_emitter_pdf_area(sc, light_material) / cos_light; /* per sr */
-        float weight = mis ? power_heuristic(dt->light_samples, pdf_light, dt->glossy_samples, bsdf_pdf(m, n, wo, wi))
-                           : 1.0f;
-        vec3 le = sc->materials[light_material].emission;
-        sum = vec3_add(sum, vec3_scale(vec3_mul(le, f), cos_theta / pdf_light * weight));
+        light_contribution l =
+            direct_light_solid_angle(m, hit, wo, &x, dt->light_samples, mis ? dt->glossy_samples : 0);
+        if (l.adds && lit_at(dt, &l, time, counters))
+            sum = vec3_add(sum, l.radiance);
     }
     vec3 radiance = vec3_scale(sum, 1.0f / (float)dt->light_samples);
     for (int i = 0; i < sc->point_light_count; i++) {
-        const pt_point_light *light = &sc->point_lights[i];
-        vec3 to_light = vec3_sub(light->position, hit->point);
-        float distance2 = vec3_length_squared(to_light);
-        vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-        float cos_theta = vec3_dot(n, wi);
-        vec3 f = cos_theta > 0.0f ? bsdf_eval(m, n, wo, wi) : vec3_splat(0.0f);
-        if (vec3_is_black(f))
-            continue;
-        if (dt->effects & EFFECT_SHADOWS) {
-            counters->shadow_rays++;
-            timed_ray shadow = {ray_spawn_to(hit->point, hit->point_error, hit->normal_geometric, light->position,
-                                             0.0f, vec3_splat(0.0f)),
-                                time};
-            if (motion_scene_occluded(dt->scene, shadow, counters))
-                continue;
-        }
-        radiance = vec3_add(radiance, vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2));
+        light_contribution l = direct_light_point(m, hit, wo, &sc->point_lights[i]);
+        if (l.adds && lit_at(dt, &l, time, counters))
+            radiance = vec3_add(radiance, l.radiance);
     }
     return radiance;
 }
@@ -191,10 +162,11 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
         if (how.emission_counts || hit.shape_id < 0) {
             radiance = le;
         } else {
-            float distance2 = vec3_length_squared(vec3_sub(hit.point, how.from));
-            float cos_light = fabsf(vec3_dot(hit.normal_geometric, wo));
-            float pdf_light = distance2 * pt_scene_emitter_pdf_area(sc, hit.material_id) / cos_light;
-            radiance = vec3_scale(le, power_heuristic(dt->glossy_samples, how.pdf, dt->light_samples, pdf_light));
+            float pdf_area = pt_scene_emitter_pdf_area(sc, hit.material_id);
+            float pdf_light = light_pdf_from(how.from, hit.point, hit.normal_geometric, wo, pdf_area);
+            /* Veach's counts multiply the densities */
+            float weight = power_heuristic((float)dt->glossy_samples * how.pdf, (float)dt->light_samples * pdf_light);
+            radiance = vec3_scale(le, weight);
         }
     }
     if (depth + 1 > dt->max_depth)

@@ -134,6 +134,7 @@ static const pt_integrator all_rungs[3] = {PT_LECTURE, PT_COSINE, PT_MIS};
 static void test_furnace_every_pixel_is_one(void **state)
 {
     (void)state;
+    exercise_checks("shade");
     pt_scene sc;
     pt_scene_build_furnace(&sc, 0.5f, 0.5f);
     for (int k = 0; k < 3; k++) {
@@ -399,6 +400,7 @@ static void test_lights_are_picked_by_power(void **state)
 static void test_russian_roulette_on_and_off_agree_in_mean(void **state)
 {
     (void)state;
+    exercise_checks("shade");
     pt_scene sc;
     pt_scene_build_cornell_box(&sc);
     /* the iterative rungs share one loop; the lecture's recursion has its own */
@@ -818,6 +820,7 @@ static void test_one_sided_emitter(void **state)
 static void test_lecture_rung_sees_the_lamp_directly(void **state)
 {
     (void)state;
+    exercise_checks("shade");
     pt_scene sc;
     pt_scene_init(&sc);
     int light = pt_scene_add_material(&sc, pt_emitter(vec3_splat(0.0f), vec3_splat(3.0f)));
@@ -1106,6 +1109,8 @@ static void test_scene_files_render_the_built_in_scenes(void **state)
 static void test_direct_light_only_equals_depth_one(void **state)
 {
     (void)state;
+    exercise_checks("light_sample");
+    exercise_checks("shade");
     char text[8192];
     FILE *f = fopen("chapters/09-path-tracing/scenes/cornell.scene", "r");
     assert_non_null(f);
@@ -1283,6 +1288,7 @@ static bool light_forms_agree(vec3 a, vec3 b)
 static void test_light_sample_forms_agree(void **state)
 {
     (void)state;
+    exercise_checks("light_sample");
     pt_scene sc;
     pt_scene_build_cornell_box(&sc);
     pcg32 rng = pcg32_for_pixel(test_seed(157), 0);

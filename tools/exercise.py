@@ -208,7 +208,7 @@ def signature(lines, start, rel):
             params.append(re.findall(r'\w+', p)[-1])
     local_names = []
     for l in lines[open_at + 1:start]:
-        decl = re.match(r'^\s*(?:const\s+)?\w+(?:\s*\*)*\s+(\w+.*);\s*(?://.*|/\*.*)?$', l)
+        decl = re.match(r'^\s*(?:const\s+)?\w+[\s\*]+(\w+.*);\s*(?://.*|/\*.*)?$', l)
         if decl and not re.match(r'^\s*(return|if|for|while)\b', l):
             for part in split_top(decl.group(1)):
                 name = re.match(r'\s*\**\s*(\w+)', part)
@@ -516,7 +516,8 @@ def plain_failure(text):
     """cmocka's words for a failed assertion, as a learner reads them."""
     m = re.match(r'^(\S+) != (\S+)$', text)
     if m:
-        return 'got %s where %s was expected' % (m.group(1), m.group(2))
+        got, expected = (str(int(v, 16)) if re.match(r'^0x[0-9a-f]+$', v) else v for v in m.groups())
+        return 'got %s where %s was expected' % (got, expected)
     if re.search(r'[a-z_]\w*\(', text) or '==' in text or '<' in text or '>' in text:
         return 'expected true: %s' % text
     return text
@@ -554,7 +555,7 @@ def grade(root, chapters, build):
             print('  %-22s %-9s %d/%-5d %s' % (ex['name'], state_of(root, ex, marks), passed, len(mine), verdict))
             for n, t in failed:
                 print('      %s' % n)
-                for m in t['messages'][:4]:
+                for m in t['messages'][-4:]:
                     print('          %s' % m)
             if failed:
                 print('      read: %s ("%s")' % (ex['where'], ex['section']))
@@ -785,6 +786,7 @@ def program_survives(tree, program, name):
 # ---- the command line -------------------------------------------------------
 
 def main(argv):
+    sys.stdout.reconfigure(line_buffering=True)
     p = argparse.ArgumentParser(description=__doc__.split('\n')[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 epilog='\n'.join(__doc__.split('\n')[27:36]))

@@ -27,6 +27,7 @@ static float pdf_area_to_solid_angle(float pdf_area, float distance2, float cos_
  * with theta at p and theta' at x', each against its normal. */
 light_contribution direct_light_area(const pt_material *m, const hit_record *p, vec3 wo, const pt_light_sample *x)
 {
+    /* exercise: light_sample */
     light_contribution l = {.radiance = vec3_splat(0.0f), .weight = 1.0f};
     vec3 ws = towards(p, x->point, &l);
     l.cos_theta_light = -vec3_dot(x->normal, ws);
@@ -38,6 +39,7 @@ light_contribution direct_light_area(const pt_material *m, const hit_record *p, 
     /* the shadow ray: from p to x', stopping short of both surfaces */
     l.shadow = ray_spawn_to(p->point, p->point_error, p->normal_geometric, x->point, x->point_error, x->normal);
     return l;
+    /* end of exercise light_sample */
 }
 
 /* ---- the later rungs' light sample, in the solid-angle form -------------------

@@ -312,6 +312,7 @@ static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth
     vec3 n = p->normal_shading;
     if (bsdf_is_delta(m)) /* a mirror or glass: not on the slide (above) */
         return shade_delta(pt, p, wo, depth, throughput, rng, counters);
+    /* exercise: shade */
     /* Contribution from the light source: x' uniformly on the light, pdf_light = 1 / A */
     vec3 l_dir = point_lights(pt, p, wo, m, 2 * depth + 2, counters); /* lights without area (above) */
     pt_light_sample x;
@@ -343,6 +344,7 @@ static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth
     vec3 l_q = hit ? shade(pt, &q, vec3_neg(wi), depth + 1, vec3_mul(throughput, f_cos_pdf), rng, counters)
                    : sc->environment; /* a ray that leaves the scene brings the environment */
     return vec3_add(l_dir, vec3_mul(l_q, f_cos_pdf));
+    /* end of exercise shade */
 }
 
 static vec3 trace_lecture(const path_tracer *pt, ray r, pt_random *rng, ray_counters *counters)

@@ -16,8 +16,9 @@ LDFLAGS += -fopenmp $(SANITIZE_FLAGS)
 LDLIBS += $(OPENEXR_LIBS) $(STB_LIBS) -lm
 TEST_LDLIBS = $(CMOCKA_LIBS)
 
-# Debian packages the build, the tests and the plots need (by name).
-DEBIAN_PACKAGES := gcc make pkg-config libcmocka-dev libopenexr-dev libstb-dev gnuplot-nox
+# Debian packages the build, the tests and the plots need (by name);
+# python3 runs tools/exercise.py (make exercise, grade, and its test).
+DEBIAN_PACKAGES := gcc make pkg-config libcmocka-dev libopenexr-dev libstb-dev gnuplot-nox python3
 
 # The libraries' flags come from pkg-config. On a fresh machine neither
 # pkg-config nor the .pc files exist when make reads this file: `make deps`

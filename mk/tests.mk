@@ -15,9 +15,12 @@
 # and the chapters before it (tests/check_layering.sh), a warning before
 # every render loop's long render (tests/long_render.sh), a render stopped by
 # a signal and resumed from its checkpoint being the uninterrupted one
-# (tests/resume.sh, chapter 09's program).
+# (tests/resume.sh, chapter 09's program), make exercise and make solution
+# keeping every learner's body and giving the files back byte for byte
+# (tests/exercise_tool.sh; the check that every exercise's stub fails its
+# tests, which builds, is make check-exercises).
 TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh) tests/check_layering.sh tests/long_render.sh \
-                tests/resume.sh
+                tests/resume.sh tests/exercise_tool.sh
 SUITE_RUNS := $(patsubst $(BUILD)/tests/%,run-%,$(TESTS))
 SCRIPT_RUNS := $(patsubst tests/%.sh,run-%,$(TEST_SCRIPTS))
 .PHONY: $(SUITE_RUNS) $(SCRIPT_RUNS)

@@ -262,17 +262,16 @@ def static_helpers(lines, body):
     return [name for name in sorted(defined) if re.search(r'\b%s\s*\(' % name, text)]
 
 
-def make_stub(ex, lines, start, end, rel):
+def make_stub(ex, lines, start, end, rel, reference):
     marker = START.match(lines[start])
     indent = marker.group(1)
     ret, function, params, local_names = signature(lines, start, rel)
-    body = lines[start + 1:end]
     out = ['%s/* Write %s() here: "%s" in %s explains it.\n' % (indent, function, ex['section'], ex['readme'])]
     for h in ex['hint']:
         out.append(('%s *     %s' % (indent, h.replace('*/', '* /'))).rstrip() + '\n')
     out.append('%s */\n' % indent)
     out.append('%sexercise_todo("%s", "%s");\n' % (indent, ex['name'], ex['where']))
-    helpers = [h for h in static_helpers(lines[:start] + lines[end + 1:], body) if h != function]
+    helpers = [h for h in static_helpers(lines[:start] + lines[end + 1:], reference) if h != function]
     if helpers:
         out.append('%s/* helpers of this file the reference calls: %s */\n' % (indent, ', '.join(helpers)))
     for name in params + local_names + helpers:
@@ -379,17 +378,39 @@ def selected(root, chapter, only):
     return exercises, marks
 
 
+def exact_stub(ex, lines, start, end, rel, reference):
+    """Is the body the stub handing out writes, to the letter? Anything
+    else that is not the reference is the learner's (a half-written body
+    that still calls exercise_todo() too), and is never thrown away."""
+    return body_of(lines, start, end) == make_stub(ex, lines, start, end, rel, reference)
+
+
 def state_of(root, ex, marks):
     rel, start, end = marks[ex['name']]
     lines = read_lines(root, rel)
     body = body_of(lines, start, end)
-    if is_stub(body):
-        return 'stub'
     ref = reference_body(root, ex['name'], rel, lines, start, end)
+    if exact_stub(ex, lines, start, end, rel, ref):
+        return 'stub'
     return 'reference' if body == ref else 'yours'
 
 
 # ---- handing out and taking back ----------------------------------------
+
+def keep_yours(root, rel, name, body):
+    """Save a learner's body as NAME.c, the newest; an older, different one
+    moves to NAME.1.c, NAME.2.c, ... first. Returns where it is."""
+    newest = state_path(root, 'yours', rel, name)
+    if os.path.exists(newest):
+        if open(newest, encoding='utf-8').readlines() == body:
+            return newest
+        n = 1
+        while os.path.exists(state_path(root, 'yours', rel, name, n)):
+            n += 1
+        os.replace(newest, state_path(root, 'yours', rel, name, n))
+    save(newest, body)
+    return newest
+
 
 def handout(root, chapter, only):
     exercises, marks = selected(root, chapter, only)
@@ -403,7 +424,7 @@ def handout(root, chapter, only):
         if not os.path.exists(state_path(root, 'reference', rel, name)):
             save(state_path(root, 'reference', rel, name), ref)
         yours = state_path(root, 'yours', rel, name)
-        if is_stub(body):
+        if exact_stub(ex, lines, start, end, rel, ref):
             print('%-22s %s: handed out already (a stub)' % (name, rel))
             continue
         if body != ref:
@@ -411,10 +432,10 @@ def handout(root, chapter, only):
             continue
         if os.path.exists(yours):
             new = open(yours, encoding='utf-8').readlines()
-            os.remove(yours)
-            print('%-22s %s: your version is back (from %s)' % (name, rel, os.path.relpath(yours, root)))
+            print('%-22s %s: your version is back (the one make solution kept in %s)'
+                  % (name, rel, os.path.relpath(yours, root)))
         else:
-            new = make_stub(ex, lines, start, end, rel)
+            new = make_stub(ex, lines, start, end, rel, ref)
             print('%-22s %s: handed out; "%s" explains it' % (name, rel, ex['section']))
         lines = lines[:start + 1] + new + lines[end:]
         write_atomically(root, rel, with_include(lines) if is_stub(new) else lines)
@@ -432,17 +453,12 @@ def solution(root, chapter, only):
         if body == ref:
             print('%-22s %s: the reference already' % (name, rel))
             continue
-        if not is_stub(body):
-            n = 0
-            while os.path.exists(state_path(root, 'yours', rel, name, n)) and \
-                    open(state_path(root, 'yours', rel, name, n), encoding='utf-8').readlines() != body:
-                n += 1
-            kept = state_path(root, 'yours', rel, name, n)
-            save(kept, body)
+        if exact_stub(ex, lines, start, end, rel, ref):
+            print('%-22s %s: the reference is back' % (name, rel))
+        else:
+            kept = keep_yours(root, rel, name, body)
             print('%-22s %s: the reference is back; yours is kept in %s (make exercise brings it back)'
                   % (name, rel, os.path.relpath(kept, root)))
-        else:
-            print('%-22s %s: the reference is back' % (name, rel))
         lines = lines[:start + 1] + ref + lines[end:]
         write_atomically(root, rel, without_include_if_unused(lines))
 

@@ -459,6 +459,49 @@ static vec3 random_unit(pcg32 *rng)
     }
 }
 
+/* ---- inside or outside: counting crossings ---------------------------------
+ * Points inside an icosphere of radius 1 (its faces lie within 2 % of the
+ * sphere: below 0.9 is inside) and outside it (1.05 to 1.55), each with a
+ * random direction: the parity of the crossings must say which, every time.
+ * The twin, "inside iff the ray hits the mesh at all", calls an outside
+ * point inside whenever its ray points at the mesh. */
+static void test_counting_crossings_tells_inside_from_outside(void **state)
+{
+    (void)state;
+    mesh m;
+    mesh_init(&m);
+    mesh_icosphere(&m, vec3_make(0, 0, 0), 1.0f, 2, -1);
+    triangle *tris = malloc((size_t)m.face_count * sizeof *tris);
+    assert_non_null(tris);
+    for (int i = 0; i < m.face_count; i++) {
+        const int *v = m.faces[i].position;
+        tris[i] = (triangle){m.positions[v[0]], m.positions[v[1]], m.positions[v[2]]};
+    }
+    pcg32 rng;
+    pcg32_seed(&rng, test_seed(77), 1);
+    int wrong = 0, twin_wrong = 0, points = 2000;
+    for (int k = 0; k < points; k++) {
+        vec3 p = random_unit(&rng);
+        bool inside = k % 2 == 0;
+        p = vec3_scale(p, inside ? 0.9f * pcg32_float(&rng) : 1.05f + 0.5f * pcg32_float(&rng));
+        vec3 d = random_unit(&rng);
+        wrong += closed_mesh_contains(tris, m.face_count, p, d) != inside;
+        ray r = ray_make(p, d);
+        bool any = false;
+        for (int i = 0; i < m.face_count && !any; i++) {
+            float t, b1, b2;
+            any = triangle_intersect_watertight(&tris[i], &r, &t, &b1, &b2);
+        }
+        twin_wrong += any != inside;
+    }
+    print_message("inside by parity: %d of %d points wrong; twin (any hit = inside): %d wrong\n", wrong, points,
+                  twin_wrong);
+    assert_int_equal(wrong, 0);
+    assert_true(twin_wrong > points / 20); /* about a fifth of the outside points aim at the mesh */
+    free(tris);
+    mesh_free(&m);
+}
+
 /* A point on triangle tri at barycentrics (b1, b2), as a hit computes it. */
 static vec3 triangle_point(const triangle *tri, float b1, float b2)
 {
@@ -1487,6 +1530,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_eye_ray_goes_through_the_pixel_centre),
         cmocka_unit_test(test_sphere_hit_from_outside),
+        cmocka_unit_test(test_counting_crossings_tells_inside_from_outside),
         cmocka_unit_test(test_sphere_hit_from_inside_returns_the_exit),
         cmocka_unit_test(test_sphere_tangent_and_miss),
         cmocka_unit_test(test_far_small_sphere_is_hit_at_the_right_distance),

@@ -203,6 +203,26 @@ bool triangle_intersect_watertight_hit(const triangle *tri, ray r, hit_record *h
     return true;
 }
 
+/* ---- Inside or outside a closed mesh: count the crossings ------------------
+ * A ray from p leaves a closed surface once more than it enters it if p is
+ * inside, as often as it enters if p is outside: p is inside iff the ray
+ * crosses the surface an odd number of times. Every triangle the ray meets
+ * at t > 0 counts, not only the closest. The one trap is a ray through an
+ * edge or a vertex, where the watertight test lets two triangles (or more)
+ * report the same crossing: the direction must be one no edge lies on,
+ * which a random direction is with probability 1 (the test draws them). */
+bool closed_mesh_contains(const triangle *triangles, int count, vec3 p, vec3 direction)
+{
+    ray r = ray_make(p, direction);
+    int crossings = 0;
+    for (int i = 0; i < count; i++) {
+        float t, b1, b2;
+        if (triangle_intersect_watertight(&triangles[i], &r, &t, &b1, &b2))
+            crossings++;
+    }
+    return crossings % 2 == 1;
+}
+
 /* ---- Implicit surface f(p) = 0: sphere tracing --------------------------
  * For a general implicit surface there is no formula for t: we walk along the
  * ray looking for where f(o + t d) reaches 0. A fixed step is the obvious root

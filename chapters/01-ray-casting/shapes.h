@@ -297,6 +297,11 @@ WATERTIGHT_INLINE bool triangle_intersect_with(triangle_test test, const waterti
 /* The watertight test filling a hit record: what chapter 01's scenes render
  * with (triangle_intersect() above is the lecture's, beside it). */
 bool triangle_intersect_watertight_hit(const triangle *tri, ray r, hit_record *hit);
+
+/* Is p inside the closed mesh of `count` triangles? The parity of the
+ * crossings of the ray from p along `direction` (which must not run through
+ * an edge or a vertex: a random one, see shapes.c). */
+bool closed_mesh_contains(const triangle *triangles, int count, vec3 p, vec3 direction);
 void triangle_fill_hit(const triangle *tri, ray r, float t, float b1, float b2, hit_record *hit);
 
 /* Fill the parts of a hit record every shape fills the same way: orient the

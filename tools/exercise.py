@@ -250,16 +250,16 @@ def neutral_return(ret):
 
 
 def static_helpers(lines, body):
-    """Static functions of the file that the reference body calls: with the
-    body gone they would be unused (a warning), so the stub names them, and
-    in doing so tells the learner which helpers there are to call."""
+    """Static functions and constants of the file that the reference body
+    uses: with the body gone they would be unused (a warning), so the stub
+    names them, and in doing so tells the learner what there is to use."""
     defined = set()
     for l in lines:
-        m = re.match(r'^static\s+(?:inline\s+)?[\w\s\*]+?\b(\w+)\s*\(', l)
+        m = re.match(r'^static\s+(?:inline\s+)?(?:const\s+)?[\w\s\*]+?\b(\w+)\s*(?:\(|=|\[)', l)
         if m:
             defined.add(m.group(1))
     text = ''.join(body)
-    return [name for name in sorted(defined) if re.search(r'\b%s\s*\(' % name, text)]
+    return [name for name in sorted(defined) if re.search(r'\b%s\b' % name, text)]
 
 
 def make_stub(ex, lines, start, end, rel, reference):
@@ -273,7 +273,7 @@ def make_stub(ex, lines, start, end, rel, reference):
     out.append('%sexercise_todo("%s", "%s");\n' % (indent, ex['name'], ex['where']))
     helpers = [h for h in static_helpers(lines[:start] + lines[end + 1:], reference) if h != function]
     if helpers:
-        out.append('%s/* helpers of this file the reference calls: %s */\n' % (indent, ', '.join(helpers)))
+        out.append('%s/* what this file has for it: %s */\n' % (indent, ', '.join(helpers)))
     for name in params + local_names + helpers:
         out.append('%s(void)%s;\n' % (indent, name))
     value = marker.group(3) or neutral_return(ret)

@@ -24,6 +24,7 @@
 #include "08-monte-carlo/sampling.h"
 #include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/experiments.h"
+#include "09-path-tracing/light_transport.h"
 #include "09-path-tracing/path_tracer.h"
 #include "10-distribution/motion_scene.h"
 #include "13-production/bench_scenes.h"
@@ -2354,19 +2355,25 @@ static void test_fast_sincos_turns_is_within_a_few_ulps(void **state)
     assert_true(twin > FAST_SINCOS_TURNS_ULPS);
 }
 
-/* ---- the physics once: the lanes' light sample against chapter 09's ----------
- * The eight-path renderer computes each vertex's light sample in AVX (or
- * lane by lane), in the solid-angle form; chapter 09's shade() computes it
- * from pt_scene_sample_light() and bsdf_eval() in the area form,
- *   L_e f_r cos(theta) cos(theta') / |x' - p|^2 / pdf_light.
- * On random vertices of the Cornell box with random light samples the two
- * agree to rounding (the forms order their products differently: a few
- * ulps each, LIGHT_MATH_TOLERANCE relative), and agree on which samples
- * add light; so does the MIS rung's, weighted by the power heuristic
- * against bsdf_pdf(). The twins: the area form without cos(theta'), and
- * the MIS rung's sample expected without its weight (within a few
- * thousandths of 1 in the box: still far outside the tolerance), are
- * caught. */
+/* ---- the physics once: the lanes' kernels against chapter 09's pieces ----------
+ * The eight-path renderer computes each diffuse vertex's light sample and
+ * bounce in AVX (or lane by lane), through chapter 09's pieces
+ * (light_transport.h). On random vertices of the Cornell box with random
+ * light samples and random numbers for the bounce, each kernel gives the
+ * very bits of the scalar function it vectorises, value by value: the light
+ * sample direct_light_solid_angle()'s contribution (times the throughput)
+ * and shadow segment, with and without its MIS weight; the bounce the
+ * direction of sample_uniform_hemisphere_fast() or
+ * sample_cosine_hemisphere_fast() (fast_sincos.h), bounce_weight()'s
+ * f cos / pdf (on the MIS rung bsdf_sample()'s rho) times the throughput
+ * and 1 / P_RR, and the next ray from ray_spawn(). And the light sample
+ * agrees with the lecture's, chapter 09's shade() in the slide's area form
+ * (direct_light_area()), to rounding (the forms order their products
+ * differently: a few ulps, LIGHT_MATH_TOLERANCE relative). The twins: the
+ * area form without cos(theta'), the MIS rung's sample expected without its
+ * weight (within a few thousandths of 1 in the box: still far outside the
+ * tolerance), and the bounce's direction from chapter 08's libm sine and
+ * cosine (a few ulps off), are caught. */
 static const float LIGHT_MATH_TOLERANCE = 1e-5f;
 
 static vec3 random_unit_in_hemisphere(vec3 n, pcg32 *rng)
@@ -2379,69 +2386,127 @@ static vec3 random_unit_in_hemisphere(vec3 n, pcg32 *rng)
     }
 }
 
-/* `mis`: the MIS rung's light sample, weighted by the power heuristic
- * against bsdf_pdf() (sample_direct_light()); `expect_mis`: the weight in
- * the expected value. */
-static long light_math_mismatches(const pt_scene *sc, int vertices, bool with_cos_light, bool mis, bool expect_mis,
-                                  uint64_t seed, long *lit)
+static bool same_vec3(vec3 a, vec3 b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+static bool same_ray(ray a, ray b)
+{
+    return same_vec3(a.origin, b.origin) && same_vec3(a.direction, b.direction) &&
+           memcmp(&a.t_min, &b.t_min, sizeof a.t_min) == 0 && memcmp(&a.t_max, &b.t_max, sizeof a.t_max) == 0;
+}
+
+/* Eight random diffuse vertices of the box, each with a point on its light
+ * (x[k]) and numbers for its bounce. */
+static void random_wide_vertices(const pt_scene *sc, pcg32 *rng, wide_vertex v[8], pt_light_sample x[8])
+{
+    for (int k = 0; k < 8; k++) {
+        int t;
+        do
+            t = (int)pcg32_bounded(rng, (uint32_t)sc->triangles.count);
+        while (vec3_max_component(sc->materials[sc->geometry.faces[t].material].emission) > 0.0f);
+        const triangle *tri = &sc->triangles.triangles[t];
+        const pt_material *m = &sc->materials[sc->geometry.faces[t].material];
+        float r1 = sqrtf(pcg32_float(rng)), r2 = pcg32_float(rng);
+        v[k].p = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - r1), vec3_scale(tri->p1, r1 * (1.0f - r2))),
+                          vec3_scale(tri->p2, r1 * r2));
+        v[k].n = v[k].ng = vec3_normalize(vec3_cross(vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0)));
+        v[k].wo = random_unit_in_hemisphere(v[k].n, rng);
+        if (pcg32_float(rng) < 0.125f) /* seen from below: f is 0, the light adds nothing, the path ends */
+            v[k].wo = vec3_neg(v[k].wo);
+        v[k].albedo = m->albedo;
+        v[k].throughput = vec3_make(0.5f + 0.5f * pcg32_float(rng), 0.5f + 0.5f * pcg32_float(rng), 1.0f);
+        v[k].p_error = 1e-4f * pcg32_float(rng);
+        memset(&x[k], 0, sizeof x[k]); /* assert_true may return: the compiler cannot know it stops the test */
+        float u_pick = pcg32_float(rng), u1 = pcg32_float(rng), u2 = pcg32_float(rng);
+        assert_true(pt_scene_sample_light(sc, u_pick, u1, u2, &x[k]));
+        v[k].x_light = x[k].point;
+        v[k].n_light = x[k].normal;
+        v[k].le = x[k].emission;
+        v[k].x_error = x[k].point_error;
+        v[k].pdf_area = x[k].pdf_light;
+        v[k].u_x = pcg32_float(rng);
+        v[k].u_y = pcg32_float(rng);
+        v[k].rr_scale = pcg32_float(rng) < 0.5f ? 1.0f : 1.0f / 0.8f;
+    }
+}
+
+static hit_record vertex_hit(const wide_vertex *v)
+{
+    hit_record hit = {.point = v->p, .point_error = v->p_error, .normal_geometric = v->ng, .normal_shading = v->n};
+    return hit;
+}
+
+/* `vertices` random vertices of the box, eight at a time, each batch (with
+ * its light samples) checked by `batch`: the number it finds wrong. */
+typedef long (*wide_batch_check)(const wide_vertex v[8], const pt_light_sample x[8], void *how);
+
+static long wide_mismatches(const pt_scene *sc, int vertices, uint64_t seed, wide_batch_check batch, void *how)
 {
     pcg32 rng = pcg32_for_pixel(seed, 0);
     long wrong = 0;
     for (int start = 0; start < vertices; start += 8) {
-        wide_light_vertex v[8];
-        vec3 expected[8];
-        bool adds[8];
-        for (int k = 0; k < 8; k++) {
-            int t;
-            do
-                t = (int)pcg32_bounded(&rng, (uint32_t)sc->triangles.count);
-            while (vec3_max_component(sc->materials[sc->geometry.faces[t].material].emission) > 0.0f);
-            const triangle *tri = &sc->triangles.triangles[t];
-            const pt_material *m = &sc->materials[sc->geometry.faces[t].material];
-            float r1 = sqrtf(pcg32_float(&rng)), r2 = pcg32_float(&rng);
-            v[k].p = vec3_add(vec3_add(vec3_scale(tri->p0, 1.0f - r1), vec3_scale(tri->p1, r1 * (1.0f - r2))),
-                              vec3_scale(tri->p2, r1 * r2));
-            v[k].n = v[k].ng = vec3_normalize(vec3_cross(vec3_sub(tri->p1, tri->p0), vec3_sub(tri->p2, tri->p0)));
-            v[k].wo = random_unit_in_hemisphere(v[k].n, &rng);
-            v[k].albedo = m->albedo;
-            v[k].throughput = vec3_make(0.5f + 0.5f * pcg32_float(&rng), 0.5f + 0.5f * pcg32_float(&rng), 1.0f);
-            v[k].p_error = 0.0f;
-            pt_light_sample x;
-            memset(&x, 0, sizeof x); /* assert_true may return: the compiler cannot know it stops the test */
-            float u_pick = pcg32_float(&rng), u1 = pcg32_float(&rng), u2 = pcg32_float(&rng);
-            assert_true(pt_scene_sample_light(sc, u_pick, u1, u2, &x));
-            v[k].x_light = x.point;
-            v[k].n_light = x.normal;
-            v[k].le = x.emission;
-            v[k].x_error = x.point_error;
-            v[k].pdf_area = x.pdf_light;
-            /* chapter 09's shade(), the area form */
-            vec3 to_light = vec3_sub(x.point, v[k].p);
-            float distance2 = vec3_length_squared(to_light);
-            vec3 ws = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-            float cos_theta = vec3_dot(v[k].n, ws), cos_theta_x = -vec3_dot(x.normal, ws);
-            vec3 f_r = bsdf_eval(m, v[k].n, v[k].wo, ws);
-            adds[k] = cos_theta > 0.0f && cos_theta_x > 0.0f && !vec3_is_black(f_r);
-            float g = cos_theta * (with_cos_light ? cos_theta_x : 1.0f) / distance2;
-            float pdf_light = distance2 * x.pdf_light / cos_theta_x, pdf_bsdf = bsdf_pdf(m, v[k].n, v[k].wo, ws);
-            float weight = expect_mis ? pdf_light * pdf_light / (pdf_light * pdf_light + pdf_bsdf * pdf_bsdf) : 1.0f;
-            expected[k] = vec3_mul(v[k].throughput, vec3_scale(vec3_mul(x.emission, f_r), g / x.pdf_light * weight));
-        }
-        vec3 got[8];
-        int mask = path_tracer_wide_light_math(v, 8, mis, got);
-        for (int k = 0; k < 8; k++) {
-            bool wide_adds = (mask >> k) & 1;
-            *lit += adds[k];
-            if (wide_adds != adds[k]) {
-                wrong++;
-                continue;
-            }
-            if (!adds[k])
-                continue;
-            float scale = fmaxf(vec3_max_component(expected[k]), vec3_max_component(got[k]));
-            wrong += vec3_max_component(vec3_abs(vec3_sub(got[k], expected[k]))) > LIGHT_MATH_TOLERANCE * scale;
-        }
+        wide_vertex v[8];
+        pt_light_sample x[8];
+        random_wide_vertices(sc, &rng, v, x);
+        wrong += batch(v, x, how);
     }
+    return wrong;
+}
+
+/* `mis`: the MIS rung's light sample, weighted by the power heuristic
+ * against bsdf_pdf() (sample_direct_light()); `expect_mis`: the weight in
+ * the value expected from the area form; `with_cos_light` false: the twin
+ * without cos(theta'). Counts the samples that add light (lit) and those
+ * whose bits are not direct_light_solid_angle()'s (not_exact). */
+typedef struct {
+    bool with_cos_light, mis, expect_mis;
+    long lit, not_exact;
+} light_check;
+
+/* The vertices whose light sample is not the area form's to rounding. */
+static long light_batch_mismatches(const wide_vertex v[8], const pt_light_sample x[8], void *how)
+{
+    light_check *c = how;
+    bool with_cos_light = c->with_cos_light, mis = c->mis, expect_mis = c->expect_mis;
+    long wrong = 0;
+    wide_light_result got[8];
+    int mask = path_tracer_wide_light_math(v, 8, mis, got);
+    for (int k = 0; k < 8; k++) {
+        pt_material m = pt_diffuse(v[k].albedo);
+        hit_record p = vertex_hit(&v[k]);
+        /* chapter 09's shade(), the area form, and the later rungs' solid-angle form */
+        light_contribution area = direct_light_area(&m, &p, v[k].wo, &x[k]);
+        light_contribution solid = direct_light_solid_angle(&m, &p, v[k].wo, &x[k], 1, mis ? 1 : 0);
+        bool wide_adds = (mask >> k) & 1, adds = area.adds && solid.adds;
+        c->lit += adds;
+        c->not_exact += wide_adds != solid.adds ||
+                        (solid.adds && !(same_vec3(got[k].contribution, vec3_mul(v[k].throughput, solid.radiance)) &&
+                                         same_ray(got[k].shadow, solid.shadow)));
+        if (wide_adds != adds) {
+            wrong++;
+            continue;
+        }
+        if (!adds)
+            continue;
+        float weight = 1.0f;
+        if (expect_mis) {
+            vec3 wi = vec3_normalize(vec3_sub(x[k].point, v[k].p));
+            weight = power_heuristic(solid.pdf_light, bsdf_pdf(&m, v[k].n, v[k].wo, wi));
+        }
+        float cos_light = with_cos_light ? 1.0f : area.cos_theta_light;
+        vec3 expected = vec3_mul(v[k].throughput, vec3_scale(area.radiance, weight / cos_light));
+        float scale = fmaxf(vec3_max_component(expected), vec3_max_component(got[k].contribution));
+        wrong += vec3_max_component(vec3_abs(vec3_sub(got[k].contribution, expected))) > LIGHT_MATH_TOLERANCE * scale;
+    }
+    return wrong;
+}
+
+static long light_math_mismatches(const pt_scene *sc, int vertices, bool with_cos_light, bool mis, bool expect_mis,
+                                  uint64_t seed, long *lit, long *not_exact)
+{
+    light_check c = {with_cos_light, mis, expect_mis, 0, 0};
+    long wrong = wide_mismatches(sc, vertices, seed, light_batch_mismatches, &c);
+    *lit += c.lit;
+    *not_exact += c.not_exact;
     return wrong;
 }
 
@@ -2454,21 +2519,123 @@ static void test_lanes_light_sample_is_chapter_09s(void **state)
     for (int avx = 1; avx >= 0; avx--)
         for (int mis = 0; mis < 2; mis++) {
             path_tracer_wide_use_avx(avx);
-            long lit = 0;
-            long wrong = light_math_mismatches(&sc, VERTICES, true, mis, mis, test_seed(151), &lit);
-            print_message("light sample%s, %s: %ld of %d vertices differ from chapter 09's (%ld add light)\n",
-                          mis ? " with its MIS weight" : "", avx ? "AVX" : "lane by lane", wrong, VERTICES, lit);
+            long lit = 0, not_exact = 0;
+            long wrong = light_math_mismatches(&sc, VERTICES, true, mis, mis, test_seed(151), &lit, &not_exact);
+            print_message("light sample%s, %s: %ld of %d vertices not direct_light_solid_angle()'s bits, %ld not "
+                          "the area form's to rounding (%ld add light)\n",
+                          mis ? " with its MIS weight" : "", avx ? "AVX" : "lane by lane", not_exact, VERTICES, wrong,
+                          lit);
+            assert_int_equal(not_exact, 0);
             assert_int_equal(wrong, 0);
             assert_true(lit > VERTICES / 4);
         }
     path_tracer_wide_use_avx(true);
-    long lit = 0;
-    long twin = light_math_mismatches(&sc, VERTICES, false, false, false, test_seed(151), &lit);
+    long lit = 0, ignored = 0;
+    long twin = light_math_mismatches(&sc, VERTICES, false, false, false, test_seed(151), &lit, &ignored);
     lit = 0;
-    long unweighted = light_math_mismatches(&sc, VERTICES, true, false, true, test_seed(151), &lit);
+    long unweighted = light_math_mismatches(&sc, VERTICES, true, false, true, test_seed(151), &lit, &ignored);
     print_message("twins: without cos(theta'): %ld differ; without the MIS weight: %ld differ\n", twin, unweighted);
     assert_true(twin > lit / 2);
     assert_true(unweighted > lit / 2);
+    pt_scene_free(&sc);
+}
+
+/* The bounce chapter 09's pieces give vertex v on `rung` (the direction
+ * from `sample`), written as the lanes write it: false if its path ends. */
+static bool expected_bounce(const wide_vertex *v, pt_integrator rung, vec3 (*sample)(float, float),
+                            wide_bounce_result *out)
+{
+    pt_material m = pt_diffuse(v->albedo);
+    vec3 local = sample(v->u_x, v->u_y);
+    vec3 wi = frame_to_world(v->n, local);
+    vec3 weight;
+    out->pdf = 0.0f;
+    if (rung == PT_LECTURE) {
+        weight = bounce_weight(&m, v->n, v->wo, wi, local.z, uniform_hemisphere_pdf());
+    } else {
+        out->pdf = cosine_hemisphere_pdf(local.z);
+        if (rung == PT_MIS ? !(local.z > 0.0f) : !(out->pdf > 0.0f))
+            return false;
+        weight = rung == PT_MIS ? m.albedo : bounce_weight(&m, v->n, v->wo, wi, local.z, out->pdf);
+    }
+    if (vec3_is_black(weight))
+        return false;
+    out->next = ray_spawn(v->p, v->p_error, v->ng, wi);
+    out->wo = vec3_neg(wi);
+    out->throughput = vec3_scale(vec3_mul(v->throughput, weight), v->rr_scale);
+    return true;
+}
+
+static vec3 uniform_hemisphere_libm(float u_x, float u_y) { return sample_uniform_hemisphere(vec2_make(u_x, u_y)); }
+static vec3 cosine_hemisphere_libm(float u_x, float u_y) { return sample_cosine_hemisphere(vec2_make(u_x, u_y)); }
+
+/* The bounce on `rung`, expected with the direction from libm's sine and
+ * cosine if `libm` (the twin); counts the paths that go on. */
+typedef struct {
+    pt_integrator rung;
+    bool libm;
+    long goes_on;
+} bounce_check;
+
+/* The vertices whose bounce is not the expected one, bit for bit (t_max
+ * aside: the lanes keep the next ray's as it was). */
+static long bounce_batch_mismatches(const wide_vertex v[8], const pt_light_sample x[8], void *how)
+{
+    (void)x;
+    bounce_check *c = how;
+    pt_integrator rung = c->rung;
+    bool libm = c->libm;
+    long wrong = 0;
+    wide_bounce_result got[8];
+    int mask = path_tracer_wide_bounce_math(v, 8, rung, got);
+    for (int k = 0; k < 8; k++) {
+        vec3 (*sample)(float, float) =
+            rung == PT_LECTURE ? (libm ? uniform_hemisphere_libm : sample_uniform_hemisphere_fast)
+                               : (libm ? cosine_hemisphere_libm : sample_cosine_hemisphere_fast);
+        wide_bounce_result want = {.pdf = 0.0f};
+        bool on = expected_bounce(&v[k], rung, sample, &want);
+        c->goes_on += on;
+        if (on != ((mask >> k) & 1)) {
+            wrong++;
+            continue;
+        }
+        got[k].next.t_max = want.next.t_max;
+        wrong += on && !(same_ray(got[k].next, want.next) && same_vec3(got[k].wo, want.wo) &&
+                         same_vec3(got[k].throughput, want.throughput) &&
+                         memcmp(&got[k].pdf, &want.pdf, sizeof want.pdf) == 0);
+    }
+    return wrong;
+}
+
+static long bounce_mismatches(const pt_scene *sc, int vertices, pt_integrator rung, bool libm, uint64_t seed,
+                              long *goes_on)
+{
+    bounce_check c = {rung, libm, 0};
+    long wrong = wide_mismatches(sc, vertices, seed, bounce_batch_mismatches, &c);
+    *goes_on += c.goes_on;
+    return wrong;
+}
+
+static void test_lanes_bounce_is_chapter_09s(void **state)
+{
+    (void)state;
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    enum { VERTICES = 8000 };
+    for (int rung = 0; rung < 3; rung++) {
+        for (int avx = 1; avx >= 0; avx--) {
+            path_tracer_wide_use_avx(avx);
+            long on = 0, wrong = bounce_mismatches(&sc, VERTICES, (pt_integrator)rung, false, test_seed(153), &on);
+            print_message("bounce, %s rung, %s: %ld of %d vertices not chapter 09's bits (%ld go on)\n",
+                          pt_integrator_name((pt_integrator)rung), avx ? "AVX" : "lane by lane", wrong, VERTICES, on);
+            assert_int_equal(wrong, 0);
+            assert_true(on > VERTICES / 2);
+        }
+        long on = 0, twin = bounce_mismatches(&sc, VERTICES, (pt_integrator)rung, true, test_seed(153), &on);
+        print_message("twin, the direction from libm's sine and cosine: %ld of %d differ\n", twin, VERTICES);
+        assert_true(twin > VERTICES / 10);
+    }
+    path_tracer_wide_use_avx(true);
     pt_scene_free(&sc);
 }
 
@@ -2691,6 +2858,7 @@ int main(void)
         cmocka_unit_test(test_spawn_avx_is_ray_h_bit_for_bit),
         cmocka_unit_test(test_fast_sincos_turns_is_within_a_few_ulps),
         cmocka_unit_test(test_lanes_light_sample_is_chapter_09s),
+        cmocka_unit_test(test_lanes_bounce_is_chapter_09s),
         cmocka_unit_test(test_no_ray_leaks_through_a_closed_mesh_anywhere),
         cmocka_unit_test(test_moller_trumbore_leaks_through_every_entry_point),
         cmocka_unit_test(test_sobol_pixel_draws_chapter_09s_numbers),

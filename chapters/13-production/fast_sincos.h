@@ -6,12 +6,17 @@
  * Usage:
  *   float s, c;
  *   fast_sincos_turns(u, &s, &c);   s = sin(2 pi u), c = cos(2 pi u), u in [0, 1]
+ *   vec3 local = sample_cosine_hemisphere_fast(u_x, u_y);   z up, as chapter 08's
  */
 #ifndef FAST_SINCOS_H
 #define FAST_SINCOS_H
 
+#include <math.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <string.h>
+
+#include "vec3.h"
 
 /* sin and cos of 2 pi u, for u in [0, 1]. Why not sinf(2 pi u)? Two reasons.
  *  - Accuracy. 2 pi u rounded to a float is up to 2.4e-7 away from the
@@ -49,6 +54,39 @@ static inline void fast_sincos_turns(float u, float *sin_out, float *cos_out)
     c ^= swap ^ ((quarter + 1u) & 2u) << 30;
     memcpy(sin_out, &s, sizeof s);
     memcpy(cos_out, &c, sizeof c);
+}
+
+/* Chapter 08's sample_uniform_hemisphere(), its azimuth by
+ * fast_sincos_turns(): z = u_x, r = sqrt(max(0, 1 - z^2)), phi = 2 pi u_y.
+ * The eight-path renderer's diffuse bounce on the lecture rung, as its AVX
+ * kernel computes it, operation for operation. */
+static inline vec3 sample_uniform_hemisphere_fast(float u_x, float u_y)
+{
+    float z = u_x, r = sqrtf(fmaxf(1.0f - z * z, 0.0f)), sin_phi, cos_phi;
+    fast_sincos_turns(u_y, &sin_phi, &cos_phi);
+    return vec3_make(r * cos_phi, r * sin_phi, z);
+}
+
+/* Chapter 08's sample_cosine_hemisphere() (the concentric map of the unit
+ * square onto the disk, lifted to the hemisphere), its angle by
+ * fast_sincos_turns(), as the AVX kernel computes it. The left and right
+ * triangles' angle pi/4 (oy / ox) is (oy / ox) / 8 of a turn; the top and
+ * bottom ones' pi/2 - pi/4 (ox / oy) has the sine and cosine of
+ * (ox / oy) / 8 of a turn swapped. Those turns lie in [-1/8, 1/8], where
+ * the polynomial was fitted. The centre, 0 / 0, is ratio 0 there: the
+ * point (0, 0) and z = 1, as chapter 08 has it. */
+static inline vec3 sample_cosine_hemisphere_fast(float u_x, float u_y)
+{
+    float ox = 2.0f * u_x - 1.0f, oy = 2.0f * u_y - 1.0f;
+    bool sides = fabsf(ox) > fabsf(oy);
+    float r = sides ? ox : oy;
+    float ratio = sides ? oy / ox : oy != 0.0f ? ox / oy : 0.0f;
+    float u = sides ? u_x : u_y, rest = 1.0f - u;
+    float one_minus_r = 2.0f * (u < rest ? u : rest); /* 1 - |r|, without cancellation */
+    float s, c;
+    fast_sincos_turns(0.125f * ratio, &s, &c);
+    float z2 = one_minus_r * (2.0f - one_minus_r);
+    return vec3_make(r * (sides ? c : s), r * (sides ? s : c), sqrtf(z2 > 0.0f ? z2 : 0.0f));
 }
 
 #endif

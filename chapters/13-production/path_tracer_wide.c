@@ -13,6 +13,7 @@
 #include "13-production/wide_trace.h"
 #include "08-monte-carlo/sampling.h"
 #include "09-path-tracing/bsdf.h"
+#include "09-path-tracing/light_transport.h"
 #include "13-production/sobol_pixel.h"
 #include "explain.h"
 #include "memory.h"
@@ -42,16 +43,11 @@ void path_tracer_wide_use_avx(bool on) { use_avx = on; }
 static wide_twin twin_wrong = WIDE_TWIN_NONE;
 void path_tracer_wide_twin(wide_twin twin) { twin_wrong = twin; }
 
-/* chapter 08's cosine_hemisphere_pdf() and bsdf_pdf()'s 1 / pi */
+/* The AVX kernels' constants, as chapter 08's sampling.c and chapter 09's
+ * bsdf.c round them: cosine_hemisphere_pdf()'s 1 / pi, and the Lambertian
+ * f = rho x (1 / pi). */
 static const float INV_PI_F = (float)(1.0 / PI);
-
-/* chapter 09's power_heuristic(): the weight of a sample drawn with density
- * a, when density b could have drawn it too */
-static float power_heuristic(float a, float b)
-{
-    float a2 = a * a, b2 = b * b;
-    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
-}
+static const float DIFFUSE_INV_PI_F = 1.0f / (float)PI;
 
 static bool wide_cpu_has_avx2(void)
 {
@@ -395,51 +391,39 @@ static bool pick_light(lane *l, const path_tracer *pt, const float *pdf_area, ve
     return true;
 }
 
-/* Lane k's shadow ray, from its hit to its point on the light (ray_spawn_to:
- * off both surfaces by their error bounds), into the lanes. */
-static void lane_store_shadow(vertex_lanes *L, int k)
+#define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
+
+/* Lane k's hit, as chapter 09's pieces read it (light_transport.h): the
+ * point, its error bound, the geometric and shading normals. */
+static hit_record lane_hit(const vertex_lanes *L, int k)
 {
-    vec3 p = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]), ng = vec3_make(L->ng[0][k], L->ng[1][k], L->ng[2][k]);
-    vec3 x_light = vec3_make(L->x_light[0][k], L->x_light[1][k], L->x_light[2][k]);
-    vec3 n_light = vec3_make(L->n_light[0][k], L->n_light[1][k], L->n_light[2][k]);
-    ray shadow = ray_spawn_to(p, L->p_error[k], ng, x_light, L->x_error[k], n_light);
-    lanes_set(L->shadow_origin, k, shadow.origin);
-    lanes_set(L->shadow_direction, k, shadow.direction);
-    L->shadow_t_min[k] = shadow.t_min;
-    L->shadow_t_max[k] = shadow.t_max;
+    hit_record hit = {.point = AT(p), .point_error = L->p_error[k], .normal_geometric = AT(ng),
+                      .normal_shading = AT(n)};
+    return hit;
 }
 
-/* sample_direct_light()'s arithmetic for one lane, exactly: the mask bit
- * says whether the sample adds anything (light and surface face each
- * other, f is not black), and the contribution is what it adds, times the
- * throughput, if its shadow ray gets through; with `mis`, weighted by the
- * power heuristic against the BSDF's cosine-weighted sampling. */
-static int light_math_lane(vertex_lanes *L, int k, bool mis)
+/* Lane k's light sample, chapter 09's solid-angle form
+ * (direct_light_solid_angle(), what sample_direct_light() adds): the mask
+ * bit says whether it adds anything (light and surface face each other, f
+ * is not black); its contribution, times the throughput, if its shadow ray
+ * gets through, and that ray, into the lanes. With `mis`, weighed by the
+ * power heuristic against the one BSDF sample drawn next. */
+static int light_math_lane(vertex_lanes *L, int k, const pt_material *m, bool mis)
 {
-#define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
-    vec3 to_light = vec3_sub(AT(x_light), AT(p));
-    float distance2 = vec3_length_squared(to_light);
-    vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-    vec3 n = AT(n);
-    float cos_theta = vec3_dot(n, wi);
-    float cos_theta_light = -vec3_dot(AT(n_light), wi);
-    if (!(cos_theta_light > 0.0f && cos_theta > 0.0f))
+    hit_record p = lane_hit(L, k);
+    pt_light_sample x = {.point = AT(x_light), .normal = AT(n_light), .emission = AT(le),
+                         .point_error = L->x_error[k], .pdf_light = L->pdf_area[k]};
+    light_contribution l = direct_light_solid_angle(m, &p, AT(wo), &x, 1, mis ? 1 : 0);
+    if (!l.adds)
         return 0;
-    /* bsdf_eval() of a diffuse surface */
-    if (vec3_dot(n, wi) <= 0.0f || vec3_dot(n, AT(wo)) <= 0.0f)
-        return 0;
-    vec3 f = vec3_scale(AT(albedo), 1.0f / (float)PI);
-    if (vec3_is_black(f))
-        return 0;
-    float pdf_light = distance2 * L->pdf_area[k] / cos_theta_light;
-    /* bsdf_pdf() of a diffuse surface, both directions above it: cos(theta) / pi */
-    float weight = mis ? power_heuristic(pdf_light, cos_theta * INV_PI_F) : 1.0f;
-    vec3 contribution = vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * weight));
-    lanes_set(L->contribution, k, contribution);
-    lane_store_shadow(L, k);
+    lanes_set(L->contribution, k, vec3_mul(AT(throughput), l.radiance));
+    lanes_set(L->shadow_origin, k, l.shadow.origin);
+    lanes_set(L->shadow_direction, k, l.shadow.direction);
+    L->shadow_t_min[k] = l.shadow.t_min;
+    L->shadow_t_max[k] = l.shadow.t_max;
     return 1 << k;
-#undef AT
 }
+#undef AT
 
 #if WIDE_HAVE_AVX
 /* For light_math_avx and bounce_math_avx: a field of L for eight lanes, and
@@ -448,9 +432,11 @@ static int light_math_lane(vertex_lanes *L, int k, bool mis)
 #define DOT(ax, ay, az, bx, by, bz)                                                                          \
     _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(ax, bx), _mm256_mul_ps(ay, by)), _mm256_mul_ps(az, bz))
 
-/* The same for the lanes of `lanes`, eight per AVX instruction: the same
- * operations in the same order (sqrt and division are exact in IEEE, so
- * every lane gets the very bits of light_math_lane). */
+/* light_math_lane() of the diffuse lanes of `lanes`, eight per AVX
+ * instruction: direct_light_solid_angle()'s operations, with bsdf_eval()
+ * and bsdf_pdf() of a diffuse surface, in the same order (sqrt and
+ * division are exact in IEEE, so every lane gets the very bits of the
+ * scalar function; tests/test_ch13.c compares them value by value). */
 SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes, bool mis)
 {
     const __m256 zero = _mm256_setzero_ps();
@@ -465,7 +451,7 @@ SPAWN_TARGET static int light_math_avx(vertex_lanes *L, int lanes, bool mis)
     __m256 cos_wo = DOT(nx, ny, nz, LOAD3(wo, 0), LOAD3(wo, 1), LOAD3(wo, 2));
     __m256 ok = _mm256_and_ps(_mm256_cmp_ps(cos_theta_light, zero, _CMP_GT_OQ), _mm256_cmp_ps(cos_theta, zero, _CMP_GT_OQ));
     ok = _mm256_and_ps(ok, _mm256_cmp_ps(cos_wo, zero, _CMP_GT_OQ));
-    const __m256 inv_pi = _mm256_set1_ps(1.0f / (float)PI);
+    const __m256 inv_pi = _mm256_set1_ps(DIFFUSE_INV_PI_F);
     __m256 fx = _mm256_mul_ps(LOAD3(albedo, 0), inv_pi), fy = _mm256_mul_ps(LOAD3(albedo, 1), inv_pi),
            fz = _mm256_mul_ps(LOAD3(albedo, 2), inv_pi);
     __m256 black = _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(fx, zero, _CMP_EQ_OQ), _mm256_cmp_ps(fy, zero, _CMP_EQ_OQ)),
@@ -535,20 +521,16 @@ static void lane_store_bounce(vertex_lanes *L, int k, vec3 wi, vec3 weight)
     lanes_set(L->wo, k, vec3_neg(wi));
 }
 
-/* shade()'s bounce for one lane, exactly: wi uniform on the hemisphere,
- * f cos / pdf, the throughput after it; the lane's bit if that is not black. */
-static int bounce_math_lane(vertex_lanes *L, int k)
+/* shade()'s bounce for one lane: wi uniform on the hemisphere (its
+ * azimuth by fast_sincos_turns(), as the AVX kernel computes it), chapter
+ * 09's bounce_weight() f cos / pdf, the throughput after it; the lane's bit
+ * if that is not black. */
+static int bounce_math_lane(vertex_lanes *L, int k, const pt_material *m)
 {
 #define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
-    /* sample_uniform_hemisphere(), its azimuth by fast_sincos_turns() as the AVX code computes it */
-    float z = L->u_x[k], r = sqrtf(fmaxf(1.0f - z * z, 0.0f)), sin_phi, cos_phi;
-    fast_sincos_turns(L->u_y[k], &sin_phi, &cos_phi);
-    vec3 n = AT(n), local = vec3_make(r * cos_phi, r * sin_phi, z);
+    vec3 n = AT(n), local = sample_uniform_hemisphere_fast(L->u_x[k], L->u_y[k]);
     vec3 wi = frame_to_world(n, local);
-    /* bsdf_eval() of a diffuse surface */
-    vec3 f = vec3_dot(n, wi) <= 0.0f || vec3_dot(n, AT(wo)) <= 0.0f ? vec3_splat(0.0f)
-                                                                     : vec3_scale(AT(albedo), 1.0f / (float)PI);
-    vec3 weight = vec3_scale(f, local.z / uniform_hemisphere_pdf());
+    vec3 weight = bounce_weight(m, n, AT(wo), wi, local.z, uniform_hemisphere_pdf());
     if (vec3_is_black(weight))
         return 0;
     lane_store_bounce(L, k, wi, weight);
@@ -597,52 +579,28 @@ static bool roulette_after_bounce(lane *l, const path_tracer *pt, vec3 *throughp
     return true;
 }
 
-/* sample_cosine_hemisphere() (chapter 08: the concentric map of the unit
- * square onto the disk, lifted to the hemisphere), its angle by
- * fast_sincos_turns() as the AVX code computes it. The left and right
- * triangles' angle pi/4 (oy / ox) is (oy / ox) / 8 of a turn; the top and
- * bottom ones' pi/2 - pi/4 (ox / oy) has the sine and cosine of
- * (ox / oy) / 8 of a turn swapped. Those turns lie in [-1/8, 1/8], where the
- * polynomial was fitted. The centre, 0 / 0, is ratio 0 there: the point
- * (0, 0) and z = 1, as chapter 08 has it. */
-static vec3 cosine_hemisphere_lane(float u_x, float u_y)
-{
-    float ox = 2.0f * u_x - 1.0f, oy = 2.0f * u_y - 1.0f;
-    bool sides = fabsf(ox) > fabsf(oy);
-    float r = sides ? ox : oy;
-    float ratio = sides ? oy / ox : oy != 0.0f ? ox / oy : 0.0f;
-    float u = sides ? u_x : u_y, rest = 1.0f - u;
-    float one_minus_r = 2.0f * (u < rest ? u : rest); /* 1 - |r|, without cancellation */
-    float s, c;
-    fast_sincos_turns(0.125f * ratio, &s, &c);
-    float z2 = one_minus_r * (2.0f - one_minus_r);
-    return vec3_make(r * (sides ? c : s), r * (sides ? s : c), sqrtf(z2 > 0.0f ? z2 : 0.0f));
-}
-
-/* trace_iterative()'s bounce at a diffuse vertex for one lane, exactly:
- * wi cosine-weighted, its pdf cos / pi (cosine_hemisphere_pdf()), and
- * f cos / pdf -- on the cosine rung bsdf_eval() times cos / pdf, if the
- * pdf is > 0; on the MIS rung bsdf_sample()'s rho, if z > 0 -- the
- * throughput after it, and the pdf. The lane's bit if the path goes on
- * (f cos / pdf is not black). */
-static int bounce_cosine_lane(vertex_lanes *L, int k, bool mis)
+/* trace_iterative()'s bounce at a diffuse vertex for one lane: wi
+ * cosine-weighted (its angle by fast_sincos_turns(), as the AVX kernel
+ * computes it), its pdf cosine_hemisphere_pdf(), and f cos / pdf -- on the
+ * cosine rung chapter 09's bounce_weight(), if the pdf is > 0; on the MIS
+ * rung bsdf_sample()'s rho, if z > 0 -- the throughput after it, and the
+ * pdf. The lane's bit if the path goes on (f cos / pdf is not black). */
+static int bounce_cosine_lane(vertex_lanes *L, int k, const pt_material *m, bool mis)
 {
 #define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
-    vec3 local = cosine_hemisphere_lane(L->u_x[k], L->u_y[k]);
+    vec3 local = sample_cosine_hemisphere_fast(L->u_x[k], L->u_y[k]);
     vec3 n = AT(n);
     vec3 wi = frame_to_world(n, local);
-    float pdf = (local.z > 0.0f ? local.z : 0.0f) * INV_PI_F;
+    float pdf = cosine_hemisphere_pdf(local.z);
     vec3 weight;
     if (mis) {
         if (!(local.z > 0.0f))
             return 0;
-        weight = AT(albedo);
+        weight = m->albedo;
     } else {
         if (!(pdf > 0.0f))
             return 0;
-        vec3 f = vec3_dot(n, wi) <= 0.0f || vec3_dot(n, AT(wo)) <= 0.0f ? vec3_splat(0.0f)
-                                                                         : vec3_scale(AT(albedo), 1.0f / (float)PI);
-        weight = vec3_scale(f, local.z / pdf);
+        weight = bounce_weight(m, n, AT(wo), wi, local.z, pdf);
     }
     if (vec3_is_black(weight))
         return 0;
@@ -726,7 +684,7 @@ SPAWN_TARGET static inline __m256 diffuse_weight8(const vertex_lanes *L, const _
     const __m256 wo[3] = {LOAD3(wo, 0), LOAD3(wo, 1), LOAD3(wo, 2)};
     __m256 above = _mm256_and_ps(_mm256_cmp_ps(spawn_dot8(n, wi), zero, _CMP_GT_OQ),
                                  _mm256_cmp_ps(spawn_dot8(n, wo), zero, _CMP_GT_OQ));
-    const __m256 inv_pi = _mm256_set1_ps(1.0f / (float)PI);
+    const __m256 inv_pi = _mm256_set1_ps(DIFFUSE_INV_PI_F);
     __m256 black = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
     for (int c = 0; c < 3; c++) {
         weight[c] = _mm256_mul_ps(_mm256_and_ps(_mm256_mul_ps(LOAD3(albedo, c), inv_pi), above), scale);
@@ -757,8 +715,9 @@ SPAWN_TARGET static int bounce_math_avx(vertex_lanes *L, int lanes)
     return mask;
 }
 
-/* cosine_hemisphere_lane() of eight lanes, operation for operation: the
- * branches on the triangle become blends, and the centre's 0 / 0 a mask. */
+/* sample_cosine_hemisphere_fast() of eight lanes, operation for operation:
+ * the branches on the triangle become blends, and the centre's 0 / 0 a
+ * mask. */
 SPAWN_TARGET static inline void cosine_hemisphere8(__m256 u_x, __m256 u_y, __m256 local[3])
 {
     const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), two = _mm256_set1_ps(2.0f);
@@ -817,29 +776,6 @@ SPAWN_TARGET static int bounce_cosine_avx(vertex_lanes *L, int lanes, bool mis)
 
 #define AT(v) vec3_make(L->v[0][k], L->v[1][k], L->v[2][k])
 
-/* shade()'s light sample at a glossy vertex: sample_direct_light's
- * arithmetic with bsdf_eval() (and with `mis`, the power heuristic's weight
- * against bsdf_pdf()); the lane's bit if it adds light. */
-static int light_math_surface_lane(vertex_lanes *L, int k, const pt_material *m, bool mis)
-{
-    vec3 to_light = vec3_sub(AT(x_light), AT(p));
-    float distance2 = vec3_length_squared(to_light);
-    vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-    vec3 n = AT(n);
-    float cos_theta = vec3_dot(n, wi), cos_theta_light = -vec3_dot(AT(n_light), wi);
-    if (!(cos_theta_light > 0.0f && cos_theta > 0.0f))
-        return 0;
-    vec3 f = bsdf_eval(m, n, AT(wo), wi);
-    if (vec3_is_black(f))
-        return 0;
-    float pdf_light = distance2 * L->pdf_area[k] / cos_theta_light; /* per steradian */
-    float weight = mis ? power_heuristic(pdf_light, bsdf_pdf(m, n, AT(wo), wi)) : 1.0f;
-    lanes_set(L->contribution, k,
-              vec3_mul(AT(throughput), vec3_scale(vec3_mul(AT(le), f), cos_theta / pdf_light * weight)));
-    lane_store_shadow(L, k);
-    return 1 << k;
-}
-
 /* The next ray of a lane, kept aside while bounce_math_avx writes all
  * eight lanes. */
 typedef struct {
@@ -863,7 +799,7 @@ static bool bounce_surface_lane(const vertex_lanes *L, int k, const pt_material 
     vec3 n = AT(n);
     vec3 local = sample_uniform_hemisphere(vec2_make(L->u_x[k], L->u_y[k]));
     vec3 wi = frame_to_world(n, local);
-    vec3 weight = vec3_scale(bsdf_eval(m, n, AT(wo), wi), local.z / uniform_hemisphere_pdf());
+    vec3 weight = bounce_weight(m, n, AT(wo), wi, local.z, uniform_hemisphere_pdf());
     if (vec3_is_black(weight))
         return false;
     out->next = ray_spawn(AT(p), L->p_error[k], AT(ng), wi);
@@ -930,7 +866,7 @@ static bool bounce_iterative_lane(lane *l, const path_tracer *pt, const vertex_l
         s.pdf = cosine_hemisphere_pdf(local.z);
         if (!(s.pdf > 0.0f))
             return false;
-        s.weight = vec3_scale(bsdf_eval(m, n, wo, s.wi), local.z / s.pdf);
+        s.weight = bounce_weight(m, n, wo, s.wi, local.z, s.pdf);
         s.is_delta = s.is_transmission = false;
     }
     if (vec3_is_black(s.weight))
@@ -951,30 +887,23 @@ static bool bounce_iterative_lane(lane *l, const path_tracer *pt, const vertex_l
 }
 
 /* point_lights() of chapter 09 for lane k: each point light's
- * f I cos(theta) / r^2, times the throughput, its shadow ray queued (or,
- * without shadows, added at once). */
+ * f I cos(theta) / r^2 (direct_light_point()), times the throughput, its
+ * shadow ray queued (or, without shadows, added at once). */
 static void point_lights_lane(row_job *job, const vertex_lanes *L, int k, const pt_material *m)
 {
     const pt_scene *sc = job->pt->scene;
-    vec3 p = AT(p), n = AT(n), wo = AT(wo), throughput = AT(throughput);
+    hit_record p = lane_hit(L, k);
     for (int i = 0; i < sc->point_light_count; i++) {
-        const pt_point_light *light = &sc->point_lights[i];
-        vec3 to_light = vec3_sub(light->position, p);
-        float distance2 = vec3_length_squared(to_light);
-        vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(distance2));
-        float cos_theta = vec3_dot(n, wi);
-        vec3 f = cos_theta > 0.0f ? bsdf_eval(m, n, wo, wi) : vec3_splat(0.0f);
-        if (vec3_is_black(f))
+        light_contribution l = direct_light_point(m, &p, AT(wo), &sc->point_lights[i]);
+        if (!l.adds)
             continue;
-        vec3 contribution = vec3_mul(throughput, vec3_scale(vec3_mul(f, light->intensity), cos_theta / distance2));
+        vec3 contribution = vec3_mul(AT(throughput), l.radiance);
         if (!(job->pt->effects & EFFECT_SHADOWS)) {
             job->lanes[k].radiance = vec3_add(job->lanes[k].radiance, contribution);
             continue;
         }
-        /* nothing to stop short of at a point light: error and normal 0 */
-        ray shadow = ray_spawn_to(p, L->p_error[k], AT(ng), light->position, 0.0f, vec3_splat(0.0f));
         job->counters->shadow_rays++;
-        queue_push(job, k, shadow, contribution);
+        queue_push(job, k, l.shadow, contribution);
     }
 }
 
@@ -1129,8 +1058,7 @@ NOT_INLINED static void emission_found(row_job *job, const vertex_lanes *L, int 
             return;
         vec3 p = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]), ng = vec3_make(L->ng[0][k], L->ng[1][k], L->ng[2][k]);
         vec3 wo = vec3_make(L->wo[0][k], L->wo[1][k], L->wo[2][k]);
-        float distance2 = vec3_length_squared(vec3_sub(p, l->previous_point));
-        float pdf_light = distance2 * job->pdf_area[material] / fabsf(vec3_dot(ng, wo)); /* per steradian */
+        float pdf_light = light_pdf_from(l->previous_point, p, ng, wo, job->pdf_area[material]); /* per steradian */
         if (twin_wrong != WIDE_TWIN_EMISSION_UNWEIGHTED)
             weight = power_heuristic(l->previous_pdf, pdf_light);
     }
@@ -1241,15 +1169,17 @@ static int bounces_aside(row_job *job, const vertex_lanes *L, int glossy, int de
 
 /* The diffuse lanes' bounces on the lecture rung (of `lanes`, those the
  * roulette let go on), in AVX or lane by lane: the lanes that go on. */
-static int bounce_diffuse(row_job *job, vertex_lanes *L, int lanes)
+static int bounce_diffuse(row_job *job, vertex_lanes *L, int lanes, const int material[LANES])
 {
 #if WIDE_HAVE_AVX
     if (lanes != 0 && job->avx)
         return bounce_math_avx(L, lanes);
 #endif
     int on = 0;
-    for (int left = lanes; left != 0; left &= left - 1)
-        on |= bounce_math_lane(L, __builtin_ctz((unsigned)left));
+    for (int left = lanes; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        on |= bounce_math_lane(L, k, &job->pt->scene->materials[material[k]]);
+    }
     return on;
 }
 
@@ -1257,7 +1187,7 @@ static int bounce_diffuse(row_job *job, vertex_lanes *L, int lanes)
  * AVX or lane by lane, then each lane's roulette on its new throughput;
  * the vertex and the pdf the next ray was drawn with kept for the MIS
  * weight of the emission it finds. */
-NOT_INLINED static int bounce_diffuse_iterative(row_job *job, vertex_lanes *L, int lanes)
+NOT_INLINED static int bounce_diffuse_iterative(row_job *job, vertex_lanes *L, int lanes, const int material[LANES])
 {
     const path_tracer *pt = job->pt;
     bool mis = pt->integrator == PT_MIS;
@@ -1267,8 +1197,10 @@ NOT_INLINED static int bounce_diffuse_iterative(row_job *job, vertex_lanes *L, i
         on = bounce_cosine_avx(L, lanes, mis);
     else
 #endif
-        for (int left = lanes; left != 0; left &= left - 1)
-            on |= bounce_cosine_lane(L, __builtin_ctz((unsigned)left), mis);
+        for (int left = lanes; left != 0; left &= left - 1) {
+            int k = __builtin_ctz((unsigned)left);
+            on |= bounce_cosine_lane(L, k, &pt->scene->materials[material[k]], mis);
+        }
     for (int left = on; left != 0; left &= left - 1) {
         int k = __builtin_ctz((unsigned)left);
         lane *l = &job->lanes[k];
@@ -1336,11 +1268,13 @@ static void render_row(row_job *job)
             lit = light_math_avx(&L, picked & diffuse, mis_diffuse); /* (writes every lane: first) */
         else
 #endif
-            for (int left = picked & diffuse; left != 0; left &= left - 1)
-                lit |= light_math_lane(&L, __builtin_ctz((unsigned)left), mis_diffuse);
+            for (int left = picked & diffuse; left != 0; left &= left - 1) {
+                int k = __builtin_ctz((unsigned)left);
+                lit |= light_math_lane(&L, k, &sc->materials[material[k]], mis_diffuse);
+            }
         for (int left = picked & glossy; left != 0; left &= left - 1) {
             int k = __builtin_ctz((unsigned)left);
-            lit |= light_math_surface_lane(&L, k, &sc->materials[material[k]], mis_glossy);
+            lit |= light_math_lane(&L, k, &sc->materials[material[k]], mis_glossy);
         }
         lane_bounce aside[LANES];
         int aside_on = bounces_aside(job, &L, bounce & glossy, delta, front, material, aside);
@@ -1351,8 +1285,8 @@ static void render_row(row_job *job)
                 if (lanes[k].depth + 1 <= pt->max_depth)
                     point_lights_lane(job, &L, k, &sc->materials[material[k]]);
             }
-        bounce = lecture ? bounce_diffuse(job, &L, bounce & diffuse)
-                         : bounce_diffuse_iterative(job, &L, bounce & diffuse);
+        bounce = lecture ? bounce_diffuse(job, &L, bounce & diffuse, material)
+                         : bounce_diffuse_iterative(job, &L, bounce & diffuse, material);
         job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)bounce);
         for (int left = aside_on; left != 0; left &= left - 1) { /* the lanes kept aside, back */
             int k = __builtin_ctz((unsigned)left);
@@ -1489,35 +1423,82 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
     return done > 0 ? seconds / done * (double)total : 0.0;
 }
 
-int path_tracer_wide_light_math(const wide_light_vertex *v, int count, bool mis, vec3 contribution[8])
+/* The tests' vertices into the lanes, and each one's diffuse material. */
+static int lanes_from(const wide_vertex *v, int count, vertex_lanes *L, pt_material m[LANES])
 {
-    vertex_lanes L;
-    memset(&L, 0, sizeof L);
+    memset(L, 0, sizeof *L);
     int lanes = 0;
     for (int k = 0; k < count && k < LANES; k++) {
-        lanes_set(L.p, k, v[k].p);
-        lanes_set(L.ng, k, v[k].ng);
-        lanes_set(L.n, k, v[k].n);
-        lanes_set(L.wo, k, v[k].wo);
-        lanes_set(L.albedo, k, v[k].albedo);
-        lanes_set(L.throughput, k, v[k].throughput);
-        lanes_set(L.x_light, k, v[k].x_light);
-        lanes_set(L.n_light, k, v[k].n_light);
-        lanes_set(L.le, k, v[k].le);
-        L.p_error[k] = v[k].p_error;
-        L.x_error[k] = v[k].x_error;
-        L.pdf_area[k] = v[k].pdf_area;
+        lanes_set(L->p, k, v[k].p);
+        lanes_set(L->ng, k, v[k].ng);
+        lanes_set(L->n, k, v[k].n);
+        lanes_set(L->wo, k, v[k].wo);
+        lanes_set(L->albedo, k, v[k].albedo);
+        lanes_set(L->throughput, k, v[k].throughput);
+        lanes_set(L->x_light, k, v[k].x_light);
+        lanes_set(L->n_light, k, v[k].n_light);
+        lanes_set(L->le, k, v[k].le);
+        L->p_error[k] = v[k].p_error;
+        L->x_error[k] = v[k].x_error;
+        L->pdf_area[k] = v[k].pdf_area;
+        L->u_x[k] = v[k].u_x;
+        L->u_y[k] = v[k].u_y;
+        L->rr_scale[k] = v[k].rr_scale;
+        m[k] = pt_diffuse(v[k].albedo);
         lanes |= 1 << k;
     }
-    int lit = 0;
+    return lanes;
+}
+
+static bool tests_use_avx(void) { return use_avx && wide_cpu_has_avx2(); }
+
+int path_tracer_wide_light_math(const wide_vertex *v, int count, bool mis, wide_light_result out[8])
+{
+    vertex_lanes L;
+    pt_material m[LANES];
+    int lanes = lanes_from(v, count, &L, m), lit = 0;
 #if WIDE_HAVE_AVX
-    if (use_avx && __builtin_cpu_supports("avx2"))
+    if (tests_use_avx())
         lit = light_math_avx(&L, lanes, mis);
     else
 #endif
-        for (int k = 0; k < count && k < LANES; k++)
-            lit |= light_math_lane(&L, k, mis);
-    for (int k = 0; k < count && k < LANES; k++)
-        contribution[k] = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
+        for (int left = lanes; left != 0; left &= left - 1) {
+            int k = __builtin_ctz((unsigned)left);
+            lit |= light_math_lane(&L, k, &m[k], mis);
+        }
+    for (int left = lit; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        out[k].contribution = vec3_make(L.contribution[0][k], L.contribution[1][k], L.contribution[2][k]);
+        out[k].shadow.origin = vec3_make(L.shadow_origin[0][k], L.shadow_origin[1][k], L.shadow_origin[2][k]);
+        out[k].shadow.direction =
+            vec3_make(L.shadow_direction[0][k], L.shadow_direction[1][k], L.shadow_direction[2][k]);
+        out[k].shadow.t_min = L.shadow_t_min[k];
+        out[k].shadow.t_max = L.shadow_t_max[k];
+    }
     return lit;
+}
+
+int path_tracer_wide_bounce_math(const wide_vertex *v, int count, pt_integrator rung, wide_bounce_result out[8])
+{
+    vertex_lanes L;
+    pt_material m[LANES];
+    int lanes = lanes_from(v, count, &L, m), on = 0;
+    bool mis = rung == PT_MIS;
+#if WIDE_HAVE_AVX
+    if (tests_use_avx())
+        on = rung == PT_LECTURE ? bounce_math_avx(&L, lanes) : bounce_cosine_avx(&L, lanes, mis);
+    else
+#endif
+        for (int left = lanes; left != 0; left &= left - 1) {
+            int k = __builtin_ctz((unsigned)left);
+            on |= rung == PT_LECTURE ? bounce_math_lane(&L, k, &m[k]) : bounce_cosine_lane(&L, k, &m[k], mis);
+        }
+    for (int left = on; left != 0; left &= left - 1) {
+        int k = __builtin_ctz((unsigned)left);
+        out[k].next = flat_rays8_get(&L.ray, k);
+        out[k].throughput = vec3_make(L.throughput[0][k], L.throughput[1][k], L.throughput[2][k]);
+        out[k].wo = vec3_make(L.wo[0][k], L.wo[1][k], L.wo[2][k]);
+        out[k].pdf = rung == PT_LECTURE ? 0.0f : L.pdf[k];
+    }
+    return on;
 }

@@ -11,7 +11,9 @@
  * (AVX2, where the processor has it; lane by lane, with the same bits,
  * where not) and the two rays' offsets. Lanes on glossy surfaces, mirrors
  * and glass, point lights and spheres are done one lane at a time with
- * chapter 09's BSDFs (bsdf_eval, bsdf_sample). A lane whose path ends
+ * chapter 09's BSDFs (bsdf_eval, bsdf_sample); the physics of every lane is
+ * chapter 09's light transport pieces (light_transport.h), which the AVX
+ * kernels vectorise. A lane whose path ends
  * starts its pixel's next sample; a lane whose pixel is done takes the
  * next pixel.
  *
@@ -104,7 +106,7 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
 /* The lanes' arithmetic (light sample, bounce, ray offsets) eight lanes
  * per AVX instruction (true, the default, where the processor has AVX2) or
  * one lane at a time: the
- * same bits either way (tests/test_ch09.c). Not thread-safe: set it before
+ * same bits either way (tests/test_ch13.c). Not thread-safe: set it before
  * rendering. */
 void path_tracer_wide_use_avx(bool on);
 
@@ -115,26 +117,50 @@ void path_tracer_wide_use_avx(bool on);
 typedef enum { WIDE_TWIN_NONE, WIDE_TWIN_EMISSION_UNWEIGHTED, WIDE_TWIN_LIGHT_UNWEIGHTED } wide_twin;
 void path_tracer_wide_twin(wide_twin twin);
 
-/* One vertex's light sample as the lanes compute it: the hit (point, its
- * error bound, geometric and shading normals), the direction back along the
- * path, the surface's albedo (diffuse), the path's throughput, and the
+/* For the tests of the AVX kernels against chapter 09's scalar pieces
+ * (light_transport.h): one diffuse vertex as the lanes hold it -- the hit
+ * (point, its error bound, geometric and shading normals), the direction
+ * back along the path, the surface's albedo, the path's throughput; the
  * point picked on a light (point, error bound, normal, L_e, pdf per unit
- * area). */
+ * area); the two numbers of the next direction and the roulette's 1 / P_RR. */
 typedef struct {
     vec3 p, ng, n, wo, albedo, throughput;
     float p_error;
     vec3 x_light, n_light, le;
     float x_error, pdf_area;
-} wide_light_vertex;
+    float u_x, u_y, rr_scale;
+} wide_vertex;
 
-/* For the tests: the light samples' arithmetic of up to eight vertices
- * on diffuse surfaces, as the eight-path renderer does it (in AVX where it
- * runs, else lane by lane): bit k of the result says whether vertex k's
- * sample adds light, and contribution[k] is what it adds, times the
- * throughput, if its shadow ray gets through -- with the power heuristic's
- * weight against the cosine-weighted BSDF sample if `mis`. Chapter 09's
- * shade() and sample_direct_light() compute the same from
- * pt_scene_sample_light(), bsdf_eval() and bsdf_pdf(). */
-int path_tracer_wide_light_math(const wide_light_vertex *v, int count, bool mis, vec3 contribution[8]);
+/* What a vertex's light sample adds, times the throughput, if its shadow
+ * ray gets through, and that ray. */
+typedef struct {
+    vec3 contribution;
+    ray shadow;
+} wide_light_result;
+
+/* The light samples of up to eight diffuse vertices as the eight-path
+ * renderer computes them (light_math_avx where it runs, else lane by lane
+ * through direct_light_solid_angle()): bit k of the result says whether
+ * vertex k's sample adds light, and out[k] (set for those only) what, with
+ * the power heuristic's weight against the one BSDF sample if `mis`. */
+int path_tracer_wide_light_math(const wide_vertex *v, int count, bool mis, wide_light_result out[8]);
+
+/* A vertex's bounce: the next ray (origin, direction, t_min; ray_spawn()),
+ * the direction back along it, the throughput after it (times f cos / pdf
+ * and rr_scale), and on the cosine and MIS rungs the direction's pdf. */
+typedef struct {
+    ray next;
+    vec3 wo, throughput;
+    float pdf;
+} wide_bounce_result;
+
+/* The bounces of up to eight diffuse vertices as the eight-path renderer
+ * computes them on `rung` (bounce_math_avx on the lecture rung,
+ * bounce_cosine_avx on the others, where they run; else lane by lane): the
+ * direction from u_x, u_y (sample_uniform_hemisphere_fast() or
+ * sample_cosine_hemisphere_fast(), fast_sincos.h) and f cos / pdf from
+ * chapter 09's bounce_weight() (on the MIS rung bsdf_sample()'s rho). Bit
+ * k says whether vertex k's path goes on; out[k] is set for those only. */
+int path_tracer_wide_bounce_math(const wide_vertex *v, int count, pt_integrator rung, wide_bounce_result out[8]);
 
 #endif

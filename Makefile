@@ -20,6 +20,7 @@
 #   make plots       draw every figure (gnuplot) from data the programs write
 #   make docs        the book: one HTML page per chapter, woven by pandoc, in build/docs/
 #   make test-docs   render every page of the book in headless Chromium and check it
+#   make excerpts    write the code each README's excerpts show again from the sources (after a change or a merge)
 #   make deps        install the Debian packages the build needs that are missing
 #   make clean       remove everything generated (build/)
 #   make help        this list
@@ -30,7 +31,7 @@
 #   mk/mpi.mk        make mpi, mpi-deps, test-mpi
 #   mk/bench.mk      make bench
 #   mk/plots.mk      make plots
-#   mk/docs.mk       make docs, test-docs
+#   mk/docs.mk       make docs, test-docs, excerpts, figures
 #
 # Everything generated goes under build/.
 

@@ -23,6 +23,7 @@
 #   make exercise CH=NN [EX=name]  hand out chapter NN's exercises (stubs); make solution CH=NN takes them back
 #   make grade [CH=NN]  run the suites on your code: one table, exercise by exercise
 #   make check-exercises  every exercise's stub fails a test and builds; make solution restores it
+#   make excerpts    write the code each README's excerpts show again from the sources (after a change or a merge)
 #   make deps        install the Debian packages the build needs that are missing
 #   make clean       remove everything generated (build/)
 #   make help        this list
@@ -33,7 +34,7 @@
 #   mk/mpi.mk        make mpi, mpi-deps, test-mpi
 #   mk/bench.mk      make bench
 #   mk/plots.mk      make plots
-#   mk/docs.mk       make docs, test-docs
+#   mk/docs.mk       make docs, test-docs, excerpts, figures
 #   mk/exercises.mk  make exercise, solution, grade, exercises, check-exercises
 #
 # Everything generated goes under build/.

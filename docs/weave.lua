@@ -2,11 +2,17 @@
 its page of the book (run by `make docs`, see the Makefile).
 
 What it does to a page:
-  * ```excerpt blocks. A fenced block of class `excerpt` holds lines
-    "FILE NAME" (FILE from the repository's root, NAME a C function, struct,
-    typedef, enum or #define). Each becomes the definition itself, read from
-    the source now, with the comment just above it: the page cannot show
-    code the source no longer has. A name that is not found stops the build
+  * Excerpts. "<!-- excerpt FILE NAME -->" ... "<!-- end of excerpt -->"
+    (FILE from the repository's root, NAME a C function, struct, typedef,
+    enum or #define) holds, in the README, a caption and the code in a ```c
+    block, written there by docs/excerpts.sh (`make excerpts`) so that the
+    README shows the code on any Git host. The page shows the definition
+    read from the source now, with the comment just above it: the page
+    cannot show code the source no longer has, and a README whose code
+    differs from it stops the build (so the README and the page agree, and
+    excerpts.awk finds what find_definition finds). A fenced block of class
+    `excerpt` with lines "FILE NAME" (what `make excerpts` turns into the
+    above) is woven the same way. A name that is not found stops the build
     with the README's file and line.
   * Images. A README shows ../../docs/img/X.png, the committed copy of a
     figure the build makes (`make figures` refreshes them): build/out/X.png
@@ -259,40 +265,81 @@ end
 local definitions_cache = {}
 local excerpt_ids = {}
 
+-- The definition of `name` in `path` as the page shows it (its label and
+-- code), or nil, having said why; `at` is where the README asks for it.
+-- `shown`, when given, is the code the README itself holds there
+-- (docs/excerpts.sh wrote it): it must be the code read now.
+local function excerpt_of(path, name, at, shown)
+  local text = definitions_cache[path] or read_file(path)
+  if not text then
+    fail(at, "excerpt: no file " .. path)
+    return nil
+  end
+  definitions_cache[path] = text
+  local lines = lines_of(text)
+  local first, last = find_definition(lines, name)
+  if not first then
+    fail(at, "excerpt: " .. name .. " is not defined in " .. path .. " any more")
+    return nil
+  end
+  local code = table.concat(lines, "\n", first, last)
+  if shown and shown ~= code then
+    fail(at, "the excerpt of " .. name .. " differs from " .. path .. ": `make excerpts` writes it again")
+  end
+  local label = pandoc.Para({
+    pandoc.Code(name), pandoc.Space(), pandoc.Str("in"), pandoc.Space(),
+    made_link({ pandoc.Code(path) }, source_link(path)),
+    pandoc.Str(", lines " .. first .. "–" .. last),
+  })
+  local id = "excerpt-" .. name
+  if excerpt_ids[id] then id = "" end -- the first excerpt of a name is the one linked to
+  excerpt_ids[id] = true
+  return pandoc.Div({ label, pandoc.CodeBlock(code, pandoc.Attr("", { "c" })) }, pandoc.Attr(id, { "excerpt" }))
+end
+
+-- A block ```excerpt (lines "FILE NAME"), the form docs/excerpts.sh
+-- replaces: woven as it stands.
 local function excerpt_blocks(block)
   local out = {}
   for _, ref in ipairs(lines_of(block.text)) do
     if ref:match("%S") then
       local words = split_words(ref)
-      local path, name = words[1], words[2]
       local at = where(ref)
-      local text = path and definitions_cache[path] or (path and read_file(path))
-      if not path or not name or #words ~= 2 then
+      if #words ~= 2 then
         fail(at, "an excerpt line is `FILE NAME` (from the repository's root), not `" .. ref .. "`")
-      elseif not text then
-        fail(at, "excerpt: no file " .. path)
       else
-        definitions_cache[path] = text
-        local lines = lines_of(text)
-        local first, last = find_definition(lines, name)
-        if not first then
-          fail(at, "excerpt: " .. name .. " is not defined in " .. path .. " any more")
-        else
-          local code = table.concat(lines, "\n", first, last)
-          local label = pandoc.Para({
-            pandoc.Code(name), pandoc.Space(), pandoc.Str("in"), pandoc.Space(),
-            made_link({ pandoc.Code(path) }, source_link(path)),
-            pandoc.Str(", lines " .. first .. "–" .. last),
-          })
-          local id = "excerpt-" .. name
-          if excerpt_ids[id] then id = "" end -- the first excerpt of a name is the one linked to
-          excerpt_ids[id] = true
-          table.insert(out, pandoc.Div({ label, pandoc.CodeBlock(code, pandoc.Attr("", { "c" })) },
-                                       pandoc.Attr(id, { "excerpt" })))
-        end
+        table.insert(out, excerpt_of(words[1], words[2], at))
       end
     end
   end
+  return out
+end
+
+-- An excerpt as the README holds it (docs/excerpts.sh): from "<!-- excerpt
+-- FILE NAME -->" to "<!-- end of excerpt -->", a caption and the code in a
+-- ```c block. The page shows the definition read from the source now, and
+-- refuses a README whose code is not that.
+local function splice_excerpts(blocks)
+  local out, open = {}, nil
+  for _, b in ipairs(blocks) do
+    local text = b.t == "RawBlock" and b.text:gsub("%s+$", "") or ""
+    local path, name = text:match("^<!%-%- excerpt (%S+) ([%w_]+) %-%->$")
+    if open then
+      if text == "<!-- end of excerpt -->" then
+        local at = where("<!-- excerpt " .. open.path .. " " .. open.name .. " -->")
+        if not open.code then fail(at, "the excerpt of " .. open.name .. " holds no code block: `make excerpts`") end
+        table.insert(out, excerpt_of(open.path, open.name, at, open.code or ""))
+        open = nil
+      elseif b.t == "CodeBlock" then
+        open.code = b.text
+      end
+    elseif path then
+      open = { path = path, name = name }
+    else
+      table.insert(out, b)
+    end
+  end
+  if open then fail(where("<!-- excerpt " .. open.path), "the excerpt of " .. open.name .. " has no `<!-- end of excerpt -->`") end
   return out
 end
 
@@ -571,7 +618,10 @@ local function find_excerpt(file, name)
       local text = read_file("chapters/" .. c .. "/README.md") or ""
       local inside = false
       for _, line in ipairs(lines_of(text)) do
-        if line:match("^```excerpt%s*$") then
+        local file, name = line:match("^<!%-%- excerpt (%S+) ([%w_]+) %-%->$")
+        if file and not excerpt_pages[file .. " " .. name] then
+          excerpt_pages[file .. " " .. name] = c .. ".html#excerpt-" .. name
+        elseif line:match("^```excerpt%s*$") then
           inside = true
         elseif inside and line:match("^```") then
           inside = false
@@ -855,7 +905,7 @@ local function splice_tables(blocks)
     elseif name then
       local md = read_file(M.build .. "/plots/" .. name .. ".md")
       if not md then fail(where("<!-- table " .. name), "no table " .. M.build .. "/plots/" .. name .. ".md (make plots)") end
-      for _, t in ipairs(pandoc.read(md, "gfm").blocks) do table.insert(out, t) end
+      for _, t in ipairs(md and pandoc.read(md, "gfm").blocks or {}) do table.insert(out, t) end
       skipping = name
     else
       table.insert(out, b)
@@ -903,7 +953,7 @@ function Pandoc(doc)
     end
   end
 
-  doc.blocks = splice_tables(doc.blocks)
+  doc.blocks = splice_excerpts(splice_tables(doc.blocks))
   local blocks = {}
   local head_done = false
   if chapter then check_sections(doc, chapter) end

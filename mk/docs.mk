@@ -9,8 +9,14 @@
 # prints on at most DOC_MAX_PRINTED pages, and that every image a README
 # shows is a file of the repository; each check first refuses its bad
 # input in tests/docs/.
+#
+# `make excerpts` writes the code of every excerpt in the READMEs again from
+# the sources (docs/excerpts.sh), so that a README shows its code on any Git
+# host; it writes only what changed, and after a merge one run brings every
+# README back in line. tests/check_excerpts.sh (in make test and test-docs)
+# fails, naming the README's line and the function, where they differ.
 
-.PHONY: docs docs-deps test-docs figures
+.PHONY: docs docs-deps test-docs figures excerpts
 
 DOCS := $(BUILD)/docs
 DOCS_TEST := $(BUILD)/docs-test
@@ -41,6 +47,10 @@ CHROMIUM = chromium --headless --no-sandbox --disable-gpu --hide-scrollbars \
 
 docs: $(DOC_PAGES)
 	@echo "The book is in $(DOCS)/: open $(DOCS)/index.html"
+
+DOC_MARKDOWN = README.md docs/*.md chapters/*/README.md
+excerpts:
+	@docs/excerpts.sh $(DOC_MARKDOWN)
 
 # make figures: the committed copies in docs/img/ of every figure a page
 # shows (the READMEs link them, so that they read with their pictures on any
@@ -137,6 +147,7 @@ test-docs: docs | docs-deps
 	echo "ok: tests/docs/hand_edited_table.md is refused: its table is not the one its run wrote"
 	@docs/splice.sh --check docs/img README.md docs/*.md chapters/*/README.md \
 	  && echo "ok: every measured table a README quotes is the one the run that drew its figure wrote"
+	@tests/check_excerpts.sh $(BUILD)
 	@tests/check_images.sh README.md docs/*.md chapters/*/README.md \
 	  && echo "ok: every image the READMEs and pages show is a file of the repository"
 	@! CHROMIUM="$(CHROMIUM)" tests/docs_print_pages.sh $(DOC_MAX_PRINTED) tests/docs/bad_long_page.html \

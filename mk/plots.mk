@@ -66,7 +66,20 @@ data_run = echo "$(call data_mode,$(2)): $(strip $(call data_shown,$(1),$(2)) --
   printf '%s\t%s\n' $(call data_mode,$(2)) "$(strip $(call data_shown,$(1),$(2)) --data build/data $(call plot_flags,$(2)))" \
     > $(BUILD)/data/ch$(2).run
 
-plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data) $(if $(MPIRUN),mpi)
+# Chapter 02 draws no plot but quotes one measured table (plots/ch02_depth.table):
+# the rays its default scene costs at each depth limit, one render a depth,
+# each writing its counters (build/data/ch02_depthN.counters.json). Counts,
+# not times: they do not move with the machine's load.
+CH02_DEPTHS := 0 1 2 3 5 10 64
+ch02-data: $(BUILD)/bin/02-whitted
+	@mkdir -p $(BUILD)/data
+	@for d in $(CH02_DEPTHS); do \
+	  $(BUILD)/bin/02-whitted --quiet --max-depth $$d --out $(BUILD)/data/ch02_depth$$d.exr || exit 1; done
+	@printf 'full\tbuild/bin/02-whitted --max-depth N --out build/data/ch02_depthN.exr, N = %s\n' \
+	  "$(CH02_DEPTHS)" > $(BUILD)/data/ch02.run
+.PHONY: ch02-data
+
+plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data) $(if $(MPIRUN),mpi) ch02-data
 	@mkdir -p $(BUILD)/data
 	@$(foreach c,$(DATA_CHAPTERS),$(call data_run,$(c),$(call chapter_number,$(c))) && ) true
 

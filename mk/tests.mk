@@ -15,12 +15,13 @@
 # and the chapters before it (tests/check_layering.sh), a warning before
 # every render loop's long render (tests/long_render.sh), a render stopped by
 # a signal and resumed from its checkpoint being the uninterrupted one
-# (tests/resume.sh, chapter 09's program), make exercise and make solution
-# keeping every learner's body and giving the files back byte for byte
-# (tests/exercise_tool.sh; the check that every exercise's stub fails its
-# tests, which builds, is make check-exercises).
+# (tests/resume.sh, chapter 09's program), every excerpt a README shows being
+# its source's code, and a hand-edited one refused (tests/check_excerpts.sh),
+# make exercise and make solution keeping every learner's body and giving
+# the files back byte for byte (tests/exercise_tool.sh; the check that every
+# exercise's stub fails its tests, which builds, is make check-exercises).
 TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh) tests/check_layering.sh tests/long_render.sh \
-                tests/resume.sh tests/exercise_tool.sh
+                tests/resume.sh tests/check_excerpts.sh tests/exercise_tool.sh
 SUITE_RUNS := $(patsubst $(BUILD)/tests/%,run-%,$(TESTS))
 SCRIPT_RUNS := $(patsubst tests/%.sh,run-%,$(TEST_SCRIPTS))
 .PHONY: $(SUITE_RUNS) $(SCRIPT_RUNS)
@@ -56,6 +57,7 @@ $(filter-out run-bad_input,$(SCRIPT_RUNS)): run-%: tests/%.sh
 # long_render.sh runs the programs.
 run-long_render: $(PROGRAMS)
 run-resume: $(BUILD)/bin/09-path-tracing
+run-check_excerpts: docs/excerpts.sh docs/excerpts.awk
 
 # bad_input.sh takes as long as all the suites together, so it runs once
 # per program, run-bad_input-NN-name, side by side under -j; run-bad_input

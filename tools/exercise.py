@@ -33,6 +33,8 @@ Commands (the Makefile's `make exercise`, `solution`, `grade`, `chNN` and
     handout   --ch NN [--ex NAME]       stubs in place of reference bodies
     solution  --ch NN [--ex NAME]       reference bodies back, the learner's kept
     status                              each exercise: reference, stub or yours
+    handed-out                          exit 0 if any exercise is not the reference
+    reference-tree DIR                  a copy of the tree with every reference body
     grade     [--ch NN] --build DIR     run the suites, print one table
     picture   NN --build DIR -- ARGS    the reference picture and the difference
     check     [--ch NN] [--ex NAME] [--plant]   every exercise: stub fails, solution restores
@@ -807,8 +809,9 @@ def main(argv):
     p = argparse.ArgumentParser(description=__doc__.split('\n')[0],
                                 formatter_class=argparse.RawDescriptionHelpFormatter,
                                 epilog='\n'.join(__doc__.split('\n')[27:36]))
-    p.add_argument('command', choices=['list', 'handout', 'solution', 'status', 'grade', 'picture', 'check'])
-    p.add_argument('number', nargs='?', help='the chapter (picture)')
+    p.add_argument('command', choices=['list', 'handout', 'solution', 'status', 'grade', 'picture', 'check',
+                                       'handed-out', 'reference-tree'])
+    p.add_argument('number', nargs='?', help='the chapter (picture), or the folder (reference-tree)')
     p.add_argument('--ch', help='the chapter number, e.g. 01')
     p.add_argument('--ex', help='one exercise by name')
     p.add_argument('--build', default='build')
@@ -833,6 +836,11 @@ def main(argv):
         return grade(root, [chapter] if chapter else chapter_dirs(root), a.build)
     elif a.command == 'picture':
         return picture(root, '%02d' % int(a.number), a.build, rest)
+    elif a.command == 'handed-out':
+        return 0 if any_handed_out(root) else 1
+    elif a.command == 'reference-tree':
+        os.makedirs(a.number, exist_ok=True)
+        reference_tree(root, os.path.abspath(a.number))
     elif a.command == 'check':
         return check(root, chapter, a.ex, a.plant, a.keep)
     return 0

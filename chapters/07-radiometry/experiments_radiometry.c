@@ -354,7 +354,9 @@ static bool furnace(double Le, double rho, int bounces, FILE *csv, bool main_rho
     return ok;
 }
 
-/* A lamp in the furnace: only a cap around the north pole emits. Every patch
+/* A lamp in the furnace: only a cap around the north pole emits, made of
+ * whole patches: those whose centres lie within 30 degrees of the pole (with
+ * 16 rings, the top three rows: a cap reaching 33.75 degrees). Every patch
  * sees the same average, so the indirect light is the same everywhere:
  * L_i = E_i + <E> rho / (1 - rho). */
 static void furnace_lamp(double rho, int bounces)
@@ -378,7 +380,7 @@ static void furnace_lamp(double rho, int bounces)
     }
     double indirect = average * rho * (1.0 - pow(rho, bounces)) / (1.0 - rho);
     if (verbose)
-        printf("  lamp cap (30 deg) only: after %d bounces, lamp patch %.12f (E + indirect %.12f), dark patch %.12f\n"
+        printf("  lamp (the rows whose centres lie within 30 deg of the pole) only: after %d bounces, lamp patch %.12f (E + indirect %.12f), dark patch %.12f\n"
                "  (indirect closed form <E> rho (1 - rho^k) / (1 - rho) = %.12f: the same on every patch)\n",
                bounces, L[0], 1.0 + indirect, L[s.count - 1], indirect);
     free(E);

@@ -2,8 +2,8 @@
 # tests/exercise_tool.sh BUILD: tools/exercise.py keeps every learner's work.
 # On a copy of the tree (a git repository of its own, so "the reference"
 # is its HEAD), without compiling anything:
-#   1. make exercise CH=09 writes stubs, and the handed-out files no longer
-#      hold the reference bodies;
+#   1. make exercise CH=09 writes stubs, the handed-out files no longer hold
+#      the reference bodies, and the tool reads its stubs back as stubs;
 #   2. a half-written body (the stub's call still in it) is the learner's:
 #      handing out again keeps it, byte for byte;
 #   3. make solution gives every file back as HEAD has it, and keeps the
@@ -28,6 +28,8 @@ file=chapters/09-path-tracing/path_tracer.c
 $tool handout --ch 09 > out.txt 2>&1
 check "handing out writes stubs" "grep -q 'exercise_todo(\"shade\"' $file"
 check "a handed-out file holds no reference body" "! grep -q 'vec3 l_q = hit ? shade(pt' $file"
+$tool status > status.txt 2>&1
+check "and the tool sees its own stubs as stubs" "grep -q '^shade  *stub ' status.txt && grep -q '^light_sample  *stub ' status.txt"
 
 # The learner starts: one line under the stub's call.
 sed -i '/exercise_todo("shade"/a\    vec3 l_dir_mine = vec3_splat(0.0f); /* mine */' $file

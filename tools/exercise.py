@@ -276,7 +276,8 @@ def make_stub(ex, lines, start, end, rel, reference):
     helpers = [h for h in static_helpers(lines[:start] + lines[end + 1:], reference) if h != function]
     if helpers:
         out.append('%s/* what this file has for it: %s (keep a (void) line below for each you do not\n'
-                   '%s * use: a static function nothing calls is a warning) */\n' % (indent, ', '.join(helpers), indent))
+                   % (indent, ', '.join(helpers)))
+        out.append('%s * use: a static function nothing calls is a warning) */\n' % indent)
     for name in params + local_names + helpers:
         out.append('%s(void)%s;\n' % (indent, name))
     value = marker.group(3) or neutral_return(ret)

@@ -638,24 +638,37 @@ def picture(root, number, build, args):
     if r.returncode != 0:
         print('the reference program did not build (above); no comparison', file=sys.stderr)
         return 1
-    reference = os.path.join(out_dir, 'ch%s.reference.exr' % number)
-    key = hashlib.sha256(open(program, 'rb').read() + '\0'.join(args).encode()).hexdigest()
-    key_file = reference + '.key'
-    if not (os.path.exists(os.path.join(root, reference)) and os.path.exists(os.path.join(root, key_file))
-            and open(os.path.join(root, key_file)).read() == key):
-        print('rendering the reference implementation\'s picture with the same flags...', file=sys.stderr)
-        flags = [a for i, a in enumerate(args) if a != '--out' and (i == 0 or args[i - 1] != '--out')]
-        r = subprocess.run([program, '--quiet'] + flags + ['--out', reference], cwd=root)
-        if r.returncode != 0:
-            return r.returncode
-        with open(os.path.join(root, key_file), 'w') as f:
-            f.write(key)
+    flags = [a for i, a in enumerate(args) if a != '--out' and (i == 0 or args[i - 1] != '--out')]
+    seed = 1
+    for i, a in enumerate(flags[:-1]):
+        if a == '--seed':
+            seed = int(flags[i + 1])
+    # The reference twice: with the learner's seed, and with the next one.
+    # How far apart those two are is the noise: a correct exercise that
+    # draws its random numbers in another order differs by about as much.
+    references = []
+    for k, s_k in enumerate((seed, seed + 1)):
+        reference = os.path.join(out_dir, 'ch%s.reference%s.exr' % (number, '' if k == 0 else '-seed%d' % s_k))
+        seeded = [a for i, a in enumerate(flags) if a != '--seed' and (i == 0 or flags[i - 1] != '--seed')]
+        run = [program, '--quiet'] + seeded + ['--seed', str(s_k), '--out', reference]
+        key = hashlib.sha256(open(program, 'rb').read() + '\0'.join(run).encode()).hexdigest()
+        key_file = os.path.join(root, reference + '.key')
+        if not (os.path.exists(os.path.join(root, reference)) and os.path.exists(key_file)
+                and open(key_file).read() == key):
+            print('rendering the reference implementation\'s picture with the same flags%s...'
+                  % ('' if k == 0 else ', seed %d' % s_k), file=sys.stderr)
+            r = subprocess.run(run, cwd=root)
+            if r.returncode != 0:
+                return r.returncode
+            with open(key_file, 'w') as f:
+                f.write(key)
+        references.append(reference)
     difference = os.path.join(out_dir, 'ch%s.difference.exr' % number)
     compare = os.path.join(root, build, 'bin', 'image_compare')
     r = subprocess.run(['make', '--no-print-directory', '-s', os.path.join(build, 'bin', 'image_compare')], cwd=root)
     if r.returncode != 0:
         return r.returncode
-    return subprocess.run([compare, yours, reference, difference], cwd=root).returncode
+    return subprocess.run([compare, yours, references[0], difference, references[1]], cwd=root).returncode
 
 
 # ---- the check of every exercise ------------------------------------------

@@ -1,12 +1,16 @@
-/* image_compare YOURS.exr REFERENCE.exr DIFFERENCE.exr -- a learner's
- * picture against the reference implementation's (make chNN, when an
- * exercise is handed out; tools/exercise.py).
+/* image_compare YOURS.exr REFERENCE.exr DIFFERENCE.exr [REFERENCE2.exr] --
+ * a learner's picture against the reference implementation's (make chNN,
+ * when an exercise is handed out; tools/exercise.py).
  *
  * Writes |yours - reference| per channel as DIFFERENCE.exr and its .png
  * preview (the preview scaled so the largest difference is white), and
  * prints one number, the relative MSE (common/image.h), with the mean
  * brightness of each picture: a path tracer that is wrong by a constant
- * factor shows it in the means, where noise alone does not. */
+ * factor shows it in the means, where noise alone does not. With a second
+ * reference (the same render with another seed), it prints how far the two
+ * references are apart: the noise, the size of the difference a correct
+ * exercise may still show when it draws its random numbers in another
+ * order. */
 #include <stdio.h>
 
 #include "image.h"
@@ -37,7 +41,20 @@ static image difference_of(const image *a, const image *b, float *largest)
     return d;
 }
 
-static int compare(const char *yours_path, const char *reference_path, const char *difference_path)
+/* How far apart two renders of the reference are (NAN if it cannot say). */
+static double noise_of(const image *reference, const char *other_path)
+{
+    char err[IMAGE_ERROR_SIZE];
+    image other = {0};
+    if (other_path == NULL || !image_read_exr(&other, other_path, err, sizeof err))
+        return NAN;
+    double relmse = image_relmse(&other, reference);
+    image_free(&other);
+    return relmse;
+}
+
+static int compare(const char *yours_path, const char *reference_path, const char *difference_path,
+                   const char *reference2_path)
 {
     char err[IMAGE_ERROR_SIZE];
     image yours = {0}, reference = {0};
@@ -64,6 +81,11 @@ static int compare(const char *yours_path, const char *reference_path, const cha
                    "(mean %.4g against %.4g); the difference is %s, white = %.3g\n",
                    image_relmse(&yours, &reference), mean_of(&yours), mean_of(&reference), difference_path,
                    (double)largest);
+            double noise = noise_of(&reference, reference2_path);
+            if (noise == noise) /* not NaN */
+                printf("the reference against itself with another seed: relative MSE %.3g (the noise: "
+                       "a right answer differs by about as much)\n",
+                       noise);
         }
         image_free(&d);
     }
@@ -74,10 +96,11 @@ static int compare(const char *yours_path, const char *reference_path, const cha
 
 int main(int argc, char **argv)
 {
-    if (argc != 4) {
-        fprintf(stderr, "usage: image_compare YOURS.exr REFERENCE.exr DIFFERENCE.exr\n"
-                        "  writes |yours - reference| and prints the relative MSE and both means\n");
+    if (argc != 4 && argc != 5) {
+        fprintf(stderr, "usage: image_compare YOURS.exr REFERENCE.exr DIFFERENCE.exr [REFERENCE2.exr]\n"
+                        "  writes |yours - reference| and prints the relative MSE and both means;\n"
+                        "  REFERENCE2, the reference with another seed: how far apart noise alone puts them\n");
         return 2;
     }
-    return compare(argv[1], argv[2], argv[3]);
+    return compare(argv[1], argv[2], argv[3], argc == 5 ? argv[4] : NULL);
 }

@@ -565,6 +565,9 @@ def grade(root, chapters, build):
             print('  does not build: fix the errors above first')
             failed_any = True
             continue
+        if 'warning:' in log:
+            print(log.rstrip())
+            print('  (the compiler warns: above)')
         tests, _ = run_suite(os.path.join(root, binary))
         print('  %-22s %-9s %-7s %s' % ('exercise', 'state', 'tests', 'result'))
         for ex in exercises:

@@ -13,7 +13,9 @@
 #include "run_record.h"
 #include "timer.h"
 
+#ifdef _OPENMP
 #include <omp.h>
+#endif
 
 void program_note_effects(const effects_report *e)
 {
@@ -184,7 +186,12 @@ double program_pilot_seconds(const render_job *job)
 /* Every thread of every rank (mpi_split.h) shares the work. */
 static int all_threads(const cli_options *opts)
 {
-    return (opts->threads > 0 ? opts->threads : omp_get_max_threads()) * mpi_split_ranks();
+#ifdef _OPENMP
+    int threads = opts->threads > 0 ? opts->threads : omp_get_max_threads();
+#else
+    int threads = 1; /* built without OpenMP (the fuzz targets): one thread */
+#endif
+    return threads * mpi_split_ranks();
 }
 
 static void warn_long(const cli_options *opts, const char *label, double one_thread_seconds, const char *advice)

@@ -143,11 +143,14 @@ valgrind-deps: deps
 
 # One libFuzzer target per parser (tests/fuzz_NAME.c), built with clang and
 # the address and undefined-behaviour sanitizers, run for FUZZ_SECONDS each
-# from the seed corpus tests/fuzz/NAME/.
+# from the seed corpus tests/fuzz/NAME/. Each links all of common/ and the
+# generated version file (checkpoints and records name the version), and
+# is built without OpenMP (common/ then runs on one thread): clang's OpenMP
+# runtime is another package, and a parser has no threads to find.
 FUZZ_SECONDS ?= 30
 FUZZ_TARGETS := $(patsubst tests/fuzz_%.c,%,$(sort $(wildcard tests/fuzz_*.c)))
 
-$(BUILD)/fuzz/fuzz_%: tests/fuzz_%.c $(COMMON_SRC) | fuzz-deps
+$(BUILD)/fuzz/fuzz_%: tests/fuzz_%.c $(COMMON_SRC) $(VERSION_SRC) | fuzz-deps
 	@mkdir -p $(dir $@)
 	clang -std=c11 -D_DEFAULT_SOURCE -g -O1 -ffp-contract=off -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
 	  $(CPPFLAGS) $^ -o $@ $(LDLIBS)

@@ -10,6 +10,7 @@
 #include "explain.h"
 #include "input_file.h"
 #include "mpi_split.h"
+#include "progressive.h"
 #include "run_record.h"
 #include "timer.h"
 
@@ -269,6 +270,16 @@ bool program_checkpointing(const cli_options *opts, const char *label, const cha
         return true;
     char err[8192] = "";
     int ok = !mpi_split_is_root() || checkpoint_read(opts->resume, &cp->id, payload_bytes, resumed, err, sizeof err);
+    if (ok && mpi_split_is_root()) {
+        /* whole and of this render: then what it holds must be a render's */
+        const char *problem =
+            strcmp(kind, "progressive") == 0 ? progressive_resume_problem(resumed) : render_resume_problem(resumed);
+        if (problem != NULL) {
+            snprintf(err, sizeof err, "%s: %s, not resumed", opts->resume, problem);
+            checkpoint_free(resumed);
+            ok = 0;
+        }
+    }
     if (!mpi_split_broadcast_int(ok)) {
         if (mpi_split_is_root())
             fprintf(stderr, "%s: --resume %s\n", label, err);

@@ -238,6 +238,10 @@ static void reference_checkpointing(const char *path, const char *record, const 
     if (found && !checkpoint_read(cp_path, &cp->id, bytes, resumed, err, sizeof err)) {
         printf("reference: not resuming: %s\n", err);
         found = 0;
+    } else if (found && render_resume_problem(resumed) != NULL) {
+        printf("reference: not resuming: %s: %s\n", cp_path, render_resume_problem(resumed));
+        checkpoint_free(resumed);
+        found = 0;
     }
     cp->resuming = mpi_split_broadcast_int(found);
     if (found) {

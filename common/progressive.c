@@ -113,14 +113,14 @@ static void write_progress(const checkpointing *cp, const estimate_image *total,
     free(payload);
 }
 
-/* Each pass doubles the samples (2 after the first): 2^31 after 31 passes
+/* Each pass doubles the samples (2 after the first, 2^k after k): 2^31
  * is past the int a pass's spp is given as. */
 enum { PROGRESSIVE_MAX_PASSES = 30 };
 
 const char *progressive_resume_problem(const checkpoint *c)
 {
-    if (c->done < 1 || c->done > PROGRESSIVE_MAX_PASSES || c->spp_done < 2 || c->spp_done > INT_MAX)
-        return "its passes or samples are not those of a progressive render";
+    if (c->done < 1 || c->done > PROGRESSIVE_MAX_PASSES || c->spp_done != 1L << c->done)
+        return "its passes and samples are not those of a progressive render (2^k samples after k passes)";
     const float *payload = c->payload;
     size_t floats = c->payload_bytes / sizeof *payload / 2;
     for (size_t i = 0; i < floats; i++)

@@ -65,8 +65,8 @@ estimate_image progressive_render_sampled(radiance_fn radiance, render_sample_fn
                                           double target_error, FILE *log);
 
 /* What is wrong with a progressive render's checkpoint (checkpoint_read
- * has matched its identity and size), or NULL: its passes between 1 and
- * PROGRESSIVE_MAX_PASSES, its samples a count the next pass can take, its
+ * has matched its identity and size), or NULL: its passes k between 1 and
+ * PROGRESSIVE_MAX_PASSES with 2^k samples, as the passes make them, its
  * mean finite and its standard error finite and not negative. */
 const char *progressive_resume_problem(const checkpoint *c);
 

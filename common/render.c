@@ -1,5 +1,6 @@
 #include "render.h"
 
+#include <float.h>
 #include <math.h>
 
 #include <stdio.h>
@@ -236,9 +237,12 @@ const char *render_resume_problem(const checkpoint *c)
     for (size_t i = 0; i < pixels; i++)
         for (int k = 0; k < 3; k++) {
             const welford *w = &states[i].channel[k];
-            if (!isfinite(w->mean) || !isfinite(w->m2) || w->m2 < 0.0 || w->count > (uint64_t)c->done)
-                return "a pixel's running sums are not ones a render makes (not finite, negative, or of more "
-                       "samples than it has done)";
+            /* (a mean or standard error past a float's range is finite in
+             * double and infinite in the image: the fuzzer found one) */
+            if (!isfinite(w->mean) || !isfinite(w->m2) || w->m2 < 0.0 || w->count > (uint64_t)c->done ||
+                fabs(w->mean) > FLT_MAX || !(welford_standard_error(w) <= FLT_MAX))
+                return "a pixel's running sums are not ones a render makes (not finite, past a float's range, "
+                       "negative, or of more samples than it has done)";
         }
     return NULL;
 }

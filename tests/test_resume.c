@@ -19,6 +19,7 @@
 #include <string.h>
 
 #include "checkpoint.h"
+#include "progressive.h"
 #include "render.h"
 #include "run_record.h"
 #include "test_temp_dir.h"
@@ -364,12 +365,37 @@ static void test_a_crafted_checkpoint_is_checked(void **state)
     states[7].channel[1].m2 = -1.0;
     assert_non_null(render_resume_problem(&c));
     states[7].channel[1].m2 = 0.0;
+    states[7].channel[0].mean = 1e300; /* finite, but infinite as the image's float (found by fuzz_checkpoint) */
+    assert_non_null(render_resume_problem(&c));
+    states[7].channel[0].mean = 0.0;
+    states[7].channel[0].count = 3;
+    states[7].channel[0].m2 = 1e300; /* a standard error of 2.9e149 */
+    assert_non_null(render_resume_problem(&c));
+    states[7].channel[0].m2 = 0.0;
     states[7].channel[2].count = 6;
     assert_non_null(render_resume_problem(&c));
     states[7].channel[2].count = 5;
     c.done = SPP + 1;
     c.spp_done = SPP + 1;
     assert_non_null(render_resume_problem(&c));
+
+    /* A progressive render's: 2^k samples after k passes, a finite image,
+     * a standard error not negative. */
+    float image[2 * WIDTH * HEIGHT * 3] = {0};
+    checkpoint p = {.done = 5, .spp_done = 32, .payload_bytes = sizeof image, .payload = image};
+    assert_null(progressive_resume_problem(&p));
+    p.spp_done = 33;
+    assert_non_null(progressive_resume_problem(&p));
+    p.done = 31;
+    p.spp_done = 1L << 31;
+    assert_non_null(progressive_resume_problem(&p));
+    p.done = 5;
+    p.spp_done = 32;
+    image[3] = INFINITY;
+    assert_non_null(progressive_resume_problem(&p));
+    image[3] = 0.0f;
+    image[WIDTH * HEIGHT * 3 + 2] = -1.0f;
+    assert_non_null(progressive_resume_problem(&p));
 }
 
 /* What must match to resume: the flags that change the image, not where

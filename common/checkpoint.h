@@ -15,10 +15,24 @@
  * size, samples per pixel, seed, and every other flag that changes the
  * image), how far it got, and its counters; then a line "payload N" and N
  * bytes of the render's own state, in this machine's byte order (the
- * header says which). It is written through atomic_file, so a reader finds
- * the previous checkpoint or the whole new one. A checkpoint of another
- * render (any of the identity's fields differ) is refused, naming each
- * field that differs.
+ * header says which); then a last line "checksum H", H the 64-bit FNV-1a
+ * hash of every byte before that line, in 16 hex digits. It is written
+ * through atomic_file, so a reader finds the previous checkpoint or the
+ * whole new one. A file whose checksum does not match what it holds (one
+ * byte changed anywhere: a disk's or a copy's error, an edit) is refused
+ * as damaged before anything in it is believed; so is a checkpoint of the
+ * format before checksums. A checkpoint of another render (any of the
+ * identity's fields differ) is refused, naming each field that differs.
+ *
+ * Why FNV-1a and not CRC-32: the project links no zlib, FNV-1a is the hash
+ * it already keeps of scene files (here, one function for both), and it
+ * catches every change of one byte for certain, not by chance: a changed
+ * byte changes the state where it is xored in, and every later step (xor
+ * with the same byte, multiply by an odd number modulo 2^64) is one to
+ * one, so the two states never meet again. Other damage passes with
+ * probability 2^-64. It guards against accidents, not against someone who
+ * edits a checkpoint and computes its hash anew: such a file is read as
+ * any other, its numbers checked, its state bounded by this render's size.
  */
 #ifndef CHECKPOINT_H
 #define CHECKPOINT_H
@@ -30,7 +44,14 @@
 #include "cli.h"
 #include "counters.h"
 
-enum { CHECKPOINT_TEXT_SIZE = 1024, CHECKPOINT_FLAGS_SIZE = 2048 };
+enum { CHECKPOINT_TEXT_SIZE = 1024, CHECKPOINT_FLAGS_SIZE = 2048, CHECKPOINT_HEADER_MAX = 8192 };
+
+/* The checksum: FNV-1a over n bytes, continuing from h (start from
+ * CHECKPOINT_CHECKSUM_START); the file's last line is the key, the hash
+ * in 16 lowercase hex digits, a newline. */
+#define CHECKPOINT_CHECKSUM_START 14695981039346656037ULL
+#define CHECKPOINT_CHECKSUM_KEY "checksum "
+uint64_t checkpoint_checksum(uint64_t h, const void *data, size_t n);
 
 /* What render a checkpoint belongs to: all of it must match to resume. */
 typedef struct {
@@ -60,10 +81,12 @@ checkpoint_identity checkpoint_identity_of(const char *kind, const char *program
 
 /* Writes c to path (atomically). False with err naming the file. */
 bool checkpoint_write(const char *path, const checkpoint *c, char *err, size_t err_size);
-/* Reads path into out, if it is a checkpoint of the render `expected`
- * with a payload of payload_bytes; else false, with err naming the file
- * and, for another render's checkpoint, each field that differs ("its
- * seed is 7, this render's 1"). */
+/* Reads path into out, if it is a whole checkpoint (its checksum
+ * matches) of the render `expected` with a payload of payload_bytes; else
+ * false, with err naming the file and what is wrong: damaged, of the old
+ * format, a line malformed, or, for another render's checkpoint, each
+ * field that differs ("its seed is 7, this render's 1"). Allocates
+ * payload_bytes, the caller's, never what the file says. */
 bool checkpoint_read(const char *path, const checkpoint_identity *expected, size_t payload_bytes, checkpoint *out,
                      char *err, size_t err_size);
 void checkpoint_free(checkpoint *c);

@@ -392,6 +392,12 @@ static bool mtl_statement(void *context, source *s, line_reader *r, field keywor
         vec3 c;
         if (!mtl_colour(s, r, word, &c))
             return false;
+        /* A light gives light: a negative Ke would be dropped as "emits
+         * nothing" (mesh_material_emits), the material printed as a plain
+         * diffuse one, where the scene file refuses a negative emission. */
+        if (word[1] == 'e' && !(c.x >= 0.0f && c.y >= 0.0f && c.z >= 0.0f))
+            return fail_at(s, "'Ke %g %g %g': an emission cannot be negative", (double)c.x, (double)c.y,
+                           (double)c.z);
         if (word[1] == 'd')
             material->diffuse = c;
         else if (word[1] == 's')

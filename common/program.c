@@ -10,10 +10,13 @@
 #include "explain.h"
 #include "input_file.h"
 #include "mpi_split.h"
+#include "progressive.h"
 #include "run_record.h"
 #include "timer.h"
 
+#ifdef _OPENMP
 #include <omp.h>
+#endif
 
 void program_note_effects(const effects_report *e)
 {
@@ -184,7 +187,12 @@ double program_pilot_seconds(const render_job *job)
 /* Every thread of every rank (mpi_split.h) shares the work. */
 static int all_threads(const cli_options *opts)
 {
-    return (opts->threads > 0 ? opts->threads : omp_get_max_threads()) * mpi_split_ranks();
+#ifdef _OPENMP
+    int threads = opts->threads > 0 ? opts->threads : omp_get_max_threads();
+#else
+    int threads = 1; /* built without OpenMP (the fuzz targets): one thread */
+#endif
+    return threads * mpi_split_ranks();
 }
 
 static void warn_long(const cli_options *opts, const char *label, double one_thread_seconds, const char *advice)
@@ -262,6 +270,16 @@ bool program_checkpointing(const cli_options *opts, const char *label, const cha
         return true;
     char err[8192] = "";
     int ok = !mpi_split_is_root() || checkpoint_read(opts->resume, &cp->id, payload_bytes, resumed, err, sizeof err);
+    if (ok && mpi_split_is_root()) {
+        /* whole and of this render: then what it holds must be a render's */
+        const char *problem =
+            strcmp(kind, "progressive") == 0 ? progressive_resume_problem(resumed) : render_resume_problem(resumed);
+        if (problem != NULL) {
+            snprintf(err, sizeof err, "%s: %s, not resumed", opts->resume, problem);
+            checkpoint_free(resumed);
+            ok = 0;
+        }
+    }
     if (!mpi_split_broadcast_int(ok)) {
         if (mpi_split_is_root())
             fprintf(stderr, "%s: --resume %s\n", label, err);

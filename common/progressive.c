@@ -2,6 +2,7 @@
  * progressive.h). */
 #include "progressive.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -110,6 +111,22 @@ static void write_progress(const checkpointing *cp, const estimate_image *total,
         fprintf(stderr, "checkpoint: %ld samples per pixel after pass %d -> %s (--resume %s continues)\n", total->spp,
                 pass, cp->path, cp->path);
     free(payload);
+}
+
+/* Each pass doubles the samples (2 after the first, 2^k after k): 2^31
+ * is past the int a pass's spp is given as. */
+enum { PROGRESSIVE_MAX_PASSES = 30 };
+
+const char *progressive_resume_problem(const checkpoint *c)
+{
+    if (c->done < 1 || c->done > PROGRESSIVE_MAX_PASSES || c->spp_done != 1L << c->done)
+        return "its passes and samples are not those of a progressive render (2^k samples after k passes)";
+    const float *payload = c->payload;
+    size_t floats = c->payload_bytes / sizeof *payload / 2;
+    for (size_t i = 0; i < floats; i++)
+        if (!isfinite(payload[i]) || !isfinite(payload[floats + i]) || payload[floats + i] < 0.0f)
+            return "its image is not one a render makes (a value not finite, or a negative standard error)";
+    return NULL;
 }
 
 /* The render so far from the resumed checkpoint (rank 0 read it and tells

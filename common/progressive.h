@@ -64,6 +64,12 @@ estimate_image progressive_render_sampled(radiance_fn radiance, render_sample_fn
                                           const camera *cam, uint64_t seed, int threads, double seconds,
                                           double target_error, FILE *log);
 
+/* What is wrong with a progressive render's checkpoint (checkpoint_read
+ * has matched its identity and size), or NULL: its passes k between 1 and
+ * PROGRESSIVE_MAX_PASSES with 2^k samples, as the passes make them, its
+ * mean finite and its standard error finite and not negative. */
+const char *progressive_resume_problem(const checkpoint *c);
+
 /* The same, keeping checkpoints of the passes so far (cp->path, at least
  * cp->every_seconds apart), or continuing cp->resume; cp NULL: neither.
  * A resumed render goes on with the next pass, as the uninterrupted one

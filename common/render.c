@@ -1,5 +1,8 @@
 #include "render.h"
 
+#include <float.h>
+#include <math.h>
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -223,6 +226,25 @@ static void write_checkpoint(const render_job *job, render_pixel_state *states, 
     else if (!cp->quiet)
         fprintf(stderr, "%s: checkpoint: %d of %d samples per pixel -> %s (--resume %s continues)\n",
                 job->label ? job->label : "render", done, job->spp, cp->path, cp->path);
+}
+
+const char *render_resume_problem(const checkpoint *c)
+{
+    if (c->done > c->id.spp || c->spp_done != c->done)
+        return "its samples done are not between 0 and its spp, or disagree with its spp-done";
+    const render_pixel_state *states = c->payload;
+    size_t pixels = c->payload_bytes / sizeof *states;
+    for (size_t i = 0; i < pixels; i++)
+        for (int k = 0; k < 3; k++) {
+            const welford *w = &states[i].channel[k];
+            /* (a mean or standard error past a float's range is finite in
+             * double and infinite in the image: the fuzzer found one) */
+            if (!isfinite(w->mean) || !isfinite(w->m2) || w->m2 < 0.0 || w->count > (uint64_t)c->done ||
+                fabs(w->mean) > FLT_MAX || !(welford_standard_error(w) <= FLT_MAX))
+                return "a pixel's running sums are not ones a render makes (not finite, past a float's range, "
+                       "negative, or of more samples than it has done)";
+        }
+    return NULL;
 }
 
 /* Every rank's pixel states to start from: a fresh one per pixel, or the

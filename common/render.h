@@ -86,6 +86,15 @@ typedef struct {
     welford channel[3];
 } render_pixel_state;
 
+/* What is wrong with a checkpoint's pixel states (checkpoint_read has
+ * matched its identity and its size), or NULL: a render's checkpoint
+ * holds as many samples done as spp-done says, at most its spp, and every
+ * pixel's sums are finite, its mean and standard error within a float's
+ * range, its squared deviations not negative and its counts at most the
+ * samples done. A file that passes its checksum was
+ * written whole, or crafted: this is what the resume trusts of it. */
+const char *render_resume_problem(const checkpoint *c);
+
 /* Renders into out (already made at the camera's size). Under mpirun
  * (mpi_split.h) every rank renders its rows and then holds the whole
  * image; the counters are every rank's. */

@@ -15,19 +15,44 @@ static char **saved_argv; /* main()'s, alive for the whole run */
 static char note_keys[NOTE_COUNT][64], note_values[NOTE_COUNT][NOTE_SIZE];
 static int note_count;
 
+/* The length of the well-formed UTF-8 sequence at s (RFC 3629: no
+ * overlong forms, no surrogates, nothing past U+10FFFF), or 0. */
+static size_t utf8_sequence(const unsigned char *s)
+{
+    unsigned char c = s[0];
+    size_t n = c < 0x80 ? 1 : c >= 0xc2 && c <= 0xdf ? 2 : c >= 0xe0 && c <= 0xef ? 3 : c >= 0xf0 && c <= 0xf4 ? 4 : 0;
+    for (size_t i = 1; i < n; i++)
+        if ((s[i] & 0xc0) != 0x80)
+            return 0; /* (the string's '\0' ends a sequence early here too) */
+    if ((c == 0xe0 && s[1] < 0xa0) || (c == 0xed && s[1] > 0x9f) || (c == 0xf0 && s[1] < 0x90) ||
+        (c == 0xf4 && s[1] > 0x8f))
+        return 0;
+    return n;
+}
+
 /* s as the body of a JSON string: quotes, backslashes and control bytes
- * escaped. Returns the characters written (less than size). */
+ * escaped. JSON text is Unicode: a byte that is not part of well-formed
+ * UTF-8 (a file name in Latin-1, say: a name on Linux is any bytes) is
+ * written as U+FFFD, the replacement character, one for each such byte,
+ * so the file stays valid JSON and says where a byte was not text.
+ * Returns the characters written (less than size). */
 static size_t json_escape(const char *s, char *out, size_t size)
 {
     size_t n = 0;
-    for (; *s != '\0' && n + 7 < size; s++) {
-        unsigned char c = (unsigned char)*s;
+    for (const unsigned char *p = (const unsigned char *)s; *p != '\0' && n + 7 < size;) {
+        unsigned char c = *p;
+        size_t length = utf8_sequence(p);
         if (c == '"' || c == '\\')
             n += (size_t)snprintf(out + n, size - n, "\\%c", c);
         else if (c < 0x20)
             n += (size_t)snprintf(out + n, size - n, "\\u%04x", c);
-        else
-            out[n++] = (char)c;
+        else if (length == 0)
+            n += (size_t)snprintf(out + n, size - n, "\\ufffd");
+        else {
+            memcpy(out + n, p, length);
+            n += length;
+        }
+        p += length > 0 ? length : 1;
     }
     out[n] = '\0';
     return n;

@@ -148,25 +148,41 @@ valgrind-deps: deps
 
 # One libFuzzer target per parser (tests/fuzz_NAME.c), built with clang and
 # the address and undefined-behaviour sanitizers, run for FUZZ_SECONDS each
-# from the seed corpus tests/fuzz/NAME/.
+# (fuzz-NAME: each on its own, side by side under -j). Each links all of
+# common/ and the generated version file (checkpoints and records name the
+# version), and is built without OpenMP (common/ then runs on one thread):
+# clang's OpenMP runtime is another package, and a parser has no threads
+# to find. The corpus: $(BUILD)/fuzz/corpus_NAME (what the runs found,
+# kept between runs), the seeds tests/fuzz/NAME/, the real files
+# FUZZ_SEEDS_NAME names (the chapters' scene files), and what the target
+# writes into $(BUILD)/fuzz/seeds_NAME when it starts (FUZZ_SEEDS_DIR: the
+# checkpoint target writes real checkpoints through the real writer).
+# -malloc_limit_mb: no input may make a target allocate more than that at
+# once (a checkpoint's header may claim any size; the reader allocates this
+# render's). Each run's log is $(BUILD)/fuzz/NAME.log; a crash fails the
+# run, names the input libFuzzer saved, and shows the log's end.
 FUZZ_SECONDS ?= 30
+FUZZ_FLAGS ?= -malloc_limit_mb=256 -timeout=30
 FUZZ_TARGETS := $(patsubst tests/fuzz_%.c,%,$(sort $(wildcard tests/fuzz_*.c)))
+FUZZ_SEEDS_scene := $(wildcard chapters/*/scenes)
+FUZZ_RUNS := $(addprefix fuzz-,$(FUZZ_TARGETS))
+.PHONY: $(FUZZ_RUNS)
 
-$(BUILD)/fuzz/fuzz_%: tests/fuzz_%.c $(COMMON_SRC) | fuzz-deps
+$(BUILD)/fuzz/fuzz_%: tests/fuzz_%.c $(COMMON_SRC) $(VERSION_SRC) | fuzz-deps
 	@mkdir -p $(dir $@)
 	clang -std=c11 -D_DEFAULT_SOURCE -g -O1 -ffp-contract=off -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
 	  $(CPPFLAGS) $^ -o $@ $(LDLIBS)
 
-fuzz: $(foreach t,$(FUZZ_TARGETS),$(BUILD)/fuzz/fuzz_$(t))
-	@for t in $(FUZZ_TARGETS); do \
-	  mkdir -p $(BUILD)/fuzz/corpus_$$t; \
-	  echo "fuzzing $$t for $(FUZZ_SECONDS) s (seed corpus tests/fuzz/$$t/)"; \
-	  $(BUILD)/fuzz/fuzz_$$t -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 \
-	    $(BUILD)/fuzz/corpus_$$t tests/fuzz/$$t > $(BUILD)/fuzz/$$t.log 2>&1 \
-	    || { tail -40 $(BUILD)/fuzz/$$t.log; echo "fuzz_$$t FOUND A CRASH (input saved in the current directory)"; exit 1; }; \
-	  runs=$$(sed -n 's/^stat::number_of_executed_units: *//p' $(BUILD)/fuzz/$$t.log); \
-	  echo "fuzz_$$t: $$runs inputs, no crash"; \
-	done
+$(FUZZ_RUNS): fuzz-%: $(BUILD)/fuzz/fuzz_%
+	@mkdir -p $(BUILD)/fuzz/corpus_$* $(BUILD)/fuzz/seeds_$* $(BUILD)/fuzz/crashes
+	@echo "fuzzing $* for $(FUZZ_SECONDS) s (seeds tests/fuzz/$*/ $(FUZZ_SEEDS_$*))"
+	@FUZZ_SEEDS_DIR=$(BUILD)/fuzz/seeds_$* $< -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $(FUZZ_FLAGS) \
+	    -artifact_prefix=$(BUILD)/fuzz/crashes/$*- $(BUILD)/fuzz/corpus_$* $(BUILD)/fuzz/seeds_$* tests/fuzz/$* \
+	    $(FUZZ_SEEDS_$*) > $(BUILD)/fuzz/$*.log 2>&1 \
+	  || { tail -40 $(BUILD)/fuzz/$*.log; echo "fuzz_$* FOUND A CRASH (the input: $(BUILD)/fuzz/crashes/$*-*)"; exit 1; }
+	@echo "fuzz_$*: $$(sed -n 's/^stat::number_of_executed_units: *//p' $(BUILD)/fuzz/$*.log) inputs in $(FUZZ_SECONDS) s, no crash"
+
+fuzz: $(FUZZ_RUNS)
 
 fuzz-deps: deps
 	@$(MAKE) --no-print-directory deps DEBIAN_PACKAGES="clang libclang-rt-14-dev"

@@ -1548,10 +1548,14 @@ static void test_the_old_offsets_render_the_scaled_boxes_wrong(void **state)
  * pt_scene_check_scale() names every object fewer than RAY_MIN_STEPS_ACROSS
  * float steps across at its distance from the origin, and says to move the
  * scene: the Cornell box scaled by 1e-3 and moved to (1e5, 0, 1e5) has a
- * light 0.13 wide there, 17 steps (and walls of 71, which pass); a sphere
- * of radius 1e-3 at 1e5 is a quarter of a step. The twins: the box itself,
- * the box scaled by 1e-7 near 0 (small is not the matter) and a sphere of
- * radius 1 at 1e5 (256 steps) get no warning. */
+ * light 0.13 wide there, 17 steps, and two blocks of 27 and 42 steps (and
+ * walls of 71, which pass); a sphere of radius 1e-3 at 1e5 is a quarter
+ * of a step. Objects are connected parts, not materials: the blocks share
+ * the walls' white, and were never checked when the walls' box stood for
+ * all three. The twins: the box itself, the box scaled by 1e-7 near 0
+ * (small is not the matter) and a sphere of radius 1 at 1e5 (256 steps)
+ * get no warning. A soup of loose tiny triangles names the first few and
+ * counts the rest. */
 static int scale_warnings(const pt_scene *sc, char **text)
 {
     size_t size = 0;
@@ -1581,10 +1585,28 @@ static void test_objects_too_small_for_their_place_are_named(void **state)
     pt_scene sc;
     pt_scene_build_cornell_box(&sc);
     pt_scene_transform(&sc, 1e-3f, SCALE_FAR);
-    assert_int_equal(scale_warnings(&sc, &text), 1);
+    assert_int_equal(scale_warnings(&sc, &text), 3);
     print_message("%s", text);
-    assert_non_null(strstr(text, "test: warning: the 2 triangles of material #3, a light"));
+    assert_non_null(strstr(text, "test: warning: the 2 connected triangles from triangle #10 (material #3, a light)"));
+    assert_non_null(strstr(text, "test: warning: the 10 connected triangles from triangle #12 (material #0)"));
+    assert_non_null(strstr(text, "test: warning: the 10 connected triangles from triangle #22 (material #0)"));
+    assert_null(strstr(text, "from triangle #0 ")); /* the walls pass */
     assert_non_null(strstr(text, "move the scene near the origin"));
+    free(text);
+    pt_scene_free(&sc);
+
+    /* 20 loose triangles a thousandth wide at 1e5: eight named, twelve counted */
+    pt_scene_init(&sc);
+    int white = pt_scene_add_material(&sc, pt_diffuse(vec3_splat(0.5f)));
+    for (int i = 0; i < 20; i++) {
+        vec3 p = vec3_make(1e5f + (float)i, 0.0f, 0.0f);
+        pt_scene_add_triangle(&sc, p, vec3_add(p, vec3_make(1e-3f, 0, 0)), vec3_add(p, vec3_make(0, 1e-3f, 0)), white);
+    }
+    pt_scene_finish(&sc);
+    assert_int_equal(scale_warnings(&sc, &text), 20);
+    assert_non_null(strstr(text, "from triangle #7 "));
+    assert_null(strstr(text, "from triangle #8 "));
+    assert_non_null(strstr(text, "and 12 more connected parts of triangles as small for their place"));
     free(text);
     pt_scene_free(&sc);
 

@@ -853,11 +853,35 @@ static void test_counters_file_records_the_run(void **state)
     remove(path);
 }
 
+/* A name on Linux is any bytes; JSON is Unicode text. A byte that is not
+ * well-formed UTF-8 (Latin-1's e-acute, a sequence cut short, an overlong
+ * '/', a surrogate) becomes \ufffd, one per byte, so the counters file
+ * stays valid JSON; the twin: well-formed UTF-8 (e-acute, the euro sign,
+ * an emoji) is written as it is. */
+static void test_counters_file_is_valid_json_for_any_bytes(void **state)
+{
+    (void)state;
+    cli_options o = cli_defaults("out.exr", 16, 8, 4);
+    char *argv[] = {"prog", "--scene", "\xe9t\xe9 \xe2\x82.scene", "--obj", "\xc0\xaf\xed\xa0\x80\xff.obj", "--mesh",
+                    "\xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80"};
+    o.scene = argv[2];
+    run_record_command(7, argv, &o);
+    char json[8192];
+    assert_true(run_record_json(json, sizeof json));
+    assert_non_null(strstr(json, "\"command\": \"prog --scene '\\ufffdt\\ufffd \\ufffd\\ufffd.scene' --obj "
+                                 "\\ufffd\\ufffd\\ufffd\\ufffd\\ufffd\\ufffd.obj --mesh \xc3\xa9\xe2\x82\xac\xf0\x9f\x98\x80\""));
+    assert_non_null(strstr(json, "\"scene\": \"\\ufffdt\\ufffd \\ufffd\\ufffd.scene\""));
+    for (const unsigned char *p = (const unsigned char *)json; *p != '\0'; p++)
+        if (*p >= 0x80) /* only the twin's three well-formed characters */
+            assert_true(p >= (const unsigned char *)strstr(json, "--mesh "));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pcg32_matches_reference_output),
         cmocka_unit_test(test_counters_file_records_the_run),
+        cmocka_unit_test(test_counters_file_is_valid_json_for_any_bytes),
         cmocka_unit_test(test_camera_flags_override_the_scenes_camera),
         cmocka_unit_test(test_pcg32_float_is_in_unit_interval_and_uniform),
         cmocka_unit_test(test_pcg32_pixel_streams_differ),

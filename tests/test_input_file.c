@@ -16,6 +16,7 @@
 
 #include "cli.h"
 #include "input_file.h"
+#include "record_file.h"
 #include "mesh.h"
 #include "scene_file.h"
 #include "test_support.h"
@@ -350,6 +351,31 @@ static void test_other_files_are_read_as_usual(void **state)
     free(text);
 }
 
+/* A cached reference's record (record_file.h) serves only when it is the
+ * expected record byte for byte: a NUL inside it (which a string compare
+ * would stop at) or a cut does not match, and each differing line is
+ * named; a directory or a missing file is no record. The twin: the same
+ * bytes match. */
+static void test_a_record_matches_only_byte_for_byte(void **state)
+{
+    (void)state;
+    char path[PATH_SIZE], why[1024], err[256];
+    const char *expected = "width 16\nspp 64\nversion v1\n";
+    in_dir(path, "ref-record.txt");
+    assert_false(record_file_matches(path, expected, why, sizeof why));
+    assert_non_null(strstr(why, "it has no record of how it was made"));
+    assert_true(record_file_write(path, expected, err, sizeof err));
+    assert_true(record_file_matches(path, expected, why, sizeof why));
+    write_bytes(path, "width 16\nspp 64\0junk\nversion v1\n", 30);
+    assert_false(record_file_matches(path, expected, why, sizeof why));
+    assert_non_null(strstr(why, "its spp 64..., now 64"));
+    write_text(path, "width 16\nspp 32\n");
+    assert_false(record_file_matches(path, expected, why, sizeof why));
+    assert_string_equal(why, "its spp 32, now 64; its , now v1");
+    assert_false(record_file_matches(test_dir, expected, why, sizeof why));
+    assert_non_null(strstr(why, "cannot be read: not a regular file"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -362,6 +388,7 @@ int main(void)
         cmocka_unit_test(test_the_flag_sets_the_limit),
         cmocka_unit_test(test_an_output_is_never_read_as_input),
         cmocka_unit_test(test_other_files_are_read_as_usual),
+        cmocka_unit_test(test_a_record_matches_only_byte_for_byte),
     };
     return cmocka_run_group_tests(tests, make_test_dir, remove_test_dir);
 }

@@ -780,6 +780,34 @@ static void test_error_in_mtl_names_mtl_file_and_line(void **state)
     mesh_free(&m);
 }
 
+/* A negative Ke is an error naming the MTL file and line, as a scene
+ * file's negative emission is (it was dropped as "emits nothing", the
+ * material printed as a plain diffuse). The twin: Ke 0 and Ke 5 load. */
+static void test_negative_emission_in_mtl_is_an_error(void **state)
+{
+    (void)state;
+    char path[PATH_SIZE], expected[PATH_SIZE + 64], err[MESH_ERROR_SIZE] = "";
+    static const char *const negative[] = {"Ke -5", "Ke 1 -0.5 1", "Ke 0 0 -1e-3"};
+    mesh m;
+    mesh_init(&m);
+    for (size_t i = 0; i < sizeof negative / sizeof negative[0]; i++) {
+        char mtl[128];
+        snprintf(mtl, sizeof mtl, "newmtl lamp\nKd 1 1 1\n%s\n", negative[i]);
+        write_text(in_dir(path, "negative.mtl"), mtl);
+        const char *text = "mtllib negative.mtl\n";
+        assert_false(mesh_parse_obj(&m, text, strlen(text), "m.obj", test_dir, err, sizeof err));
+        snprintf(expected, sizeof expected, "%s:3: '", path);
+        assert_starts_with(err, expected);
+        assert_contains(err, "an emission cannot be negative");
+        assert_int_equal(m.material_count, 0);
+    }
+    write_text(in_dir(path, "negative.mtl"), "newmtl dark\nKe 0\nnewmtl lamp\nKe 5\n");
+    parse_ok(&m, "mtllib negative.mtl\n", test_dir);
+    assert_int_equal(m.material_count, 2);
+    assert_true(m.materials[1].emission.x == 5.0f);
+    mesh_free(&m);
+}
+
 /* ---- files ------------------------------------------------------------- */
 
 static void test_load_missing_file(void **state)
@@ -1014,6 +1042,7 @@ int main(void)
         cmocka_unit_test(test_mtllib_several_files_on_one_line),
         cmocka_unit_test(test_error_missing_mtl_file),
         cmocka_unit_test(test_error_in_mtl_names_mtl_file_and_line),
+        cmocka_unit_test(test_negative_emission_in_mtl_is_an_error),
         cmocka_unit_test(test_load_missing_file),
         cmocka_unit_test(test_load_finds_mtl_beside_the_obj),
         cmocka_unit_test(test_write_then_load_round_trip),

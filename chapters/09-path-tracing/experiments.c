@@ -11,6 +11,7 @@
 #include "atomic_file.h"
 #include "checkpoint.h"
 #include "mpi_split.h"
+#include "record_file.h"
 #include "run_record.h"
 #include "timer.h"
 
@@ -158,48 +159,19 @@ static void reference_record(const path_tracer *reference, const camera *cam, in
 }
 
 /* Whether the record beside `path` is `expected`; if not, why, in why
- * ("its spp 1024, now 4096; ..."; "no record"). */
+ * ("its spp 1024, now 4096; ..."; "no record"): record_file.h. */
 static bool record_matches(const char *path, const char *expected, char *why, size_t why_size)
 {
-    char stored_path[4200], stored[2048] = "";
+    char stored_path[4200];
     record_path(path, stored_path, sizeof stored_path);
-    FILE *f = fopen(stored_path, "r");
-    size_t n = f != NULL ? fread(stored, 1, sizeof stored - 1, f) : 0;
-    if (f != NULL)
-        fclose(f);
-    stored[n] = '\0';
-    if (f == NULL) {
-        snprintf(why, why_size, "it has no record of how it was made, %.1000s", stored_path);
-        return false;
-    }
-    if (strcmp(stored, expected) == 0)
-        return true;
-    /* name each line that differs */
-    size_t used = 0;
-    why[0] = '\0';
-    const char *a = stored, *b = expected;
-    while ((*a != '\0' || *b != '\0') && used < why_size) {
-        size_t la = strcspn(a, "\n"), lb = strcspn(b, "\n");
-        if (la != lb || strncmp(a, b, la) != 0) {
-            size_t key = strcspn(b, " \n");
-            used += (size_t)snprintf(why + used, why_size - used, "%sits %.*s, now %.*s", used > 0 ? "; " : "",
-                                     (int)la, a, (int)(lb - (key < lb ? key + 1 : lb)), b + (key < lb ? key + 1 : lb));
-        }
-        a += la + (a[la] == '\n');
-        b += lb + (b[lb] == '\n');
-    }
-    return false;
+    return record_file_matches(stored_path, expected, why, why_size);
 }
 
 static bool record_write(const char *path, const char *record, char *err, size_t err_size)
 {
     char p[4200];
     record_path(path, p, sizeof p);
-    atomic_file f;
-    if (!atomic_file_open(&f, p, err, err_size))
-        return false;
-    fputs(record, f.stream);
-    return atomic_file_commit(&f, err, err_size);
+    return record_file_write(p, record, err, err_size);
 }
 
 /* A reference the ranks made together goes on rank 0; the others, which
@@ -237,6 +209,10 @@ static void reference_checkpointing(const char *path, const char *record, const 
     int found = mpi_split_is_root() && access(cp_path, R_OK) == 0;
     if (found && !checkpoint_read(cp_path, &cp->id, bytes, resumed, err, sizeof err)) {
         printf("reference: not resuming: %s\n", err);
+        found = 0;
+    } else if (found && render_resume_problem(resumed) != NULL) {
+        printf("reference: not resuming: %s: %s\n", cp_path, render_resume_problem(resumed));
+        checkpoint_free(resumed);
         found = 0;
     }
     cp->resuming = mpi_split_broadcast_int(found);

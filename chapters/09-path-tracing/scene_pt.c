@@ -204,6 +204,76 @@ static void warn_too_small(FILE *out, float extent, float magnitude)
             (double)(extent / step), (double)step, (double)RAY_MIN_STEPS_ACROSS);
 }
 
+/* At most this many parts are named one by one; the rest are counted. */
+enum { SCALE_WARNINGS_SHOWN = 8 };
+
+/* A connected part's box, size, first triangle, and whether it emits. */
+typedef struct {
+    vec3 lo, hi;
+    int count, first;
+    bool light;
+} part_bounds;
+
+typedef struct {
+    vec3 p;
+    int index;
+} placed_position;
+
+static int compare_placed(const void *a, const void *b)
+{
+    const vec3 *p = &((const placed_position *)a)->p, *q = &((const placed_position *)b)->p;
+    if (p->x != q->x)
+        return p->x < q->x ? -1 : 1;
+    if (p->y != q->y)
+        return p->y < q->y ? -1 : 1;
+    return p->z < q->z ? -1 : p->z > q->z;
+}
+
+/* Union-find: the part's representative, halving the path on the way. */
+static int part_of(int *parent, int i)
+{
+    while (parent[i] != i) {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    return i;
+}
+
+static void join_parts(int *parent, int a, int b)
+{
+    a = part_of(parent, a);
+    b = part_of(parent, b);
+    if (a != b)
+        parent[a > b ? a : b] = a < b ? a : b;
+}
+
+/* For each position, the representative of its connected part: triangles
+ * are connected through a shared corner, by index or by place (a scene
+ * file's quads each have their own corners, and a box of quads meets at
+ * equal points). malloc'ed. */
+static int *triangle_parts(const mesh *g)
+{
+    int n = g->position_count;
+    int *parent = memory_allocate((size_t)(n > 0 ? n : 1), sizeof *parent);
+    placed_position *sorted = memory_allocate((size_t)(n > 0 ? n : 1), sizeof *sorted);
+    for (int i = 0; i < n; i++) {
+        parent[i] = i;
+        sorted[i] = (placed_position){g->positions[i], i};
+    }
+    qsort(sorted, (size_t)n, sizeof *sorted, compare_placed);
+    for (int i = 1; i < n; i++)
+        if (compare_placed(&sorted[i - 1], &sorted[i]) == 0)
+            join_parts(parent, sorted[i - 1].index, sorted[i].index);
+    free(sorted);
+    for (int f = 0; f < g->face_count; f++) {
+        join_parts(parent, g->faces[f].position[0], g->faces[f].position[1]);
+        join_parts(parent, g->faces[f].position[0], g->faces[f].position[2]);
+    }
+    for (int i = 0; i < n; i++)
+        parent[i] = part_of(parent, i);
+    return parent;
+}
+
 int pt_scene_check_scale(const pt_scene *sc, const char *label, FILE *out)
 {
     int warnings = 0;
@@ -217,34 +287,52 @@ int pt_scene_check_scale(const pt_scene *sc, const char *label, FILE *out)
         warn_too_small(out, extent, magnitude);
         warnings++;
     }
-    for (int m = 0; m < sc->material_count; m++) {
-        vec3 lo = vec3_splat(INFINITY), hi = vec3_splat(-INFINITY);
-        int count = 0, first = -1;
-        for (int f = 0; f < sc->geometry.face_count; f++) {
-            if (sc->geometry.faces[f].material != m)
-                continue;
-            for (int k = 0; k < 3; k++) {
-                vec3 p = mesh_vertex(&sc->geometry, f, k);
-                lo = vec3_min(lo, p);
-                hi = vec3_max(hi, p);
-            }
-            first = count++ == 0 ? f : first;
+    /* The triangles by connected part: each object alone, whatever its
+     * material (the Cornell box's two blocks share the walls' white; one
+     * box of all three would be as large as the room). */
+    const mesh *g = &sc->geometry;
+    int reported = 0, unreported = 0;
+    int *root = triangle_parts(g);
+    part_bounds *b = memory_allocate((size_t)(g->position_count > 0 ? g->position_count : 1), sizeof *b);
+    for (int i = 0; i < g->position_count; i++)
+        b[i] = (part_bounds){vec3_splat(INFINITY), vec3_splat(-INFINITY), 0, -1, false};
+    for (int f = 0; f < g->face_count; f++) {
+        part_bounds *p = &b[root[g->faces[f].position[0]]];
+        for (int k = 0; k < 3; k++) {
+            vec3 v = mesh_vertex(g, f, k);
+            p->lo = vec3_min(p->lo, v);
+            p->hi = vec3_max(p->hi, v);
         }
-        if (count == 0)
+        p->first = p->count++ == 0 ? f : p->first;
+        p->light = p->light || vec3_max_component(sc->materials[g->faces[f].material].emission) > 0.0f;
+    }
+    for (int f = 0; f < g->face_count; f++) {
+        const part_bounds *p = &b[root[g->faces[f].position[0]]];
+        if (p->first != f) /* each part once, in the order of its first triangle */
             continue;
-        float extent = vec3_max_component(vec3_sub(hi, lo));
-        float magnitude = vec3_max_component(vec3_max(vec3_abs(lo), vec3_abs(hi)));
+        float extent = vec3_max_component(vec3_sub(p->hi, p->lo));
+        float magnitude = vec3_max_component(vec3_max(vec3_abs(p->lo), vec3_abs(p->hi)));
         if (!ray_too_small_for_position(extent, magnitude))
             continue;
-        fprintf(out,
-                "%s: warning: the %d triangle%s of material #%d%s (the first is triangle #%d), "
-                "from (%.7g, %.7g, %.7g) to (%.7g, %.7g, %.7g),",
-                label, count, count == 1 ? "" : "s", m,
-                vec3_max_component(sc->materials[m].emission) > 0.0f ? ", a light" : "", first, (double)lo.x,
-                (double)lo.y, (double)lo.z, (double)hi.x, (double)hi.y, (double)hi.z);
-        warn_too_small(out, extent, magnitude);
         warnings++;
+        if (reported == SCALE_WARNINGS_SHOWN) { /* a soup of a million loose triangles: not a million lines */
+            unreported++;
+            continue;
+        }
+        reported++;
+        int m = g->faces[f].material;
+        fprintf(out,
+                "%s: warning: the %d connected triangle%s from triangle #%d (material #%d%s), "
+                "from (%.7g, %.7g, %.7g) to (%.7g, %.7g, %.7g),",
+                label, p->count, p->count == 1 ? "" : "s", f, m, p->light ? ", a light" : "", (double)p->lo.x,
+                (double)p->lo.y, (double)p->lo.z, (double)p->hi.x, (double)p->hi.y, (double)p->hi.z);
+        warn_too_small(out, extent, magnitude);
     }
+    if (unreported > 0)
+        fprintf(out, "%s: warning: and %d more connected part%s of triangles as small for their place\n", label,
+                unreported, unreported == 1 ? "" : "s");
+    free(b);
+    free(root);
     return warnings;
 }
 

@@ -110,8 +110,10 @@ void pt_scene_transform(pt_scene *sc, float scale, vec3 offset);
 /* Objects too small for where they are (ray.h's ray_too_small_for_position:
  * fewer than RAY_MIN_STEPS_ACROSS float steps across at the magnitude of
  * their coordinates), which no ray offset can render right: each sphere,
- * and the triangles of each material together (the scene keeps no other
- * grouping). Writes one warning per object to `out`,
+ * and each connected part of the triangles (joined by a shared corner,
+ * by index or by place: a mesh's piece, a box of quads, a lone quad),
+ * whatever its material. Writes one warning per object to `out` (the
+ * first few; then how many more),
  * "label: warning: <the object> is only N float steps across at that
  * distance from the origin ...; move the scene near the origin", and
  * returns how many. The programs of chapters 09-13 call it before

@@ -74,7 +74,7 @@ static void use_production(pt_scene *sc, bool walls)
 
 /* The walls of a scene (its structure a walls_accel). */
 static bool walls_segment_inside_of(const pt_scene *sc, const ray *r) { return walls_segment_inside(sc->bvh, r); }
-static int walls_segments8_inside_of(const pt_scene *sc, const flat_rays8 *rays, int active)
+static int walls_segments8_inside_of(const pt_scene *sc, const rays8 *rays, int active)
 {
     return walls_segments8_inside(sc->bvh, rays, active);
 }
@@ -1160,7 +1160,7 @@ static long wall_lanes_misjudged(const pt_scene *sc, const pt_scene *truth, uint
     long wrong = 0;
     *inside = 0;
     for (int packet = 0; packet < 20000; packet++) {
-        flat_rays8 rays;
+        rays8 rays;
         ray alone[FLAT_LANES];
         for (int k = 0; k < FLAT_LANES; k++) {
             vec3 from = point_near_a_wall(sc, &rng), to = point_near_a_wall(sc, &rng);
@@ -1171,7 +1171,7 @@ static long wall_lanes_misjudged(const pt_scene *sc, const pt_scene *truth, uint
                 alone[k].t_max = INFINITY;
             else if (kind == 1)
                 alone[k].t_min = pcg32_float(&rng);
-            flat_rays8_set(&rays, k, alone[k]);
+            rays8_set(&rays, k, alone[k]);
         }
         int active = (int)pcg32_bounded(&rng, 256);
         int got = walls_segments8_inside_of(sc, &rays, active);
@@ -2061,12 +2061,12 @@ static void leak_through_tracer(leak_tally *t, const char *name, const pt_scene 
     ray_counters counters = {0};
     for (int i = 0; i < c->n; i += FLAT_LANES) {
         int lanes = c->n - i < FLAT_LANES ? c->n - i : FLAT_LANES, active = (1 << lanes) - 1;
-        flat_rays8 rays = {0}, segments = {0};
+        rays8 rays = {0}, segments = {0};
         for (int k = 0; k < lanes; k++) {
-            flat_rays8_set(&rays, k, c->rays[i + k]);
-            flat_rays8_set(&segments, k, leak_segment(c->rays[i + k]));
+            rays8_set(&rays, k, c->rays[i + k]);
+            rays8_set(&segments, k, leak_segment(c->rays[i + k]));
         }
-        flat_hits8 hits;
+        hits8 hits;
         int hit = all->closest_hit8(all->context, &rays, active, &hits, &counters);
         int blocked = all->any_hit8(all->context, &segments, active, &counters);
         for (int k = 0; k < lanes; k++) {

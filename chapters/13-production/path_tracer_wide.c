@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "13-production/fast_sincos.h"
-#include "13-production/flat.h"
+#include "13-production/rays8.h"
 #include "13-production/walls.h"
 #include "13-production/wide_trace.h"
 #include "08-monte-carlo/sampling.h"
@@ -26,7 +26,7 @@
  * (spawn_avx.h's target); without it, lane by lane. */
 #define WIDE_HAVE_AVX SPAWN_HAVE_AVX2
 
-enum { LANES = FLAT_LANES };
+enum { LANES = RAYS8_LANES };
 
 /* On the functions only the cosine and MIS rungs call from render_row:
  * inlined, they grew it past what the compiler inlines into it, and left
@@ -98,7 +98,7 @@ wide_scene_tracers wide_scene_tracers_for(const pt_scene *sc)
  * path ends there is given its next camera ray (start_sample) before the
  * next step reads it. */
 typedef struct {
-    flat_rays8 ray;
+    rays8 ray;
     _Alignas(32) float wo[3][LANES], throughput[3][LANES];
     _Alignas(32) float p[3][LANES], p_error[LANES], ng[3][LANES], n[3][LANES], albedo[3][LANES];
     _Alignas(32) float x_light[3][LANES], x_error[LANES], n_light[3][LANES], le[3][LANES], pdf_area[LANES];
@@ -142,7 +142,7 @@ typedef struct {
  * wait between steps, and a step adds at most 8 for the light samples and
  * 8 per point light: capacity entries, a multiple of 8 (queue_make). */
 typedef struct {
-    flat_rays8 *rays;
+    rays8 *rays;
     vec3 *contribution;
     int *lane, *sample_id;
     int capacity;
@@ -194,7 +194,7 @@ static void start_sample(lane *l, row_job *job)
     float px = (float)l->x + lane_float(l, job->pt);
     float py = (float)l->y + lane_float(l, job->pt);
     int k = (int)(l - job->lanes);
-    flat_rays8_set(&job->vertex->ray, k, camera_ray(job->cam, px, py));
+    rays8_set(&job->vertex->ray, k, camera_ray(job->cam, px, py));
     job->counters->camera_rays++;
     job->camera |= 1 << k;
     l->depth = 0;
@@ -241,9 +241,9 @@ static void settle(lane *l, vec3 s, row_job *job)
 
 /* Does a sphere of the scene lie on lane k's segment? (pt_scene_occluded's
  * spheres, lane by lane: a room holds few.) */
-static bool spheres_block_lane(const pt_scene *sc, const flat_rays8 *rays, int k, ray_counters *counters)
+static bool spheres_block_lane(const pt_scene *sc, const rays8 *rays, int k, ray_counters *counters)
 {
-    ray r = flat_rays8_get(rays, k);
+    ray r = rays8_get(rays, k);
     hit_record ignored;
     for (int i = 0; i < sc->sphere_count; i++) {
         sphere shape = {sc->spheres[i].center, sc->spheres[i].radius};
@@ -310,7 +310,7 @@ static void trace_queued(row_job *job, int n)
 static void queue_push(row_job *job, int k, ray shadow, vec3 contribution)
 {
     int q = job->queued++;
-    flat_rays8_set(&job->queue.rays[q / LANES], q % LANES, shadow);
+    rays8_set(&job->queue.rays[q / LANES], q % LANES, shadow);
     job->queue.contribution[q] = contribution;
     job->queue.lane[q] = k;
     job->queue.sample_id[q] = job->lanes[k].sample_id;
@@ -323,7 +323,7 @@ static void queue_push(row_job *job, int k, ray shadow, vec3 contribution)
 static void settle_waiting(lane *l, row_job *job)
 {
     while (l->waiting && job->queued > 0)
-        trace_queued(job, job->queued < FLAT_LANES ? job->queued : FLAT_LANES);
+        trace_queued(job, job->queued < RAYS8_LANES ? job->queued : RAYS8_LANES);
 }
 
 /* The sample's path is done: into the pixel's mean once its shadow rays
@@ -909,10 +909,10 @@ static void point_lights_lane(row_job *job, const vertex_lanes *L, int k, const 
 
 /* pt_scene_intersect()'s spheres for lane k, after its triangles: a sphere
  * nearer than the triangle hit (t_max, or the ray's own) replaces it. */
-static bool sphere_hit_lane(const pt_scene *sc, const flat_rays8 *rays, int k, float t_max, hit_record *hit,
+static bool sphere_hit_lane(const pt_scene *sc, const rays8 *rays, int k, float t_max, hit_record *hit,
                             ray_counters *counters)
 {
-    ray r = flat_rays8_get(rays, k);
+    ray r = rays8_get(rays, k);
     r.t_max = t_max;
     return pt_scene_intersect_spheres(sc, r, hit, counters);
 }
@@ -938,11 +938,11 @@ static int hit_record_set(const pt_scene *sc, const hit_record *hit, int k, vert
  * geometric normal facing the ray, the shading normal, the material and its
  * albedo, and whether the front was hit; written straight into the lanes'
  * arrays. */
-static int hit_record_lane(const pt_scene *sc, const flat_hits8 *hits, int k, vertex_lanes *L,
+static int hit_record_lane(const pt_scene *sc, const hits8 *hits, int k, vertex_lanes *L,
                            int material[LANES])
 {
     hit_record hit;
-    triangle_set_fill_hit(&sc->triangles, hits->index[k], flat_rays8_get(&L->ray, k), hits->t[k], hits->b1[k],
+    triangle_set_fill_hit(&sc->triangles, hits->index[k], rays8_get(&L->ray, k), hits->t[k], hits->b1[k],
                           hits->b2[k], &hit);
     return hit_record_set(sc, &hit, k, L, material);
 }
@@ -952,7 +952,7 @@ static int hit_record_lane(const pt_scene *sc, const flat_hits8 *hits, int k, ve
  * corners, normals and materials gathered by index (AVX2). Only where the
  * triangles have no vertex normals: then the shading normal is the
  * geometric one. */
-SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const flat_hits8 *hits, int lanes,
+SPAWN_TARGET static int hit_records_avx(const pt_scene *sc, const hits8 *hits, int lanes,
                                         vertex_lanes *L, int material[LANES])
 {
     const triangle_set *set = &sc->triangles;
@@ -1014,7 +1014,7 @@ static int closest_hits(row_job *job, vertex_lanes *L, int active, int material[
 {
     const pt_scene *sc = job->pt->scene;
     const wide_tracer *all = &job->trace->all;
-    flat_hits8 hits;
+    hits8 hits;
     int hit_lanes = sc->triangles.count > 0 ? all->closest_hit8(all->context, &L->ray, active, &hits, job->counters) : 0;
     int sphere_lanes = 0;
     hit_record sphere_hits[LANES];
@@ -1119,7 +1119,7 @@ static void queue_light_samples(row_job *job, const vertex_lanes *L, int surface
     const int shadows = job->pt->effects & EFFECT_SHADOWS ? lit : 0;
     for (int left = surface; left != 0; left &= left - 1) {
         int k = __builtin_ctz((unsigned)left), q = job->queued, is_lit = (shadows >> k) & 1;
-        flat_rays8 *shadow = &job->queue.rays[q / LANES];
+        rays8 *shadow = &job->queue.rays[q / LANES];
         for (int c = 0; c < 3; c++) {
             shadow->origin[c][q % LANES] = L->shadow_origin[c][k];
             shadow->direction[c][q % LANES] = L->shadow_direction[c][k];
@@ -1290,7 +1290,7 @@ static void render_row(row_job *job)
         job->counters->indirect_rays += (uint64_t)__builtin_popcount((unsigned)bounce);
         for (int left = aside_on; left != 0; left &= left - 1) { /* the lanes kept aside, back */
             int k = __builtin_ctz((unsigned)left);
-            flat_rays8_set(&L.ray, k, aside[k].next);
+            rays8_set(&L.ray, k, aside[k].next);
             lanes_set(L.throughput, k, aside[k].throughput);
             lanes_set(L.wo, k, aside[k].wo);
             lanes[k].emission_counts = (delta >> k) & 1;
@@ -1316,7 +1316,7 @@ static shadow_queue queue_make(const pt_scene *sc)
     q.capacity = LANES * (2 + sc->point_light_count);
     /* the packets as the kernels load them: 32-byte aligned */
     size_t bytes = (size_t)(q.capacity / LANES) * sizeof *q.rays;
-    q.rays = aligned_alloc(_Alignof(flat_rays8), bytes);
+    q.rays = aligned_alloc(_Alignof(rays8), bytes);
     if (q.rays == NULL) {
         fprintf(stderr, "out of memory (%zu bytes for shadow rays)\n", bytes);
         exit(1);
@@ -1495,7 +1495,7 @@ int path_tracer_wide_bounce_math(const wide_vertex *v, int count, pt_integrator 
         }
     for (int left = on; left != 0; left &= left - 1) {
         int k = __builtin_ctz((unsigned)left);
-        out[k].next = flat_rays8_get(&L.ray, k);
+        out[k].next = rays8_get(&L.ray, k);
         out[k].throughput = vec3_make(L.throughput[0][k], L.throughput[1][k], L.throughput[2][k]);
         out[k].wo = vec3_make(L.wo[0][k], L.wo[1][k], L.wo[2][k]);
         out[k].pdf = rung == PT_LECTURE ? 0.0f : L.pdf[k];

@@ -1,5 +1,5 @@
 /* bvh_internal.h -- what the BVH's own files share (bvh_build.c,
- * bvh_traverse.c, and the 4-wide BVH built on them), and the tests that
+ * bvh_traverse.c, and chapter 13's wide BVH built on them), and the tests that
  * check those parts one by one; no chapter program includes it. */
 #ifndef BVH_INTERNAL_H
 #define BVH_INTERNAL_H
@@ -18,7 +18,7 @@
  * first is lo where 1/d >= 0 and hi where 1/d < 0 (1/(-0) = -inf included),
  * as in Williams et al., "An Efficient and Robust Ray-Box Intersection
  * Algorithm" (2005). Here and not in bvh.h because only traversal kernels
- * use it: bvh_traverse.c's iterative ones, and the 4-wide BVH's, which
+ * use it: bvh_traverse.c's iterative ones, and chapter 13's wide BVH's, which
  * takes bvh_ray_make() and BVH_SLAB_ROUNDING_PAD. */
 typedef struct {
     vec3 origin;
@@ -80,10 +80,7 @@ bool bvh_use_triangle_test(accel *a, triangle_test test);
 bvh_node *bvh_nodes_allocate(int count);
 void bvh_nodes_free(bvh_node *nodes);
 
-/* bvh4_traverse.c's accel_ops for the default kernel (bvh4_build.c sets it). */
-const accel_ops *bvh4_default_ops(void);
-
-/* The SAH's constants, which the 4-wide BVH (bvh4.c) sets differently:
+/* The SAH's constants, which chapter 13's wide BVH sets differently:
  * bvh_build() uses C_t = BVH_SAH_TRAVERSAL_COST, blocks of 1 and leaves of
  * at most BVH_SAH_MAX_LEAF_SIZE. */
 typedef struct {
@@ -91,8 +88,8 @@ typedef struct {
     int leaf_block;       /* a leaf costs C_i per started block of this many triangles */
     int max_leaf_size;    /* split larger sets even when the SAH prefers a leaf */
     /* C_t for the sets whose box has at least top_area_fraction of the
-     * root's surface area (none if it is 0): the 4-wide BVH splits the
-     * few large sets near the root more eagerly (bvh4_build.c says why). */
+     * root's surface area (none if it is 0): chapter 13's wide BVH splits
+     * the few large sets near the root more eagerly (it says why). */
     float top_area_fraction, top_traversal_cost;
 } bvh_sah_params;
 

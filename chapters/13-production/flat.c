@@ -6,11 +6,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "13-production/bvh4.h"
+#include "13-production/wide_bvh.h"
 #include "memory.h"
 #include "timer.h"
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(BVH4_NO_SIMD)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(WIDE_BVH_NO_SIMD)
 #define FLAT_HAVE_X86 1
 #include <immintrin.h>
 
@@ -575,7 +575,7 @@ static bool flat_use_triangle_test(accel *a, triangle_test test)
         flat_block *b = &f->blocks[i / FLAT_LANES];
         int k = i % FLAT_LANES;
         float p0[3], v1[3], v2[3];
-        bvh4_lane_coordinates(i < a->set->count ? &a->set->triangles[i] : NULL, test, p0, v1, v2);
+        wide_bvh_lane_coordinates(i < a->set->count ? &a->set->triangles[i] : NULL, test, p0, v1, v2);
         /* N = (P1 - P0) x (P2 - P0), watertight_plane_t()'s operations (for
          * the watertight test; with Moller-Trumbore's edges it is unused) */
         float e1x = v1[0] - p0[0], e1y = v1[1] - p0[1], e1z = v1[2] - p0[2];

@@ -10,7 +10,7 @@
  * with the arithmetic of chapter 06's 4-wide leaves made 8 wide.
  *
  * The triangles are kept in blocks of eight, structure of arrays (as
- * bvh4_packet, twice as wide). Four kernels give the same answers: AVX
+ * wide_bvh_packet, twice as wide). Four kernels give the same answers: AVX
  * where the processor has it (asked at run time, so one binary runs
  * everywhere; compiled once more for AVX-512's 32 registers, where it has
  * those), SSE (each block as two halves), and a plain C loop. Each
@@ -42,7 +42,7 @@
 
 /* Eight triangles by coordinate, then by lane, and which triangle each
  * lane is (-1: an empty lane). The lanes hold what the triangle
- * test reads, as bvh4_packet's do (bvh4.h, bvh4_lane_coordinates()): the
+ * test reads, as wide_bvh_packet's do (wide_bvh.h, wide_bvh_lane_coordinates()): the
  * corners P0, P1, P2 (empty and degenerate lanes NaN, which no ray hits),
  * or P0, E1 = P1 - P0 and E2 = P2 - P0 (empty lanes all zeros, whose
  * determinant 0 never hits). 416 bytes. */

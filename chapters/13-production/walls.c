@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "13-production/bvh4.h"
+#include "13-production/wide_bvh.h"
 #include "13-production/flat.h"
 #include "memory.h"
 
@@ -54,7 +54,7 @@ accel *production_accel_build(const triangle_set *set)
     /* Four boxes per node tested at once. Inside a room every ray meets the
      * boxes of the walls; a binary tree visits them one level at a time, a
      * 4-wide one in one or two nodes. */
-    return bvh4_build(set, BVH_SPLIT_SAH);
+    return wide_bvh_build(set, BVH_SPLIT_SAH);
 }
 
 /* ---- walls cast no shadows ----------------------------------------------------

@@ -13,9 +13,9 @@
  *   the flat set     flat.h's eight-ray AVX kernels, eight rays per
  *                    instruction against every triangle: for a few dozen
  *                    triangles (the Cornell box)
- *   the 8-wide BVH   bvh4.h's traversal, each lane's ray walking the tree
+ *   the 8-wide BVH   wide_bvh.h's traversal, each lane's ray walking the tree
  *                    alone (for meshes); or, on request, as a ray stream
- *                    (bvh4_closest_hit_stream: the eight take turns node
+ *                    (wide_bvh_closest_hit_stream: the eight take turns node
  *                    by node, so that one ray's wait for memory overlaps
  *                    the others' work -- for eight rays the turns cost
  *                    more than they hide)
@@ -53,7 +53,7 @@ typedef struct {
 } wide_tracer;
 
 /* The tracer of a built structure: the flat set's kernels for flat_build's,
- * the 8-wide BVH's walk for bvh4_build's, else accel_closest_hit() and
+ * the 8-wide BVH's walk for wide_bvh_build's, else accel_closest_hit() and
  * accel_any_hit() one ray at a time. NULL: a tracer that finds nothing (a
  * scene with no occluders). The structure must outlive the tracer. */
 wide_tracer wide_tracer_for(const accel *a);

@@ -1457,6 +1457,19 @@ static void test_eight_paths_same_bits_for_threads_and_lanes(void **state)
     assert_false(path_tracer_wide_supported(&pt, why, sizeof why));
     explain_end();
     assert_non_null(strstr(why, "explain"));
+    /* A material kind the lanes do not render (here a value past chapter
+     * 09's kinds, standing for one added after them) is refused by its
+     * name, so the scene is rendered one path at a time, never with black
+     * lanes. */
+    pt_material kept = sc.materials[1];
+    sc.materials[1].kind = (bsdf_kind)BSDF_KIND_COUNT;
+    char kind_why[160] = "";
+    assert_false(path_tracer_wide_supported(&pt, kind_why, sizeof kind_why));
+    assert_non_null(strstr(kind_why, "material 1 is of kind '?'"));
+    estimate_image refused;
+    assert_false(render_estimate_wide(&pt, &cam, 1, test_seed(92), 1, &refused));
+    sc.materials[1] = kept;
+    assert_true(path_tracer_wide_supported(&pt, NULL, 0));
     pt_scene lecture;
     pt_scene_build_cornell_box(&lecture);
     path_tracer on_bvh = tracer(&lecture, PT_LECTURE, RR_FIXED);

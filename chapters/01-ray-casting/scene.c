@@ -207,7 +207,6 @@ static material material_from_desc(const scene_desc *d, const scene_material *sm
         break;
     }
     case SCENE_MATERIAL_EMISSIVE:
-    default:
         m = material_blinn_phong(sm->albedo, vec3_splat(0.0f), 1.0f);
         program_warn(label, d, sm->line, sm->column, "emissive '%s': shaded by its albedo; its triangles and quads "
                      "light the scene as point lights (below), its spheres do not", sm->name);

@@ -36,6 +36,18 @@ void pt_scene_free(pt_scene *sc)
     memset(sc, 0, sizeof *sc);
 }
 
+scene_material_kind bsdf_kind_scene_kind(bsdf_kind k)
+{
+    static const scene_material_kind scene_kinds[BSDF_KIND_COUNT] = {
+#define BSDF_SCENE_KIND(id, scene_kind) scene_kind,
+        BSDF_KINDS(BSDF_SCENE_KIND)
+#undef BSDF_SCENE_KIND
+    };
+    return (unsigned)k < BSDF_KIND_COUNT ? scene_kinds[k] : SCENE_MATERIAL_KIND_COUNT;
+}
+
+const char *bsdf_kind_name(bsdf_kind k) { return scene_material_kind_name(bsdf_kind_scene_kind(k)); }
+
 pt_material pt_diffuse(vec3 albedo) { return (pt_material){BSDF_DIFFUSE, albedo, vec3_splat(0.0f), 1.0f, 1.0f}; }
 
 pt_material pt_emitter(vec3 albedo, vec3 emission)

@@ -26,9 +26,9 @@ static pt_material material_from_desc(const scene_desc *d, const scene_material 
     case SCENE_MATERIAL_GLOSSY:
         return pt_glossy(sm->albedo, sm->roughness);
     case SCENE_MATERIAL_EMISSIVE:
-    default:
         return pt_emitter(sm->albedo, sm->emission);
     }
+    return pt_diffuse(sm->albedo); /* not reached: the parser makes only the kinds above */
 }
 
 static bool add_mesh(pt_scene *sc, const scene_desc *d, int index, char *err, size_t err_size)
@@ -132,11 +132,7 @@ void pt_scene_describe(const pt_scene *sc, scene_desc *d)
         memset(&sm, 0, sizeof sm);
         snprintf(sm.name, sizeof sm.name, "material%d", i);
         bool emits = m->emission.x > 0.0f || m->emission.y > 0.0f || m->emission.z > 0.0f;
-        sm.kind = m->kind == BSDF_GLOSSY ? SCENE_MATERIAL_GLOSSY
-                  : m->kind == BSDF_GLASS  ? SCENE_MATERIAL_GLASS
-                  : m->kind == BSDF_MIRROR ? SCENE_MATERIAL_MIRROR
-                  : emits                  ? SCENE_MATERIAL_EMISSIVE
-                                           : SCENE_MATERIAL_DIFFUSE;
+        sm.kind = m->kind == BSDF_DIFFUSE && emits ? SCENE_MATERIAL_EMISSIVE : bsdf_kind_scene_kind(m->kind);
         sm.albedo = m->albedo;
         sm.emission = m->emission;
         sm.roughness = m->roughness;

@@ -38,16 +38,32 @@ static bool wide_cpu_has_avx2(void)
 
 bool wide_avx_runs(void) { return use_avx && wide_cpu_has_avx2(); }
 
+/* The material kinds the lanes render: diffuse (eight at a time), glossy,
+ * mirror and glass (one lane at a time, through chapter 09's BSDFs;
+ * light_found() sorts them). A scene with a kind of chapter 09's that is
+ * not one of these is refused by name (path_tracer_wide_supported), so
+ * that it is rendered one path at a time, never with black lanes. */
+static bool lanes_render_kind(bsdf_kind kind)
+{
+    return kind == BSDF_DIFFUSE || kind == BSDF_GLOSSY || kind == BSDF_MIRROR || kind == BSDF_GLASS;
+}
+
 bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_size)
 {
-    const char *reason = NULL;
+    const pt_scene *sc = pt->scene;
+    char reason[160] = "";
     if (explain_on())
-        reason = "--explain follows one path";
-    else if (pt->scene->triangles.count > 0 && pt->scene->bvh == NULL)
-        reason = "the scene's triangles are in no structure (pt_scene_finish)";
-    if (reason != NULL && why != NULL)
+        snprintf(reason, sizeof reason, "--explain follows one path");
+    else if (sc->triangles.count > 0 && sc->bvh == NULL)
+        snprintf(reason, sizeof reason, "the scene's triangles are in no structure (pt_scene_finish)");
+    for (int i = 0; i < sc->material_count && reason[0] == '\0'; i++)
+        if (!lanes_render_kind(sc->materials[i].kind))
+            snprintf(reason, sizeof reason,
+                     "material %d is of kind '%s', which the lanes do not render (diffuse, glossy, mirror, glass)",
+                     i, bsdf_kind_name(sc->materials[i].kind));
+    if (reason[0] != '\0' && why != NULL)
         snprintf(why, why_size, "%s", reason);
-    return reason == NULL;
+    return reason[0] == '\0';
 }
 
 wide_scene_tracers wide_scene_tracers_for(const pt_scene *sc)

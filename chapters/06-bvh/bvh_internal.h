@@ -41,18 +41,22 @@ static inline bvh_ray bvh_ray_make(const ray *r)
     return b;
 }
 
-/* Does the ray meet the node's box for some t in [t_min, t_max]? Returns
- * that, and t_enter (the first such t). The far plane of each axis is the
- * other one of its pair: 3 - near_x, 5 - near_y, 7 - near_z. */
-static inline bool bvh_slab_test(const bvh_node *node, const bvh_ray *r, float t_min, float t_max, float *t_enter)
+/* Does the ray meet the box for some t in [t_min, t_max]? Returns that,
+ * and t_enter (the first such t). The box's six planes, in bvh_node.bounds'
+ * order, lie `stride` floats apart from b: 1 for a node of this chapter,
+ * the node's width for a child of chapter 13's wide BVH (whose scalar
+ * kernel runs this very test, so the two cannot drift apart). The far
+ * plane of each axis is the other one of its pair: 3 - near_x, 5 - near_y,
+ * 7 - near_z. */
+static inline bool bvh_slab_test_planes(const float *b, int stride, const bvh_ray *r, float t_min, float t_max,
+                                        float *t_enter)
 {
-    const float *b = node->bounds;
-    float near_x = (b[r->near_x] - r->origin.x) * r->inverse_direction.x;
-    float far_x = (b[3 - r->near_x] - r->origin.x) * r->inverse_direction.x;
-    float near_y = (b[r->near_y] - r->origin.y) * r->inverse_direction.y;
-    float far_y = (b[5 - r->near_y] - r->origin.y) * r->inverse_direction.y;
-    float near_z = (b[r->near_z] - r->origin.z) * r->inverse_direction.z;
-    float far_z = (b[7 - r->near_z] - r->origin.z) * r->inverse_direction.z;
+    float near_x = (b[r->near_x * stride] - r->origin.x) * r->inverse_direction.x;
+    float far_x = (b[(3 - r->near_x) * stride] - r->origin.x) * r->inverse_direction.x;
+    float near_y = (b[r->near_y * stride] - r->origin.y) * r->inverse_direction.y;
+    float far_y = (b[(5 - r->near_y) * stride] - r->origin.y) * r->inverse_direction.y;
+    float near_z = (b[r->near_z * stride] - r->origin.z) * r->inverse_direction.z;
+    float far_z = (b[(7 - r->near_z) * stride] - r->origin.z) * r->inverse_direction.z;
     /* t_enter = max t_min, t_exit = min t_max; a NaN leaves them as they are */
     float enter = t_min, exit = INFINITY;
     enter = near_x > enter ? near_x : enter;
@@ -68,6 +72,12 @@ static inline bool bvh_slab_test(const bvh_node *node, const bvh_ray *r, float t
     exit = t_max < exit ? t_max : exit;
     *t_enter = enter;
     return enter <= exit;
+}
+
+/* The slab test of a node's box. */
+static inline bool bvh_slab_test(const bvh_node *node, const bvh_ray *r, float t_min, float t_max, float *t_enter)
+{
+    return bvh_slab_test_planes(node->bounds, 1, r, t_min, t_max, t_enter);
 }
 
 extern const accel_ops bvh_ops_axis_sign; /* BVH_ORDER_AXIS_SIGN */

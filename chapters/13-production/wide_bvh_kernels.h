@@ -76,37 +76,24 @@ static inline wide_bvh_ray wide_bvh_ray_make(const ray *r)
 }
 
 /* ---- four (or eight) slab tests ----------------------------------------------------
- * bvh_slab_test() (bvh.h) for the WIDE_BVH_WIDTH children: the same operations
- * in the same order, so the same answer for every box, including its IEEE
- * rules (NaN from 0 * inf leaves t_enter and t_exit as they are; the
- * flat-box pad on t_exit). Returns a WIDE_BVH_WIDTH-bit mask of the boxes hit,
- * with their t_enter. The SSE version tests four boxes per instruction, a
- * group of four at a time: one group for a 4-wide node, two for 8-wide. */
+ * bvh_slab_test() (bvh_internal.h) for the WIDE_BVH_WIDTH children: the
+ * same operations in the same order, so the same answer for every box,
+ * including its IEEE rules (NaN from 0 * inf leaves t_enter and t_exit as
+ * they are; the flat-box pad on t_exit). Returns a WIDE_BVH_WIDTH-bit mask
+ * of the boxes hit, with their t_enter. The scalar version is chapter 06's
+ * test itself, child by child (bvh_slab_test_planes: child k's planes lie
+ * WIDE_BVH_WIDTH floats apart); the SSE version tests four boxes per
+ * instruction, a group of four at a time: one group for a 4-wide node, two
+ * for 8-wide. */
 
 static inline int slab_test4_scalar(const wide_bvh_node *node, const wide_bvh_ray *r, float t_min, float t_max,
                                     float t_enter[WIDE_BVH_WIDTH])
 {
-    const bvh_ray *s = &r->scalar;
     int mask = 0;
-    for (int k = 0; k < WIDE_BVH_WIDTH; k++) {
-        float near_x = (node->bounds[s->near_x][k] - s->origin.x) * s->inverse_direction.x;
-        float far_x = (node->bounds[r->far_x][k] - s->origin.x) * s->inverse_direction.x;
-        float near_y = (node->bounds[s->near_y][k] - s->origin.y) * s->inverse_direction.y;
-        float far_y = (node->bounds[r->far_y][k] - s->origin.y) * s->inverse_direction.y;
-        float near_z = (node->bounds[s->near_z][k] - s->origin.z) * s->inverse_direction.z;
-        float far_z = (node->bounds[r->far_z][k] - s->origin.z) * s->inverse_direction.z;
-        float enter = t_min, exit = INFINITY;
-        enter = near_x > enter ? near_x : enter;
-        enter = near_y > enter ? near_y : enter;
-        enter = near_z > enter ? near_z : enter;
-        exit = far_x < exit ? far_x : exit;
-        exit = far_y < exit ? far_y : exit;
-        exit = far_z < exit ? far_z : exit;
-        exit *= BVH_SLAB_ROUNDING_PAD;
-        exit = t_max < exit ? t_max : exit;
-        t_enter[k] = enter;
-        mask |= (enter <= exit) << k;
-    }
+    for (int k = 0; k < WIDE_BVH_WIDTH; k++)
+        mask |= bvh_slab_test_planes((const float *)node->bounds + k, WIDE_BVH_WIDTH, &r->scalar, t_min, t_max,
+                                     &t_enter[k])
+                << k;
     return mask;
 }
 

@@ -167,6 +167,15 @@ bool scene_desc_parse(scene_desc *d, const char *text, size_t length, const char
 bool scene_desc_load_mesh(const scene_desc *d, int index, mesh *m, char *err, size_t err_size);
 
 /* Where a statement is, for a chapter's warnings: "file:line:col". */
+/* A description made in code (scene_describe.c): a chapter's built-in
+ * scene, named "built-in scene", with its camera and background; then its
+ * materials (each named material<N>, N its index), shapes and point lights
+ * added one by one, each copied in. */
+void scene_desc_init_built_in(scene_desc *d, vec3 eye, vec3 target, vec3 up, float fov_degrees, vec3 background);
+void scene_desc_add_material(scene_desc *d, scene_material m);
+void scene_desc_add_shape(scene_desc *d, scene_shape s);
+void scene_desc_add_point_light(scene_desc *d, vec3 position, vec3 intensity);
+
 void scene_desc_where(const scene_desc *d, int line, int column, char *out, size_t out_size);
 
 /* A kind's keyword ("diffuse", ...; "?" for a value that is no kind). */

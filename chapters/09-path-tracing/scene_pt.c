@@ -36,18 +36,6 @@ void pt_scene_free(pt_scene *sc)
     memset(sc, 0, sizeof *sc);
 }
 
-scene_material_kind bsdf_kind_scene_kind(bsdf_kind k)
-{
-    static const scene_material_kind scene_kinds[BSDF_KIND_COUNT] = {
-#define BSDF_SCENE_KIND(id, scene_kind) scene_kind,
-        BSDF_KINDS(BSDF_SCENE_KIND)
-#undef BSDF_SCENE_KIND
-    };
-    return (unsigned)k < BSDF_KIND_COUNT ? scene_kinds[k] : SCENE_MATERIAL_KIND_COUNT;
-}
-
-const char *bsdf_kind_name(bsdf_kind k) { return scene_material_kind_name(bsdf_kind_scene_kind(k)); }
-
 pt_material pt_diffuse(vec3 albedo) { return (pt_material){BSDF_DIFFUSE, albedo, vec3_splat(0.0f), 1.0f, 1.0f}; }
 
 pt_material pt_emitter(vec3 albedo, vec3 emission)
@@ -770,16 +758,16 @@ const char *const PT_BUILTIN_SCENE_NOTES[] = {
     "a point light inside a sphere of albedo 0.5",
     NULL,
 };
-/* in the order of PT_BUILTIN_SCENE_NAMES */
+/* in the order of PT_BUILTIN_SCENE_NAMES (their lines are PT_BUILTIN_SCENE_NOTES) */
 const pt_builtin_scene PT_BUILTIN_SCENES[] = {
-    {"cornell", pt_scene_build_cornell_box},
-    {"materials", pt_scene_build_cornell_box_materials},
-    {"veach", pt_scene_build_veach},
-    {"furnace", build_furnace},
-    {"white-furnace", build_white_furnace},
-    {"glass-furnace", build_glass_furnace},
-    {"point-in-sphere", build_point_in_sphere},
-    {NULL, NULL},
+    {"cornell", pt_scene_build_cornell_box, NULL},
+    {"materials", pt_scene_build_cornell_box_materials, NULL},
+    {"veach", pt_scene_build_veach, NULL},
+    {"furnace", build_furnace, NULL},
+    {"white-furnace", build_white_furnace, NULL},
+    {"glass-furnace", build_glass_furnace, NULL},
+    {"point-in-sphere", build_point_in_sphere, NULL},
+    {NULL, NULL, NULL},
 };
 
 bool pt_scene_build_builtin(pt_scene *sc, const char *name)

@@ -23,6 +23,7 @@
 #include "01-ray-casting/shapes.h"
 #include "03-aabb-slabs/accel.h"
 #include "camera.h"
+#include "cli.h"
 #include "counters.h"
 #include "mesh.h"
 #include "scene_file.h"
@@ -282,6 +283,7 @@ void pt_scene_build_point_in_sphere(pt_scene *sc, float albedo, float intensity)
 typedef struct {
     const char *name;
     void (*build)(pt_scene *sc);
+    const char *description; /* the line --help shows (a program's own table, chapters 11 and 12) */
 } pt_builtin_scene;
 extern const pt_builtin_scene PT_BUILTIN_SCENES[];
 /* The same names, NULL-terminated, and a line on each (--builtin). */
@@ -289,6 +291,11 @@ extern const char *const PT_BUILTIN_SCENE_NAMES[];
 extern const char *const PT_BUILTIN_SCENE_NOTES[];
 /* Builds the scene named `name`; false if there is none of that name. */
 bool pt_scene_build_builtin(pt_scene *sc, const char *name);
+/* The --builtin choice of a program's own table of `count` scenes (chapters
+ * 11 and 12), the first the default: their names and descriptions written
+ * into names[count + 1] and notes[count], the caller's, which the choice
+ * keeps pointing to. */
+cli_choice pt_builtin_scene_choice(const pt_builtin_scene *table, int count, const char **names, const char **notes);
 
 /* An MTL material as the path tracer's, as the format means it: an
  * emitter where Ke > 0; glass where the MTL says light passes through

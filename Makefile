@@ -9,7 +9,7 @@
 #   make sanitize    the test suites under AddressSanitizer + UndefinedBehaviorSanitizer
 #   make test-seeds  every random test over 200 seeds: how many runs fail
 #   make fp-contract-leaks  chapter 01 rebuilt with fused multiply-add: the watertight test leaks
-#   make test-bvh4   the wide BVH's suite with 4 children per node instead of 8
+#   make test-wide-bvh  the wide BVH's suite with 4 children per node instead of 8 (alias test-bvh4)
 #   make valgrind    one small render of each chapter program under valgrind
 #   make fuzz        run each parser's fuzz target for FUZZ_SECONDS
 #   make mpi         the programs built against OpenMPI, in build/mpi/ (mpirun -np N splits a render)
@@ -30,7 +30,7 @@
 #
 #   mk/config.mk     flags, Debian packages (make deps)
 #   mk/chapters.mk   common/, and per chapter: library, program, suite, chNN, test-chNN
-#   mk/tests.mk      make test, sanitize, test-seeds, fp-contract-leaks, test-bvh4, valgrind, fuzz
+#   mk/tests.mk      make test, sanitize, test-seeds, fp-contract-leaks, test-wide-bvh, valgrind, fuzz
 #   mk/mpi.mk        make mpi, mpi-deps, test-mpi
 #   mk/bench.mk      make bench
 #   mk/plots.mk      make plots

@@ -59,6 +59,29 @@ static bool shape_sees_itself(const scene_desc *d, const scene_shape *s)
     return !(s->kind == SCENE_SHAPE_PLANE || s->kind == SCENE_SHAPE_TRIANGLE || s->kind == SCENE_SHAPE_QUAD);
 }
 
+/* The shapes (uses: per material kind) whose kind passes on `effect`; into
+ * counts (if not NULL), "N kind" for each such kind, joined by " and ". */
+static int kinds_passing(const int uses[SCENE_MATERIAL_KIND_COUNT], unsigned effect, char *counts, size_t size)
+{
+    static const unsigned passes[SCENE_MATERIAL_KIND_COUNT] = {
+#define KIND_EFFECTS(id, keyword, effects) effects,
+        SCENE_MATERIAL_KINDS(KIND_EFFECTS)
+#undef KIND_EFFECTS
+    };
+    int shapes = 0, named = 0;
+    for (int k = 0; k < SCENE_MATERIAL_KIND_COUNT; k++) {
+        if (!(passes[k] & effect))
+            continue;
+        shapes += uses[k];
+        if (counts != NULL) {
+            size_t used = strlen(counts);
+            snprintf(counts + used, size - used, "%s%d %s", named++ > 0 ? " and " : "", uses[k],
+                     scene_material_kind_name((scene_material_kind)k));
+        }
+    }
+    return shapes;
+}
+
 effects_report effects_analyse(const scene_desc *d)
 {
     effects_report e;
@@ -66,7 +89,7 @@ effects_report effects_analyse(const scene_desc *d)
     e.allowed = d->effects_allowed;
 
     int point_lights = 0, area_lights = 0, emitting_shapes = 0, own_mtl_meshes = 0;
-    int uses[6] = {0}; /* shapes per material kind */
+    int uses[SCENE_MATERIAL_KIND_COUNT] = {0}; /* shapes per material kind */
     for (int i = 0; i < d->light_count; i++)
         *(d->lights[i].kind == SCENE_LIGHT_POINT ? &point_lights : &area_lights) += 1;
     for (int i = 0; i < d->shape_count; i++) {
@@ -111,30 +134,30 @@ effects_report effects_analyse(const scene_desc *d)
                  "one surface that cannot shadow itself: no light can be blocked, no shadow ray needed");
     }
 
-    if (uses[SCENE_MATERIAL_MIRROR] + uses[SCENE_MATERIAL_GLASS] > 0 || own_mtl_meshes > 0) {
-        e.needed |= EFFECT_REFLECTION;
-        snprintf(e.why[1], EFFECT_REASON_SIZE, "%d mirror and %d glass shapes%s", uses[SCENE_MATERIAL_MIRROR],
-                 uses[SCENE_MATERIAL_GLASS], mtl_note);
-    } else {
-        snprintf(e.why[1], EFFECT_REASON_SIZE, "no shape is a mirror or glass");
-    }
-    if (uses[SCENE_MATERIAL_GLASS] > 0 || own_mtl_meshes > 0) {
-        e.needed |= EFFECT_REFRACTION;
-        snprintf(e.why[2], EFFECT_REASON_SIZE, "%d glass shapes%s", uses[SCENE_MATERIAL_GLASS], mtl_note);
-    } else {
-        snprintf(e.why[2], EFFECT_REASON_SIZE, "no glass (no dielectric), so no refraction ray");
-    }
-    if (uses[SCENE_MATERIAL_GLOSSY] > 0 || own_mtl_meshes > 0) { /* an MTL may hold GGX metals */
-        e.needed |= EFFECT_GLOSSY;
-        snprintf(e.why[3], EFFECT_REASON_SIZE, "%d glossy shapes%s", uses[SCENE_MATERIAL_GLOSSY], mtl_note);
-    } else {
-        snprintf(e.why[3], EFFECT_REASON_SIZE, "no glossy material");
+    /* Reflection, refraction, glossy: the shapes whose kind passes that
+     * light on (SCENE_MATERIAL_KINDS' effects), named kind by kind. */
+    static const struct {
+        unsigned effect;
+        const char *none;
+    } passed[] = {
+        {EFFECT_REFLECTION, "no shape is a mirror or glass"},
+        {EFFECT_REFRACTION, "no glass (no dielectric), so no refraction ray"},
+        {EFFECT_GLOSSY, "no glossy material"}, /* (an MTL may hold GGX metals) */
+    };
+    for (int i = 0; i < 3; i++) {
+        char counts[EFFECT_REASON_SIZE] = "";
+        int shapes = kinds_passing(uses, passed[i].effect, counts, sizeof counts);
+        if (shapes > 0 || own_mtl_meshes > 0) {
+            e.needed |= passed[i].effect;
+            snprintf(e.why[1 + i], EFFECT_REASON_SIZE, "%s shapes%s", counts, mtl_note);
+        } else {
+            snprintf(e.why[1 + i], EFFECT_REASON_SIZE, "%s", passed[i].none);
+        }
     }
 
     /* Indirect diffuse light: a diffuse surface must be able to receive
      * light that another surface (or it itself) reflected, or the sky. */
-    int diffuse = uses[SCENE_MATERIAL_DIFFUSE] + uses[SCENE_MATERIAL_BLINN_PHONG] + uses[SCENE_MATERIAL_EMISSIVE] +
-                  uses[SCENE_MATERIAL_GLOSSY] + own_mtl_meshes;
+    int diffuse = kinds_passing(uses, EFFECT_INDIRECT, NULL, 0) + own_mtl_meshes;
     bool sees_itself = false;
     for (int i = 0; i < d->shape_count; i++)
         sees_itself = sees_itself || shape_sees_itself(d, &d->shapes[i]);

@@ -352,29 +352,33 @@ static bool statement_material(const parse_context *pc, scene_desc *d, const tok
         {"emission", ARG_VEC3, RADIANCE},
     };
     enum { ALBEDO, DIFFUSE, SPECULAR, SHININESS, CHECKER, SIZE, IOR, ROUGHNESS, EMISSION, KEYS };
-    /* Which keys each kind takes, and which it needs. */
+    /* Which keys each kind (SCENE_MATERIAL_KINDS) takes, and which it needs. */
     static const struct {
-        const char *kind;
         unsigned allowed, required;
-    } kinds[] = {
-        {"diffuse", 1u << ALBEDO, 1u << ALBEDO},
-        {"blinn_phong", 1u << DIFFUSE | 1u << SPECULAR | 1u << SHININESS | 1u << CHECKER | 1u << SIZE, 1u << DIFFUSE},
-        {"mirror", 1u << ALBEDO, 0},
-        {"glass", 1u << IOR | 1u << ALBEDO, 1u << IOR},
-        {"glossy", 1u << ALBEDO | 1u << ROUGHNESS, 1u << ALBEDO | 1u << ROUGHNESS},
-        {"emissive", 1u << EMISSION | 1u << ALBEDO, 1u << EMISSION},
+    } kinds[SCENE_MATERIAL_KIND_COUNT] = {
+        [SCENE_MATERIAL_DIFFUSE] = {1u << ALBEDO, 1u << ALBEDO},
+        [SCENE_MATERIAL_BLINN_PHONG] = {1u << DIFFUSE | 1u << SPECULAR | 1u << SHININESS | 1u << CHECKER | 1u << SIZE,
+                                        1u << DIFFUSE},
+        [SCENE_MATERIAL_MIRROR] = {1u << ALBEDO, 0},
+        [SCENE_MATERIAL_GLASS] = {1u << IOR | 1u << ALBEDO, 1u << IOR},
+        [SCENE_MATERIAL_GLOSSY] = {1u << ALBEDO | 1u << ROUGHNESS, 1u << ALBEDO | 1u << ROUGHNESS},
+        [SCENE_MATERIAL_EMISSIVE] = {1u << EMISSION | 1u << ALBEDO, 1u << EMISSION},
     };
     if (n < 3)
         return fail(pc, t[0].column, "material needs a name and a kind: material NAME KIND key value ...");
     if (t[1].quoted || t[1].length >= SCENE_NAME_SIZE)
         return fail(pc, t[1].column, "a material's name is a word of at most %d characters", SCENE_NAME_SIZE - 1);
     int kind = -1;
-    for (int k = 0; k < (int)(sizeof kinds / sizeof kinds[0]); k++)
-        if (token_is(&t[2], kinds[k].kind))
+    char known[128] = "";
+    for (int k = 0; k < SCENE_MATERIAL_KIND_COUNT; k++) {
+        const char *keyword = scene_material_kind_name((scene_material_kind)k);
+        if (token_is(&t[2], keyword))
             kind = k;
+        snprintf(known + strlen(known), sizeof known - strlen(known), "%s%s", k > 0 ? ", " : "", keyword);
+    }
     if (kind < 0)
-        return fail(pc, t[2].column, "unknown material kind '%.*s' (diffuse, blinn_phong, mirror, glass, glossy, emissive)",
-                    t[2].length > 40 ? 40 : t[2].length, t[2].text);
+        return fail(pc, t[2].column, "unknown material kind '%.*s' (%s)", t[2].length > 40 ? 40 : t[2].length,
+                    t[2].text, known);
     if (d->material_count >= SCENE_MAX_MATERIALS)
         return fail(pc, t[0].column, "too many materials (at most %d)", SCENE_MAX_MATERIALS);
     /* Only this kind's keys are known to it: a glass with "roughness" is an
@@ -390,7 +394,7 @@ static bool statement_material(const parse_context *pc, scene_desc *d, const tok
         }
     key_value got[KEYS];
     char statement[96];
-    snprintf(statement, sizeof statement, "a %s material", kinds[kind].kind);
+    snprintf(statement, sizeof statement, "a %s material", scene_material_kind_name((scene_material_kind)kind));
     if (!parse_keys(pc, t, 3, n, own, own_count, got, statement))
         return false;
     for (int k = 0; k < KEYS; k++)
@@ -845,8 +849,12 @@ void scene_desc_where(const scene_desc *d, int line, int column, char *out, size
 
 const char *scene_material_kind_name(scene_material_kind k)
 {
-    static const char *const names[] = {"diffuse", "blinn_phong", "mirror", "glass", "glossy", "emissive"};
-    return (unsigned)k < 6 ? names[k] : "?";
+    static const char *const names[] = {
+#define SCENE_MATERIAL_NAME(id, keyword, effects) keyword,
+        SCENE_MATERIAL_KINDS(SCENE_MATERIAL_NAME)
+#undef SCENE_MATERIAL_NAME
+    };
+    return (unsigned)k < SCENE_MATERIAL_KIND_COUNT ? names[k] : "?";
 }
 
 const char *scene_shape_kind_name(scene_shape_kind k)

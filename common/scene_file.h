@@ -40,14 +40,33 @@ enum {
     SCENE_MAX_GENERATED_TRIANGLES = 1 << 22,
 };
 
+/* The material kinds, the one list: X(ID, keyword, effects) for each, in
+ * the enum's order. SCENE_MATERIAL_ID is the kind, `keyword` its name in a
+ * scene file (and everywhere a kind is named), `effects` the light it can
+ * pass on (effects.h's bits, read by effects_analyse(): a scene with the
+ * kind may need them). The enum below, the kinds' names, the scene file's
+ * parser (scene_file.c, which also says which keys each kind takes) and
+ * effects_analyse() are made from it; chapter 09's BSDF kinds (scene_pt.h)
+ * are the rows of it that are BSDFs. A new kind: a row here, its keys in
+ * scene_file.c, and the compiler names each switch that must learn it. */
+#define SCENE_MATERIAL_KINDS(X)                                                                                \
+    X(DIFFUSE, "diffuse", EFFECT_INDIRECT)         /* Lambertian: albedo */                                  \
+    X(BLINN_PHONG, "blinn_phong", EFFECT_INDIRECT) /* k_d (maybe a checkerboard), k_s, p */                  \
+    X(MIRROR, "mirror", EFFECT_REFLECTION)         /* perfect reflection, tinted by albedo */                \
+    X(GLASS, "glass", EFFECT_REFLECTION | EFFECT_REFRACTION) /* smooth dielectric with index ior */           \
+    X(GLOSSY, "glossy", EFFECT_GLOSSY | EFFECT_INDIRECT) /* GGX microfacet: F0 = albedo, alpha = roughness */ \
+    X(EMISSIVE, "emissive", EFFECT_INDIRECT) /* diffuse albedo that also emits L_e from its front */
+
 typedef enum {
-    SCENE_MATERIAL_DIFFUSE,     /* Lambertian: albedo */
-    SCENE_MATERIAL_BLINN_PHONG, /* k_d (maybe a checkerboard), k_s, p */
-    SCENE_MATERIAL_MIRROR,      /* perfect reflection, tinted by albedo */
-    SCENE_MATERIAL_GLASS,       /* smooth dielectric with index ior */
-    SCENE_MATERIAL_GLOSSY,      /* GGX microfacet: F0 = albedo, alpha = roughness */
-    SCENE_MATERIAL_EMISSIVE,    /* diffuse albedo that also emits L_e from its front */
+#define SCENE_MATERIAL_ENUM(id, keyword, effects) SCENE_MATERIAL_##id,
+    SCENE_MATERIAL_KINDS(SCENE_MATERIAL_ENUM)
+#undef SCENE_MATERIAL_ENUM
 } scene_material_kind;
+/* How many (apart from the enum, so that a switch over the kinds names
+ * only kinds). */
+#define SCENE_MATERIAL_ONE(id, keyword, effects) +1
+enum { SCENE_MATERIAL_KIND_COUNT = 0 SCENE_MATERIAL_KINDS(SCENE_MATERIAL_ONE) };
+#undef SCENE_MATERIAL_ONE
 
 typedef struct {
     char name[SCENE_NAME_SIZE];
@@ -148,8 +167,18 @@ bool scene_desc_parse(scene_desc *d, const char *text, size_t length, const char
 bool scene_desc_load_mesh(const scene_desc *d, int index, mesh *m, char *err, size_t err_size);
 
 /* Where a statement is, for a chapter's warnings: "file:line:col". */
+/* A description made in code (scene_describe.c): a chapter's built-in
+ * scene, named "built-in scene", with its camera and background; then its
+ * materials (each named material<N>, N its index), shapes and point lights
+ * added one by one, each copied in. */
+void scene_desc_init_built_in(scene_desc *d, vec3 eye, vec3 target, vec3 up, float fov_degrees, vec3 background);
+void scene_desc_add_material(scene_desc *d, scene_material m);
+void scene_desc_add_shape(scene_desc *d, scene_shape s);
+void scene_desc_add_point_light(scene_desc *d, vec3 position, vec3 intensity);
+
 void scene_desc_where(const scene_desc *d, int line, int column, char *out, size_t out_size);
 
+/* A kind's keyword ("diffuse", ...; "?" for a value that is no kind). */
 const char *scene_material_kind_name(scene_material_kind k);
 const char *scene_shape_kind_name(scene_shape_kind k);
 

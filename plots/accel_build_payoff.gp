@@ -22,8 +22,8 @@ stats file skip 1 using 2 nooutput
 N = int(STATS_max)
 rows(s) = sprintf("< grep '^%s,%d,' '%s'", s, N, file)
 
-names = "grid kdtree bvh-median bvh-sah bvh4-sah embree"
-titles = "grid kd-tree BVH(median) BVH(SAH) BVH4(SAH) Embree"
+names = "grid kdtree bvh-median bvh-sah wide-bvh-sah embree"
+titles = "grid kd-tree BVH(median) BVH(SAH) wide-BVH(SAH) Embree"
 array build_ms[words(names)]
 array ns_per_ray[words(names)]
 do for [k = 1:words(names)] {

@@ -19,8 +19,8 @@ set datafile separator comma
 rows(m, s) = sprintf("< grep '^%s,%s,' '%s'", m, s, file)
 
 # the hierarchies' figures, as constants for horizontal lines
-trees = "kdtree bvh-sah bvh4-sah"
-tree_titles = "kd-tree BVH(SAH) BVH4(SAH)"
+trees = "kdtree bvh-sah wide-bvh-sah"
+tree_titles = "kd-tree BVH(SAH) wide-BVH(SAH)"
 array tris[6]
 array ns[6]
 do for [m = 1:2] {

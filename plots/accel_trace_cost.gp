@@ -5,7 +5,7 @@
 # same, eight triangles per AVX instruction: the Cornell box's choice); a
 # good hierarchy like
 # log N (a line that barely rises); the gap to Embree is what SIMD and
-# decades of tuning buy. BVH4 with streams (the same tree, 16 rays taking
+# decades of tuning buy. The wide BVH with streams (the same tree, 16 rays taking
 # turns so their waits for memory overlap) shows how much of the rise at
 # large N is waiting for memory.
 #
@@ -23,8 +23,8 @@ ns(s, col) = (strcol(1) eq s && column(col) > 0) ? 1000.0 / column(col) : NaN
 
 rows(s) = sprintf("< grep '^%s,' '%s'", s, file)
 
-names = "brute flat grid kdtree bvh-median bvh-sah bvh4-sah bvh4-stream embree"
-titles = "brute-force flat(8/AVX) grid kd-tree BVH(median) BVH(SAH) BVH4(SAH) BVH4(streams) Embree"
+names = "brute flat grid kdtree bvh-median bvh-sah wide-bvh-sah wide-bvh-stream embree"
+titles = "brute-force flat(8/AVX) grid kd-tree BVH(median) BVH(SAH) wide-BVH(SAH) wide-BVH(streams) Embree"
 set style line 1 lc rgb "#7f7f7f" lw 2 pt 7 ps 0.7
 set style line 2 lc rgb "#7f7f7f" lw 2 dt (2,2) pt 6 ps 0.7
 set style line 3 lc rgb "#2ca02c" lw 2 pt 5 ps 0.7

@@ -9,8 +9,8 @@
  * Mrays/s for closest hit and any hit on both sets, one thread and all
  * threads. Prints a table and writes CSV. With --embree FILE (the harness's
  * output lines), prints our figures as ratios of Embree's. The row
- * bvh4-stream is bvh4-sah's tree traced through bvh4_closest_hit_stream()
- * and bvh4_any_hit_stream() in chunks of STREAM_CHUNK rays: the same
+ * wide-bvh-stream is wide-bvh-sah's tree traced through wide_bvh_closest_hit_stream()
+ * and wide_bvh_any_hit_stream() in chunks of STREAM_CHUNK rays: the same
  * answers, 16 rays taking turns so that their waits for memory overlap.
  *
  * Every structure traces with the watertight triangle test (chapter 01),
@@ -39,7 +39,7 @@
 #include "04-uniform-grid/grid.h"
 #include "05-kd-tree/kdtree.h"
 #include "06-bvh/bvh.h"
-#include "13-production/bvh4.h"
+#include "13-production/wide_bvh.h"
 #include "13-production/flat.h"
 #include "atomic_file.h"
 #include "memory.h"
@@ -67,7 +67,7 @@ static double process_cpu_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Rays handed to a stream kernel at a time (bvh4-stream). */
+/* Rays handed to a stream kernel at a time (wide-bvh-stream). */
 enum { STREAM_CHUNK = 1024 };
 
 static trace_result trace(const accel *a, const ray_set *rays, int count, bool closest, int threads, bool stream)
@@ -86,9 +86,9 @@ static trace_result trace(const accel *a, const ray_set *rays, int count, bool c
             for (int start = 0; start < count; start += STREAM_CHUNK) {
                 int n = count - start < STREAM_CHUNK ? count - start : STREAM_CHUNK;
                 if (closest)
-                    bvh4_closest_hit_stream(a, rays->rays + start, n, chunk_hits, found, &mine);
+                    wide_bvh_closest_hit_stream(a, rays->rays + start, n, chunk_hits, found, &mine);
                 else
-                    bvh4_any_hit_stream(a, rays->rays + start, n, found, &mine);
+                    wide_bvh_any_hit_stream(a, rays->rays + start, n, found, &mine);
                 for (int j = 0; j < n; j++) {
                     hits += found[j];
                     if (closest && found[j])
@@ -149,7 +149,7 @@ typedef struct {
     accel *(*build)(const triangle_set *set);
     long max_triangles; /* larger meshes are skipped (brute force) */
     int max_rays;       /* rays per set (brute force uses a strided subset) */
-    bool stream;        /* traced as streams of rays taking turns (bvh4_closest_hit_stream) */
+    bool stream;        /* traced as streams of rays taking turns (wide_bvh_closest_hit_stream) */
 } structure;
 
 static accel *build_brute(const triangle_set *s) { return brute_force_build(s); }
@@ -157,7 +157,7 @@ static accel *build_grid(const triangle_set *s) { return grid_build(s, GRID_DEFA
 static accel *build_kdtree(const triangle_set *s) { return kdtree_build(s); }
 static accel *build_bvh_median(const triangle_set *s) { return bvh_build(s, BVH_SPLIT_MEDIAN); }
 static accel *build_bvh_sah(const triangle_set *s) { return bvh_build(s, BVH_SPLIT_SAH); }
-static accel *build_bvh4_sah(const triangle_set *s) { return bvh4_build(s, BVH_SPLIT_SAH); }
+static accel *build_wide_bvh_sah(const triangle_set *s) { return wide_bvh_build(s, BVH_SPLIT_SAH); }
 static accel *build_flat(const triangle_set *s) { return flat_build(s); }
 
 static const structure structures[] = {
@@ -167,8 +167,8 @@ static const structure structures[] = {
     {"kdtree", build_kdtree, 1L << 30, 1 << 20, false},
     {"bvh-median", build_bvh_median, 1L << 30, 1 << 20, false},
     {"bvh-sah", build_bvh_sah, 1L << 30, 1 << 20, false},
-    {"bvh4-sah", build_bvh4_sah, 1L << 30, 1 << 20, false},
-    {"bvh4-stream", build_bvh4_sah, 1L << 30, 1 << 20, true},
+    {"wide-bvh-sah", build_wide_bvh_sah, 1L << 30, 1 << 20, false},
+    {"wide-bvh-stream", build_wide_bvh_sah, 1L << 30, 1 << 20, true},
 };
 enum { STRUCTURE_COUNT = sizeof structures / sizeof structures[0] };
 
@@ -417,9 +417,9 @@ static void usage(void)
            "writes it as CSV).\n"
            "--max-rays N traces at most N rays of each set (a strided subset, as brute force gets):\n"
            "a rough run in seconds, which make plots uses when make bench has not run.\n"
-           "structures: brute flat grid kdtree bvh-median bvh-sah bvh4-sah bvh4-stream (flat: brute\n"
-           "force, 8 triangles per AVX instruction; bvh4-stream: bvh4-sah's tree, rays traced 16 at a\n"
-           "time, taking turns: bvh4_closest_hit_stream)\n");
+           "structures: brute flat grid kdtree bvh-median bvh-sah wide-bvh-sah wide-bvh-stream (flat: brute\n"
+           "force, 8 triangles per AVX instruction; wide-bvh-stream: wide-bvh-sah's tree, rays traced 16 at a\n"
+           "time, taking turns: wide_bvh_closest_hit_stream)\n");
 }
 
 int main(int argc, char **argv)

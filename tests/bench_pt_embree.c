@@ -21,7 +21,7 @@
  *      then traced alone by ours and by Embree: nanoseconds per closest-hit
  *      and per shadow ray, and the render's time less its tracing time;
  *      and once more by chapter 06's 4-wide BVH over the same triangles, one
- *      ray at a time and in streams (bvh4_closest_hit_stream), which hide
+ *      ray at a time and in streams (wide_bvh_closest_hit_stream), which hide
  *      waits for memory that this small scene never has;
  *   4. the image means of the lecture rung rendered by both, with their
  *      standard errors: they must agree within 5 standard errors.
@@ -41,7 +41,7 @@
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "09-path-tracing/scene_pt.h"
-#include "13-production/bvh4.h"
+#include "13-production/wide_bvh.h"
 #include "13-production/speed.h"
 #include "13-production/walls.h"
 #include "atomic_file.h"
@@ -213,8 +213,8 @@ static double trace_alone(const accel *a, const ray_list *list, bool closest, bo
     return timer_seconds() - start;
 }
 
-/* The same rays through chapter 06's streams (bvh4_closest_hit_stream):
- * BVH4_STREAM_LANES rays taking turns, in chunks of STREAM_CHUNK. Seconds,
+/* The same rays through chapter 06's streams (wide_bvh_closest_hit_stream):
+ * WIDE_BVH_STREAM_LANES rays taking turns, in chunks of STREAM_CHUNK. Seconds,
  * one run, and the hits counted. */
 enum { STREAM_CHUNK = 1024 };
 static double trace_streams(const accel *a, const ray_list *list, bool closest, long *hits)
@@ -227,9 +227,9 @@ static double trace_streams(const accel *a, const ray_list *list, bool closest, 
     for (int first = 0; first < list->count; first += STREAM_CHUNK) {
         int n = list->count - first < STREAM_CHUNK ? list->count - first : STREAM_CHUNK;
         if (closest)
-            bvh4_closest_hit_stream(a, list->rays + first, n, chunk_hits, found, &counters);
+            wide_bvh_closest_hit_stream(a, list->rays + first, n, chunk_hits, found, &counters);
         else
-            bvh4_any_hit_stream(a, list->rays + first, n, found, &counters);
+            wide_bvh_any_hit_stream(a, list->rays + first, n, found, &counters);
         for (int k = 0; k < n; k++)
             total += found[k];
     }
@@ -449,8 +449,8 @@ int main(int argc, char **argv)
      * before it went flat), one ray at a time and in streams. Would the
      * streams help? They hide waits for memory, and this scene's trees
      * (1.5 KB) never wait: expect them slower. */
-    accel *tree = bvh4_build(&sc.triangles, BVH_SPLIT_SAH);
-    accel *tree_occluders = ours_occluders != NULL ? bvh4_build(ours_occluders->set, BVH_SPLIT_SAH) : NULL;
+    accel *tree = wide_bvh_build(&sc.triangles, BVH_SPLIT_SAH);
+    accel *tree_occluders = ours_occluders != NULL ? wide_bvh_build(ours_occluders->set, BVH_SPLIT_SAH) : NULL;
     double tree_seconds[2][3];
     long tree_hits[2][3] = {{0}};
     for (int k = 0; k < 6; k++)
@@ -467,14 +467,14 @@ int main(int argc, char **argv)
         }
     for (int streams = 0; streams < 2; streams++) {
         double shadow_seconds = tree_seconds[streams][1] + tree_seconds[streams][2];
-        printf("%-20s %-12s %12.1f %12.1f %12.3f\n", "bvh4 (chapter 13)", streams ? "streams" : "independent",
+        printf("%-20s %-12s %12.1f %12.1f %12.3f\n", "wide BVH (chapter 13)", streams ? "streams" : "independent",
                tree_seconds[streams][0] / lists[0].count * 1e9, shadow_seconds / shadow_count * 1e9,
                (tree_seconds[streams][0] + shadow_seconds) / million_samples);
     }
     accel_destroy(tree);
     accel_destroy(tree_occluders);
-    printf("hits: closest %ld (ours) %ld (Embree) %ld (bvh4) %ld (bvh4 streams), occluded %ld (ours) %ld (Embree) "
-           "%ld (bvh4) %ld (bvh4 streams)\n",
+    printf("hits: closest %ld (ours) %ld (Embree) %ld (wide BVH) %ld (wide BVH streams), occluded %ld (ours) %ld (Embree) "
+           "%ld (wide BVH) %ld (wide BVH streams)\n",
            hits[0][0], hits[1][0], tree_hits[0][0], tree_hits[1][0], hits[0][1] + hits[0][2],
            hits[1][1] + hits[1][2], tree_hits[0][1] + tree_hits[0][2],
            tree_hits[1][1] + tree_hits[1][2]);

@@ -127,9 +127,9 @@ static void bench_scene_free(bench_scene *b)
 /* ---- Embree's eight-ray kernels as a wide_tracer --------------------------------
  * rtcIntersect8 and rtcOccluded8 on the lanes of `active`, over the
  * Embree scene of an embree_accel (context): the triangle's index, t and
- * barycentrics as flat_hits8 wants them. */
+ * barycentrics as hits8 wants them. */
 
-static void embree_rays8(const flat_rays8 *rays, int active, int valid[8], struct RTCRay8 *e)
+static void embree_rays8(const rays8 *rays, int active, int valid[8], struct RTCRay8 *e)
 {
     for (int k = 0; k < 8; k++) {
         valid[k] = (active >> k & 1) ? -1 : 0;
@@ -148,7 +148,7 @@ static void embree_rays8(const flat_rays8 *rays, int active, int valid[8], struc
     }
 }
 
-static int embree8_closest_hit(const void *context, const flat_rays8 *rays, int active, flat_hits8 *hits,
+static int embree8_closest_hit(const void *context, const rays8 *rays, int active, hits8 *hits,
                                ray_counters *counters)
 {
     (void)counters;
@@ -175,7 +175,7 @@ static int embree8_closest_hit(const void *context, const flat_rays8 *rays, int 
     return hit;
 }
 
-static int embree8_any_hit(const void *context, const flat_rays8 *rays, int active, ray_counters *counters)
+static int embree8_any_hit(const void *context, const rays8 *rays, int active, ray_counters *counters)
 {
     (void)counters;
     const embree_accel *ea = context;

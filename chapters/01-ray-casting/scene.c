@@ -207,7 +207,6 @@ static material material_from_desc(const scene_desc *d, const scene_material *sm
         break;
     }
     case SCENE_MATERIAL_EMISSIVE:
-    default:
         m = material_blinn_phong(sm->albedo, vec3_splat(0.0f), 1.0f);
         program_warn(label, d, sm->line, sm->column, "emissive '%s': shaded by its albedo; its triangles and quads "
                      "light the scene as point lights (below), its spheres do not", sm->name);
@@ -427,20 +426,13 @@ bool scene_from_desc(scene *sc, const scene_desc *d, const char *label, char *er
 
 void scene_describe(const scene *sc, scene_desc *d)
 {
-    scene_desc_init(d);
-    snprintf(d->source, sizeof d->source, "built-in scene");
-    d->has_camera = true;
-    d->eye = sc->camera.eye;
-    d->target = sc->camera.target;
-    d->up = sc->camera.up;
-    d->fov_degrees = sc->camera.vertical_fov_degrees;
-    d->background = sc->background;
+    scene_desc_init_built_in(d, sc->camera.eye, sc->camera.target, sc->camera.up, sc->camera.vertical_fov_degrees,
+                             sc->background);
     d->ambient = sc->ambient;
     for (int i = 0; i < sc->material_count; i++) {
         const material *m = &sc->materials[i];
         scene_material sm;
         memset(&sm, 0, sizeof sm);
-        snprintf(sm.name, sizeof sm.name, "material%d", i);
         sm.kind = m->kind == MATERIAL_MIRROR  ? SCENE_MATERIAL_MIRROR
                   : m->kind == MATERIAL_GLASS ? SCENE_MATERIAL_GLASS
                                               : SCENE_MATERIAL_BLINN_PHONG;
@@ -448,8 +440,7 @@ void scene_describe(const scene *sc, scene_desc *d)
         sm.specular = m->specular;
         sm.shininess = m->shininess;
         sm.ior = m->ior;
-        d->materials = memory_grow(d->materials, &d->material_capacity, d->material_count + 1, sizeof sm);
-        d->materials[d->material_count++] = sm;
+        scene_desc_add_material(d, sm);
     }
     for (int i = 0; i < sc->shape_count; i++) {
         const shape *s = &sc->shapes[i];
@@ -480,18 +471,10 @@ void scene_describe(const scene *sc, scene_desc *d)
             ss.minor = s->as.torus.minor;
             break;
         }
-        d->shapes = memory_grow(d->shapes, &d->shape_capacity, d->shape_count + 1, sizeof ss);
-        d->shapes[d->shape_count++] = ss;
+        scene_desc_add_shape(d, ss);
     }
-    for (int i = 0; i < sc->light_count; i++) {
-        scene_light l;
-        memset(&l, 0, sizeof l);
-        l.kind = SCENE_LIGHT_POINT;
-        l.position = sc->lights[i].position;
-        l.intensity = sc->lights[i].intensity;
-        d->lights = memory_grow(d->lights, &d->light_capacity, d->light_count + 1, sizeof l);
-        d->lights[d->light_count++] = l;
-    }
+    for (int i = 0; i < sc->light_count; i++)
+        scene_desc_add_point_light(d, sc->lights[i].position, sc->lights[i].intensity);
 }
 
 int scene_load_for_program(scene *sc, scene_desc *desc, cli_options *opts, const char *program,

@@ -119,7 +119,7 @@ static inline const char *triangle_test_name(triangle_test test)
  * axes renamed so that z is the one along which |d| is largest (kz; kx and
  * ky follow it cyclically), and the shear along it that takes the ray's
  * line to the z axis: x' = x - (d_kx / d_kz) z,  y' = y - (d_ky / d_kz) z.
- * The SIMD kernels of chapter 13 (bvh4, flat) hold the same numbers in
+ * The SIMD kernels of chapter 13 (the wide BVH, flat) hold the same numbers in
  * registers and do the triangle's part lane by lane with exactly the
  * operations of watertight_intersect() below, so every lane's answer is
  * this function's, bit for bit. */

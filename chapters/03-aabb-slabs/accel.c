@@ -112,21 +112,14 @@ static inline int brute_force_walk(const accel *a, ray *r, bool any, triangle_te
 static bool brute_force_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
     float b1 = 0.0f, b2 = 0.0f;
-    int best = a->triangle_test == TRIANGLE_TEST_WATERTIGHT
-                   ? brute_force_walk(a, &r, false, TRIANGLE_TEST_WATERTIGHT, &b1, &b2, counters)
-                   : brute_force_walk(a, &r, false, TRIANGLE_TEST_MOLLER_TRUMBORE, &b1, &b2, counters);
-    if (best < 0)
-        return false;
-    triangle_set_fill_hit(a->set, best, r, r.t_max, b1, b2, hit);
-    return true;
+    int best = ACCEL_WALK(a, brute_force_walk, a, &r, false, &b1, &b2, counters);
+    return accel_walk_hit(a, best, r, b1, b2, hit);
 }
 
 static bool brute_force_any_hit(const accel *a, ray r, ray_counters *counters)
 {
     float b1, b2;
-    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
-        return brute_force_walk(a, &r, true, TRIANGLE_TEST_WATERTIGHT, &b1, &b2, counters) >= 0;
-    return brute_force_walk(a, &r, true, TRIANGLE_TEST_MOLLER_TRUMBORE, &b1, &b2, counters) >= 0;
+    return ACCEL_WALK(a, brute_force_walk, a, &r, true, &b1, &b2, counters) >= 0;
 }
 
 static void brute_force_destroy(accel *a) { free(a); }

@@ -164,6 +164,28 @@ static inline bool accel_use_triangle_test(accel *a, triangle_test test)
     return a->ops->use_triangle_test != NULL && a->ops->use_triangle_test(a, test);
 }
 
+/* ---- a structure's walk behind accel_ops -------------------------------------------
+ * Brute force, the grid and the kd-tree each walk their cells or nodes in a
+ * function of one shape: walk(structure, ray *r, mode, triangle_test,
+ * float *b1, float *b2, ray_counters *), which returns the index of the
+ * triangle found (-1: none; mode says closest or any), r->t_max cut to its
+ * t, and its barycentrics. ACCEL_WALK calls it with the structure's test
+ * as a constant, so that the walk is compiled once per test (the test
+ * inlined into its loop); accel_walk_hit() makes closest_hit's record of
+ * what it found. */
+#define ACCEL_WALK(a, walk, structure, r, mode, b1, b2, counters)                                             \
+    ((a)->triangle_test == TRIANGLE_TEST_WATERTIGHT                                                          \
+         ? walk(structure, r, mode, TRIANGLE_TEST_WATERTIGHT, b1, b2, counters)                              \
+         : walk(structure, r, mode, TRIANGLE_TEST_MOLLER_TRUMBORE, b1, b2, counters))
+
+static inline bool accel_walk_hit(const accel *a, int found, ray r, float b1, float b2, hit_record *hit)
+{
+    if (found < 0)
+        return false;
+    triangle_set_fill_hit(a->set, found, r, r.t_max, b1, b2, hit);
+    return true;
+}
+
 /* Brute force: every ray tests every triangle. The baseline every structure
  * must agree with, and beat. */
 accel *brute_force_build(const triangle_set *set);

@@ -9,6 +9,7 @@
 #include <time.h>
 
 #include "03-aabb-slabs/accel_program.h"
+#include "03-aabb-slabs/accel_view.h"
 #include "memory.h"
 #include "program.h"
 #include "timer.h"
@@ -81,6 +82,15 @@ void accel_input_free(accel_input *in)
 {
     mesh_free(&in->m);
     scene_desc_free(&in->desc);
+}
+
+int accel_input_render(const cli_options *opts, const char *program, const accel_input *in, const accel *a,
+                       bool heatmap, float heatmap_max, const camera_override *view, render_stats *stats)
+{
+    accel_view seen = {a, heatmap, heatmap_max};
+    camera cam = accel_input_camera(in, a->set->bounds, opts->width, opts->height);
+    cam = camera_overridden(&cam, view);
+    return program_render(opts, program, accel_view_radiance, &seen, &cam, stats);
 }
 
 /* ---- the Embree harness's ray sets, timed on one thread ------------------- */

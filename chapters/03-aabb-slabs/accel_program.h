@@ -23,6 +23,7 @@
 #include "camera.h"
 #include "cli.h"
 #include "mesh.h"
+#include "render.h"
 #include "scene_file.h"
 
 /* The ray sets of the Embree harness (../shared/anchors/embree_bench.c),
@@ -76,6 +77,12 @@ int accel_input_load(accel_input *in, cli_options *opts, const char *program, co
  * view of the bounds. */
 camera accel_input_camera(const accel_input *in, aabb bounds, int width, int height);
 void accel_input_free(accel_input *in);
+/* The structure `a`, built over in's mesh, rendered as chapters 04-06 show
+ * it: accel_view_radiance() (with heatmap, each ray's cost, white at
+ * heatmap_max) through accel_input_camera() as --eye, --target and --fov
+ * override it (view). Returns program_render()'s status, with its stats. */
+int accel_input_render(const cli_options *opts, const char *program, const accel_input *in, const accel *a,
+                       bool heatmap, float heatmap_max, const camera_override *view, render_stats *stats);
 /* Times the harness's coherent or incoherent ray set (accel_harness_rays)
  * on one thread: the median of 3 runs of closest hit and of any hit, by the
  * wall clock and by this thread's CPU time, with the hit fraction, the sum of

@@ -377,38 +377,25 @@ done:
     return best;
 }
 
-/* The walk compiled once per triangle test (the test a constant inside). */
-static int grid_walk_with(const accel *a, ray *r, walk_rule rule, float *b1, float *b2, ray_counters *counters)
-{
-    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
-        return grid_walk((const grid *)a, r, rule, TRIANGLE_TEST_WATERTIGHT, b1, b2, counters);
-    return grid_walk((const grid *)a, r, rule, TRIANGLE_TEST_MOLLER_TRUMBORE, b1, b2, counters);
-}
-
+/* The walk compiled once per triangle test (accel.h, ACCEL_WALK). */
 static bool grid_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
     float b1 = 0.0f, b2 = 0.0f;
-    int best = grid_walk_with(a, &r, WALK_CLOSEST, &b1, &b2, counters);
-    if (best < 0)
-        return false;
-    triangle_set_fill_hit(a->set, best, r, r.t_max, b1, b2, hit);
-    return true;
+    int best = ACCEL_WALK(a, grid_walk, (const grid *)a, &r, WALK_CLOSEST, &b1, &b2, counters);
+    return accel_walk_hit(a, best, r, b1, b2, hit);
 }
 
 static bool grid_any_hit(const accel *a, ray r, ray_counters *counters)
 {
     float b1, b2;
-    return grid_walk_with(a, &r, WALK_ANY, &b1, &b2, counters) >= 0;
+    return ACCEL_WALK(a, grid_walk, (const grid *)a, &r, WALK_ANY, &b1, &b2, counters) >= 0;
 }
 
 static bool grid_naive_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
     float b1 = 0.0f, b2 = 0.0f;
-    int best = grid_walk_with(a, &r, WALK_NAIVE_EXIT, &b1, &b2, counters);
-    if (best < 0)
-        return false;
-    triangle_set_fill_hit(a->set, best, r, r.t_max, b1, b2, hit);
-    return true;
+    int best = ACCEL_WALK(a, grid_walk, (const grid *)a, &r, WALK_NAIVE_EXIT, &b1, &b2, counters);
+    return accel_walk_hit(a, best, r, b1, b2, hit);
 }
 
 static void grid_destroy(accel *a)

@@ -58,7 +58,11 @@ static void print_grid(const accel *a)
     printf(" triangles\n");
 }
 
-/* The program's own flags. */
+/* The program's own flags. Its run() reads as chapter 05's and 06's do (load the
+ * mesh, build, print the structure, render, print the costs): each
+ * program is read whole on its chapter's page, so the steps they share
+ * are one call each into chapter 03's accel_program.h (accel_input_load,
+ * accel_input_render), and what stays is the chapter's own. */
 typedef struct {
     cli_choice mesh;
     const char *obj_path;
@@ -85,11 +89,8 @@ static int run(cli_options *opts, const char *program, const grid_flags *f)
     if (f->probe_rays > 0 && !opts->quiet)
         probe(a, f->probe_rays, opts->seed);
 
-    accel_view view = {a, f->heatmap, f->heatmap_max};
-    camera cam = accel_input_camera(&in, set.bounds, opts->width, opts->height);
-    cam = camera_overridden(&cam, &f->view);
     render_stats stats;
-    int status = program_render(opts, program, accel_view_radiance, &view, &cam, &stats);
+    int status = accel_input_render(opts, program, &in, a, f->heatmap, f->heatmap_max, &f->view, &stats);
     if (status == 0 && !opts->quiet) {
         double rays = (double)stats.counters.camera_rays;
         printf("per camera ray: %.2f cells visited, %.2f triangles tested (plus 1 slab test of the bounds)\n",

@@ -232,28 +232,18 @@ done:
     return best;
 }
 
-/* The walk compiled once per triangle test (the test a constant inside). */
-static int kdtree_walk_with(const accel *a, ray *r, bool any, float *b1, float *b2, ray_counters *counters)
-{
-    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
-        return kdtree_walk((const kd_tree *)a, r, any, TRIANGLE_TEST_WATERTIGHT, b1, b2, counters);
-    return kdtree_walk((const kd_tree *)a, r, any, TRIANGLE_TEST_MOLLER_TRUMBORE, b1, b2, counters);
-}
-
+/* The walk compiled once per triangle test (accel.h, ACCEL_WALK). */
 static bool kdtree_closest_hit(const accel *a, ray r, hit_record *hit, ray_counters *counters)
 {
     float b1 = 0.0f, b2 = 0.0f;
-    int best = kdtree_walk_with(a, &r, false, &b1, &b2, counters);
-    if (best < 0)
-        return false;
-    triangle_set_fill_hit(a->set, best, r, r.t_max, b1, b2, hit);
-    return true;
+    int best = ACCEL_WALK(a, kdtree_walk, (const kd_tree *)a, &r, false, &b1, &b2, counters);
+    return accel_walk_hit(a, best, r, b1, b2, hit);
 }
 
 static bool kdtree_any_hit(const accel *a, ray r, ray_counters *counters)
 {
     float b1, b2;
-    return kdtree_walk_with(a, &r, true, &b1, &b2, counters) >= 0;
+    return ACCEL_WALK(a, kdtree_walk, (const kd_tree *)a, &r, true, &b1, &b2, counters) >= 0;
 }
 
 static void kdtree_destroy(accel *a)

@@ -46,7 +46,11 @@ static void print_costs(const accel *a, const render_stats *stats)
                build * rays / stats->seconds, build / stats->seconds);
 }
 
-/* The program's own flags. */
+/* The program's own flags. Its run() reads as chapter 04's and 06's do (load the
+ * mesh, build, print the structure, render, print the costs): each
+ * program is read whole on its chapter's page, so the steps they share
+ * are one call each into chapter 03's accel_program.h (accel_input_load,
+ * accel_input_render), and what stays is the chapter's own. */
 typedef struct {
     cli_choice mesh;
     const char *obj_path;
@@ -72,11 +76,8 @@ static int run(cli_options *opts, const char *program, const kd_flags *f)
     if (!opts->quiet)
         print_tree(in.name, a, &f->options);
 
-    accel_view view = {a, f->heatmap, f->heatmap_max};
-    camera cam = accel_input_camera(&in, set.bounds, opts->width, opts->height);
-    cam = camera_overridden(&cam, &f->view);
     render_stats stats;
-    int status = program_render(opts, program, accel_view_radiance, &view, &cam, &stats);
+    int status = accel_input_render(opts, program, &in, a, f->heatmap, f->heatmap_max, &f->view, &stats);
     if (status == 0 && !opts->quiet)
         print_costs(a, &stats);
     if (status == 0 && f->run_bench) {

@@ -66,7 +66,7 @@ typedef struct {
 } builder;
 
 /* The SAH counts a leaf's triangles in blocks of sah.leaf_block: a 4-wide
- * triangle test (bvh4.c) costs the same for 1 to 4 triangles. */
+ * triangle test (chapter 13's wide BVH) costs the same for 1 to 4 triangles. */
 static inline float sah_blocks(const builder *b, int n)
 {
     return (float)((n + b->sah.leaf_block - 1) / b->sah.leaf_block);

@@ -1,5 +1,5 @@
 /* bvh_internal.h -- what the BVH's own files share (bvh_build.c,
- * bvh_traverse.c, and the 4-wide BVH built on them), and the tests that
+ * bvh_traverse.c, and chapter 13's wide BVH built on them), and the tests that
  * check those parts one by one; no chapter program includes it. */
 #ifndef BVH_INTERNAL_H
 #define BVH_INTERNAL_H
@@ -18,7 +18,7 @@
  * first is lo where 1/d >= 0 and hi where 1/d < 0 (1/(-0) = -inf included),
  * as in Williams et al., "An Efficient and Robust Ray-Box Intersection
  * Algorithm" (2005). Here and not in bvh.h because only traversal kernels
- * use it: bvh_traverse.c's iterative ones, and the 4-wide BVH's, which
+ * use it: bvh_traverse.c's iterative ones, and chapter 13's wide BVH's, which
  * takes bvh_ray_make() and BVH_SLAB_ROUNDING_PAD. */
 typedef struct {
     vec3 origin;
@@ -41,18 +41,22 @@ static inline bvh_ray bvh_ray_make(const ray *r)
     return b;
 }
 
-/* Does the ray meet the node's box for some t in [t_min, t_max]? Returns
- * that, and t_enter (the first such t). The far plane of each axis is the
- * other one of its pair: 3 - near_x, 5 - near_y, 7 - near_z. */
-static inline bool bvh_slab_test(const bvh_node *node, const bvh_ray *r, float t_min, float t_max, float *t_enter)
+/* Does the ray meet the box for some t in [t_min, t_max]? Returns that,
+ * and t_enter (the first such t). The box's six planes, in bvh_node.bounds'
+ * order, lie `stride` floats apart from b: 1 for a node of this chapter,
+ * the node's width for a child of chapter 13's wide BVH (whose scalar
+ * kernel runs this very test, so the two cannot drift apart). The far
+ * plane of each axis is the other one of its pair: 3 - near_x, 5 - near_y,
+ * 7 - near_z. */
+static inline bool bvh_slab_test_planes(const float *b, int stride, const bvh_ray *r, float t_min, float t_max,
+                                        float *t_enter)
 {
-    const float *b = node->bounds;
-    float near_x = (b[r->near_x] - r->origin.x) * r->inverse_direction.x;
-    float far_x = (b[3 - r->near_x] - r->origin.x) * r->inverse_direction.x;
-    float near_y = (b[r->near_y] - r->origin.y) * r->inverse_direction.y;
-    float far_y = (b[5 - r->near_y] - r->origin.y) * r->inverse_direction.y;
-    float near_z = (b[r->near_z] - r->origin.z) * r->inverse_direction.z;
-    float far_z = (b[7 - r->near_z] - r->origin.z) * r->inverse_direction.z;
+    float near_x = (b[r->near_x * stride] - r->origin.x) * r->inverse_direction.x;
+    float far_x = (b[(3 - r->near_x) * stride] - r->origin.x) * r->inverse_direction.x;
+    float near_y = (b[r->near_y * stride] - r->origin.y) * r->inverse_direction.y;
+    float far_y = (b[(5 - r->near_y) * stride] - r->origin.y) * r->inverse_direction.y;
+    float near_z = (b[r->near_z * stride] - r->origin.z) * r->inverse_direction.z;
+    float far_z = (b[(7 - r->near_z) * stride] - r->origin.z) * r->inverse_direction.z;
     /* t_enter = max t_min, t_exit = min t_max; a NaN leaves them as they are */
     float enter = t_min, exit = INFINITY;
     enter = near_x > enter ? near_x : enter;
@@ -70,6 +74,12 @@ static inline bool bvh_slab_test(const bvh_node *node, const bvh_ray *r, float t
     return enter <= exit;
 }
 
+/* The slab test of a node's box. */
+static inline bool bvh_slab_test(const bvh_node *node, const bvh_ray *r, float t_min, float t_max, float *t_enter)
+{
+    return bvh_slab_test_planes(node->bounds, 1, r, t_min, t_max, t_enter);
+}
+
 extern const accel_ops bvh_ops_axis_sign; /* BVH_ORDER_AXIS_SIGN */
 extern const accel_ops bvh_ops_distance;  /* BVH_ORDER_DISTANCE */
 /* Their use_triangle_test: rewrites bvh.triangles for the test (bvh.h). */
@@ -80,10 +90,7 @@ bool bvh_use_triangle_test(accel *a, triangle_test test);
 bvh_node *bvh_nodes_allocate(int count);
 void bvh_nodes_free(bvh_node *nodes);
 
-/* bvh4_traverse.c's accel_ops for the default kernel (bvh4_build.c sets it). */
-const accel_ops *bvh4_default_ops(void);
-
-/* The SAH's constants, which the 4-wide BVH (bvh4.c) sets differently:
+/* The SAH's constants, which chapter 13's wide BVH sets differently:
  * bvh_build() uses C_t = BVH_SAH_TRAVERSAL_COST, blocks of 1 and leaves of
  * at most BVH_SAH_MAX_LEAF_SIZE. */
 typedef struct {
@@ -91,8 +98,8 @@ typedef struct {
     int leaf_block;       /* a leaf costs C_i per started block of this many triangles */
     int max_leaf_size;    /* split larger sets even when the SAH prefers a leaf */
     /* C_t for the sets whose box has at least top_area_fraction of the
-     * root's surface area (none if it is 0): the 4-wide BVH splits the
-     * few large sets near the root more eagerly (bvh4_build.c says why). */
+     * root's surface area (none if it is 0): chapter 13's wide BVH splits
+     * the few large sets near the root more eagerly (it says why). */
     float top_area_fraction, top_traversal_cost;
 } bvh_sah_params;
 

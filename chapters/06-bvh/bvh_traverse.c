@@ -105,7 +105,10 @@ BVH_INLINE bool test_leaf(const bvh *b, const bvh_node *node, const ray *r, cons
 /* ---- near child first by the sign of the direction on the split axis ------- */
 
 /* The box of every node popped is tested against [t_min, closest hit], so a
- * far child that begins beyond the closest hit fails its box test. */
+ * far child that begins beyond the closest hit fails its box test.
+ * It starts as traverse_distance() does (the ray prepared, the stack), and
+ * stays whole: each order is read as one function on the chapter's page,
+ * and `stop_at_first` makes each one function for closest and any hit. */
 static inline bvh_found traverse_axis_sign(const bvh *b, const ray *r, bool stop_at_first, triangle_test test,
                                            ray_counters *counters)
 {
@@ -148,7 +151,8 @@ static inline bvh_found traverse_axis_sign(const bvh *b, const ray *r, bool stop
 
 /* Both children's boxes are tested at their parent; the far child goes on
  * the stack with its t_enter, and when it comes off, it is skipped without
- * another box test if a hit closer than t_enter was found meanwhile. */
+ * another box test if a hit closer than t_enter was found meanwhile. (Its
+ * start is traverse_axis_sign()'s, kept so that each reads whole.) */
 static inline bvh_found traverse_distance(const bvh *b, const ray *r, bool stop_at_first, triangle_test test,
                                           ray_counters *counters)
 {

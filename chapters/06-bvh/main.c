@@ -53,12 +53,9 @@ static void print_tree(const accel *a, const triangle_set *set)
 /* The mesh through the tree: its picture (or heat map), then the tests per ray. */
 static int render(const cli_options *opts, const chapter_flags *f, const accel_input *in, const accel *a)
 {
-    accel_view view = {a, f->heatmap, f->heatmap_max};
     program_note_accel(a->stats.name);
-    camera cam = accel_input_camera(in, a->set->bounds, opts->width, opts->height);
-    cam = camera_overridden(&cam, &f->view);
     render_stats stats;
-    int status = program_render(opts, "06-bvh", accel_view_radiance, &view, &cam, &stats);
+    int status = accel_input_render(opts, "06-bvh", in, a, f->heatmap, f->heatmap_max, &f->view, &stats);
     if (status == 0 && !opts->quiet) {
         double rays = (double)stats.counters.camera_rays;
         printf("%s, %s order: %.2f nodes visited and %.2f triangles tested per ray\n", a->stats.name,

@@ -10,6 +10,19 @@ vec3 frame_to_world(vec3 n, vec3 local)
     return vec3_add(vec3_add(vec3_scale(t, local.x), vec3_scale(b, local.y)), vec3_scale(n, local.z));
 }
 
+/* The BSDFs' rows of the scene format's kinds (scene_pt.h, BSDF_KINDS). */
+scene_material_kind bsdf_kind_scene_kind(bsdf_kind k)
+{
+    static const scene_material_kind scene_kinds[BSDF_KIND_COUNT] = {
+#define BSDF_SCENE_KIND(id, scene_kind) scene_kind,
+        BSDF_KINDS(BSDF_SCENE_KIND)
+#undef BSDF_SCENE_KIND
+    };
+    return (unsigned)k < BSDF_KIND_COUNT ? scene_kinds[k] : SCENE_MATERIAL_KIND_COUNT;
+}
+
+const char *bsdf_kind_name(bsdf_kind k) { return scene_material_kind_name(bsdf_kind_scene_kind(k)); }
+
 bool bsdf_is_delta(const pt_material *m) { return m->kind == BSDF_GLASS || m->kind == BSDF_MIRROR; }
 
 /* ---- GGX microfacets --------------------------------------------------------

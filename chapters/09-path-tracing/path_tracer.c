@@ -78,12 +78,6 @@ static bool delta_allowed(const path_tracer *pt, const bsdf_sample_result *s)
 
 /* ---- --explain ------------------------------------------------------------------ */
 
-static const char *bsdf_kind_name(bsdf_kind k)
-{
-    static const char *const names[] = {"diffuse", "glossy", "glass", "mirror"};
-    return (unsigned)k < 4 ? names[k] : "?";
-}
-
 static void explain_pt_hit(const pt_scene *sc, const hit_record *hit, int depth)
 {
     char p[64];

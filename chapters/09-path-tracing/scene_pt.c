@@ -846,16 +846,16 @@ const char *const PT_BUILTIN_SCENE_NOTES[] = {
     "a point light inside a sphere of albedo 0.5",
     NULL,
 };
-/* in the order of PT_BUILTIN_SCENE_NAMES */
+/* in the order of PT_BUILTIN_SCENE_NAMES (their lines are PT_BUILTIN_SCENE_NOTES) */
 const pt_builtin_scene PT_BUILTIN_SCENES[] = {
-    {"cornell", pt_scene_build_cornell_box},
-    {"materials", pt_scene_build_cornell_box_materials},
-    {"veach", pt_scene_build_veach},
-    {"furnace", build_furnace},
-    {"white-furnace", build_white_furnace},
-    {"glass-furnace", build_glass_furnace},
-    {"point-in-sphere", build_point_in_sphere},
-    {NULL, NULL},
+    {"cornell", pt_scene_build_cornell_box, NULL},
+    {"materials", pt_scene_build_cornell_box_materials, NULL},
+    {"veach", pt_scene_build_veach, NULL},
+    {"furnace", build_furnace, NULL},
+    {"white-furnace", build_white_furnace, NULL},
+    {"glass-furnace", build_glass_furnace, NULL},
+    {"point-in-sphere", build_point_in_sphere, NULL},
+    {NULL, NULL, NULL},
 };
 
 bool pt_scene_build_builtin(pt_scene *sc, const char *name)

@@ -23,16 +23,36 @@
 #include "01-ray-casting/shapes.h"
 #include "03-aabb-slabs/accel.h"
 #include "camera.h"
+#include "cli.h"
 #include "counters.h"
 #include "mesh.h"
 #include "scene_file.h"
 
+/* The BSDFs (bsdf.c): the rows of the scene format's one list of material
+ * kinds (SCENE_MATERIAL_KINDS, scene_file.h) that are BSDFs, X(ID, the
+ * scene file's kind), in the enum's order; a kind's name is the scene
+ * file's. Blinn-Phong is rendered as diffuse and emissive as a diffuse
+ * emitter (scene_pt_file.c). A new BSDF: a row here, its cases in bsdf.c
+ * (the compiler names them), its constructor below. */
+#define BSDF_KINDS(X)                                                                                        \
+    X(DIFFUSE, SCENE_MATERIAL_DIFFUSE) /* Lambertian: f = albedo / pi */                                    \
+    X(GLOSSY, SCENE_MATERIAL_GLOSSY)   /* GGX microfacet reflection with Schlick's Fresnel (F0 = albedo) */ \
+    X(GLASS, SCENE_MATERIAL_GLASS)     /* a smooth dielectric: Fresnel-weighted reflection and refraction */ \
+    X(MIRROR, SCENE_MATERIAL_MIRROR)   /* perfect reflection of albedo */
+
 typedef enum {
-    BSDF_DIFFUSE, /* Lambertian: f = albedo / pi */
-    BSDF_GLOSSY,  /* GGX microfacet reflection with Schlick's Fresnel (F0 = albedo) */
-    BSDF_GLASS,   /* a smooth dielectric: Fresnel-weighted reflection and refraction */
-    BSDF_MIRROR,  /* perfect reflection of albedo */
+#define BSDF_KIND_ENUM(id, scene_kind) BSDF_##id,
+    BSDF_KINDS(BSDF_KIND_ENUM)
+#undef BSDF_KIND_ENUM
 } bsdf_kind;
+#define BSDF_KIND_ONE(id, scene_kind) +1
+enum { BSDF_KIND_COUNT = 0 BSDF_KINDS(BSDF_KIND_ONE) };
+#undef BSDF_KIND_ONE
+
+/* The scene file's kind of a BSDF, and its name ("diffuse", ...; "?" for
+ * a value that is no kind). */
+scene_material_kind bsdf_kind_scene_kind(bsdf_kind k);
+const char *bsdf_kind_name(bsdf_kind k);
 
 typedef struct {
     bsdf_kind kind;
@@ -265,6 +285,7 @@ void pt_scene_build_point_in_sphere(pt_scene *sc, float albedo, float intensity)
 typedef struct {
     const char *name;
     void (*build)(pt_scene *sc);
+    const char *description; /* the line --help shows (a program's own table, chapters 11 and 12) */
 } pt_builtin_scene;
 extern const pt_builtin_scene PT_BUILTIN_SCENES[];
 /* The same names, NULL-terminated, and a line on each (--builtin). */
@@ -272,6 +293,11 @@ extern const char *const PT_BUILTIN_SCENE_NAMES[];
 extern const char *const PT_BUILTIN_SCENE_NOTES[];
 /* Builds the scene named `name`; false if there is none of that name. */
 bool pt_scene_build_builtin(pt_scene *sc, const char *name);
+/* The --builtin choice of a program's own table of `count` scenes (chapters
+ * 11 and 12), the first the default: their names and descriptions written
+ * into names[count + 1] and notes[count], the caller's, which the choice
+ * keeps pointing to. */
+cli_choice pt_builtin_scene_choice(const pt_builtin_scene *table, int count, const char **names, const char **notes);
 
 /* An MTL material as the path tracer's, as the format means it: an
  * emitter where Ke > 0; glass where the MTL says light passes through

@@ -6,6 +6,16 @@
 #include "memory.h"
 #include "program.h"
 
+cli_choice pt_builtin_scene_choice(const pt_builtin_scene *table, int count, const char **names, const char **notes)
+{
+    for (int k = 0; k < count; k++) {
+        names[k] = table[k].name;
+        notes[k] = table[k].description;
+    }
+    names[count] = NULL;
+    return (cli_choice){names, notes, 0};
+}
+
 static pt_material material_from_desc(const scene_desc *d, const scene_material *sm, const char *label)
 {
     pt_material m;
@@ -26,9 +36,9 @@ static pt_material material_from_desc(const scene_desc *d, const scene_material 
     case SCENE_MATERIAL_GLOSSY:
         return pt_glossy(sm->albedo, sm->roughness);
     case SCENE_MATERIAL_EMISSIVE:
-    default:
         return pt_emitter(sm->albedo, sm->emission);
     }
+    return pt_diffuse(sm->albedo); /* not reached: the parser makes only the kinds above */
 }
 
 static bool add_mesh(pt_scene *sc, const scene_desc *d, int index, char *err, size_t err_size)
@@ -118,31 +128,18 @@ bool pt_scene_from_desc(pt_scene *sc, const scene_desc *d, const char *label, ch
 
 void pt_scene_describe(const pt_scene *sc, scene_desc *d)
 {
-    scene_desc_init(d);
-    snprintf(d->source, sizeof d->source, "built-in scene");
-    d->has_camera = true;
-    d->eye = sc->eye;
-    d->target = sc->target;
-    d->up = sc->up;
-    d->fov_degrees = sc->vertical_fov_degrees;
-    d->background = sc->environment;
+    scene_desc_init_built_in(d, sc->eye, sc->target, sc->up, sc->vertical_fov_degrees, sc->environment);
     for (int i = 0; i < sc->material_count; i++) {
         const pt_material *m = &sc->materials[i];
         scene_material sm;
         memset(&sm, 0, sizeof sm);
-        snprintf(sm.name, sizeof sm.name, "material%d", i);
         bool emits = m->emission.x > 0.0f || m->emission.y > 0.0f || m->emission.z > 0.0f;
-        sm.kind = m->kind == BSDF_GLOSSY ? SCENE_MATERIAL_GLOSSY
-                  : m->kind == BSDF_GLASS  ? SCENE_MATERIAL_GLASS
-                  : m->kind == BSDF_MIRROR ? SCENE_MATERIAL_MIRROR
-                  : emits                  ? SCENE_MATERIAL_EMISSIVE
-                                           : SCENE_MATERIAL_DIFFUSE;
+        sm.kind = m->kind == BSDF_DIFFUSE && emits ? SCENE_MATERIAL_EMISSIVE : bsdf_kind_scene_kind(m->kind);
         sm.albedo = m->albedo;
         sm.emission = m->emission;
         sm.roughness = m->roughness;
         sm.ior = m->ior;
-        d->materials = memory_grow(d->materials, &d->material_capacity, d->material_count + 1, sizeof sm);
-        d->materials[d->material_count++] = sm;
+        scene_desc_add_material(d, sm);
     }
     for (int i = 0; i < sc->geometry.face_count + sc->sphere_count; i++) {
         scene_shape s;
@@ -160,16 +157,8 @@ void pt_scene_describe(const pt_scene *sc, scene_desc *d)
             s.inside_out = sp->inside_out;
             s.material = sp->material;
         }
-        d->shapes = memory_grow(d->shapes, &d->shape_capacity, d->shape_count + 1, sizeof s);
-        d->shapes[d->shape_count++] = s;
+        scene_desc_add_shape(d, s);
     }
-    for (int i = 0; i < sc->point_light_count; i++) {
-        scene_light l;
-        memset(&l, 0, sizeof l);
-        l.kind = SCENE_LIGHT_POINT;
-        l.position = sc->point_lights[i].position;
-        l.intensity = sc->point_lights[i].intensity;
-        d->lights = memory_grow(d->lights, &d->light_capacity, d->light_count + 1, sizeof l);
-        d->lights[d->light_count++] = l;
-    }
+    for (int i = 0; i < sc->point_light_count; i++)
+        scene_desc_add_point_light(d, sc->point_lights[i].position, sc->point_lights[i].intensity);
 }

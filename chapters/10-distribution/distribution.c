@@ -148,11 +148,10 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
     vec3 radiance = vec3_splat(0.0f);
     int indent = 2 * depth + 2; /* --explain: each bounce two steps deeper */
     if (explain_on()) {
-        static const char *const kinds[] = {"diffuse", "glossy", "glass", "mirror"};
         char p[64];
         explain_line(indent - 1, "hit %s, material #%d (%s), at t = %.6g, point %s, bounce %d",
                      hit.shape_id >= 0 ? "a static triangle" : "a sphere or moving object", hit.material_id,
-                     kinds[m->kind], (double)hit.t, explain_vec3(p, hit.point), depth);
+                     bsdf_kind_name(m->kind), (double)hit.t, explain_vec3(p, hit.point), depth);
     }
 
     /* Emission. Emitting static triangles are the lights the samples aim
@@ -172,7 +171,10 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
     if (depth + 1 > dt->max_depth)
         return radiance;
 
-    if (m->kind == BSDF_DIFFUSE || m->kind == BSDF_GLOSSY) {
+    /* Each kind's way (no default: a kind missing here is a compiler warning). */
+    switch (m->kind) {
+    case BSDF_DIFFUSE:
+    case BSDF_GLOSSY: {
         bool lobe_rays = m->kind == BSDF_GLOSSY && dt->glossy_samples > 0 && (dt->effects & EFFECT_GLOSSY);
         vec3 direct = direct_light(dt, &hit, wo, m, tr.time, lobe_rays, rng, counters);
         radiance = vec3_add(radiance, direct);
@@ -205,10 +207,9 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
         }
         return vec3_add(radiance, vec3_scale(sum, 1.0f / (float)dt->glossy_samples));
     }
-
     /* Mirror and glass: chapter 02's branches, no sampling at all. */
-    vec3 reflected = vec3_reflect(vec3_neg(wo), n);
-    if (m->kind == BSDF_MIRROR) {
+    case BSDF_MIRROR: {
+        vec3 reflected = vec3_reflect(vec3_neg(wo), n);
         if (dt->effects & EFFECT_REFLECTION) {
             counters->reflection_rays++;
             vec3 incoming = trace_branch(dt, &hit, reflected, "reflected ray", tr.time, depth, rng, counters);
@@ -216,19 +217,24 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
         }
         return radiance;
     }
-    float eta_i = hit.front_face ? 1.0f : m->ior, eta_t = hit.front_face ? m->ior : 1.0f;
-    vec3 refracted;
-    bool can_refract = refract_direction(vec3_neg(wo), n, eta_i / eta_t, &refracted);
-    float reflectance = can_refract ? fresnel_dielectric(vec3_dot(n, wo), eta_i, eta_t) : 1.0f;
-    if ((dt->effects & EFFECT_REFLECTION) && reflectance > 0.0f) {
-        counters->reflection_rays++;
-        vec3 incoming = trace_branch(dt, &hit, reflected, "reflected ray", tr.time, depth, rng, counters);
-        radiance = vec3_add(radiance, vec3_scale(vec3_mul(m->albedo, incoming), reflectance));
+    case BSDF_GLASS: {
+        vec3 reflected = vec3_reflect(vec3_neg(wo), n);
+        float eta_i = hit.front_face ? 1.0f : m->ior, eta_t = hit.front_face ? m->ior : 1.0f;
+        vec3 refracted;
+        bool can_refract = refract_direction(vec3_neg(wo), n, eta_i / eta_t, &refracted);
+        float reflectance = can_refract ? fresnel_dielectric(vec3_dot(n, wo), eta_i, eta_t) : 1.0f;
+        if ((dt->effects & EFFECT_REFLECTION) && reflectance > 0.0f) {
+            counters->reflection_rays++;
+            vec3 incoming = trace_branch(dt, &hit, reflected, "reflected ray", tr.time, depth, rng, counters);
+            radiance = vec3_add(radiance, vec3_scale(vec3_mul(m->albedo, incoming), reflectance));
+        }
+        if ((dt->effects & EFFECT_REFRACTION) && can_refract && reflectance < 1.0f) {
+            counters->refraction_rays++;
+            vec3 incoming = trace_branch(dt, &hit, refracted, "refracted ray", tr.time, depth, rng, counters);
+            radiance = vec3_add(radiance, vec3_scale(vec3_mul(m->albedo, incoming), 1.0f - reflectance));
+        }
+        return radiance;
     }
-    if ((dt->effects & EFFECT_REFRACTION) && can_refract && reflectance < 1.0f) {
-        counters->refraction_rays++;
-        vec3 incoming = trace_branch(dt, &hit, refracted, "refracted ray", tr.time, depth, rng, counters);
-        radiance = vec3_add(radiance, vec3_scale(vec3_mul(m->albedo, incoming), 1.0f - reflectance));
     }
     return radiance;
 }

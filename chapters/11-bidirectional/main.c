@@ -11,13 +11,7 @@
 #include "mpi_split.h"
 
 /* The built-in scenes (--builtin), each with the line --help shows. */
-typedef struct {
-    const char *name;
-    void (*build)(pt_scene *sc);
-    const char *description;
-} builtin_scene;
-
-static const builtin_scene BUILTINS[] = {
+static const pt_builtin_scene BUILTINS[] = {
     {"cornell", pt_scene_build_cornell_box, "the Cornell box (default)"},
     {"ceiling-lamp", bdpt_scene_build_ceiling_lamp, "a lamp shining at the ceiling: where BDPT wins"},
     {"veach", pt_scene_build_veach, "four glossy plates under four lights of growing size (chapter 09's)"},
@@ -25,15 +19,7 @@ static const builtin_scene BUILTINS[] = {
 enum { BUILTIN_COUNT = sizeof BUILTINS / sizeof BUILTINS[0] };
 
 /* The --builtin choice, its names and notes taken from the table. */
-static cli_choice builtin_choice(void)
-{
-    static const char *names[BUILTIN_COUNT + 1], *notes[BUILTIN_COUNT];
-    for (int k = 0; k < BUILTIN_COUNT; k++) {
-        names[k] = BUILTINS[k].name;
-        notes[k] = BUILTINS[k].description;
-    }
-    return (cli_choice){names, notes, 0};
-}
+static const char *builtin_names[BUILTIN_COUNT + 1], *builtin_notes[BUILTIN_COUNT];
 
 static const char *const INTEGRATOR_NAMES[] = {"bdpt", "pt", NULL};
 enum { INTEGRATOR_BDPT, INTEGRATOR_PT };
@@ -78,7 +64,7 @@ static bool parse_strategy(const char *text, int *s, int *t)
  * box and the ceiling lamp. */
 static int run_experiments(const bdpt_flags *f, int threads, const char *program)
 {
-    const builtin_scene *measured[2] = {&BUILTINS[0], &BUILTINS[1]};
+    const pt_builtin_scene *measured[2] = {&BUILTINS[0], &BUILTINS[1]};
     char err[1024];
     for (int k = 0; k < 2; k++) {
         pt_scene sc;
@@ -221,7 +207,7 @@ static int render(const cli_options *opts, const char *program, const pt_scene *
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch11.exr", 256, 256, 16);
-    bdpt_flags f = {builtin_choice(), {INTEGRATOR_NAMES, NULL, INTEGRATOR_BDPT}, {HEURISTIC_NAMES, NULL, BDPT_POWER},
+    bdpt_flags f = {pt_builtin_scene_choice(BUILTINS, BUILTIN_COUNT, builtin_names, builtin_notes), {INTEGRATOR_NAMES, NULL, INTEGRATOR_BDPT}, {HEURISTIC_NAMES, NULL, BDPT_POWER},
                     NULL, NULL, false, -1, 32, 32768, 8.0f};
     const cli_flag extras[] = {
         {"--max-depth", CLI_INT, &f.max_depth, "N", "bounces counted at most (default 64)", 0, BDPT_MAX_DEPTH},

@@ -13,13 +13,7 @@
 #include "mpi_split.h"
 
 /* The built-in scenes (--builtin), each with the line --help shows. */
-typedef struct {
-    const char *name;
-    void (*build)(pt_scene *sc);
-    const char *description;
-} builtin_scene;
-
-static const builtin_scene BUILTINS[] = {
+static const pt_builtin_scene BUILTINS[] = {
     {"lamp", mlt_scene_build_lamp,
      "the ceiling light shut in a housing; light leaves only down a 2 cm channel (default)"},
     {"cornell", pt_scene_build_cornell_box, "the Cornell box"},
@@ -28,15 +22,7 @@ static const builtin_scene BUILTINS[] = {
 enum { BUILTIN_COUNT = sizeof BUILTINS / sizeof BUILTINS[0] };
 
 /* The --builtin choice, its names and notes taken from the table. */
-static cli_choice builtin_choice(void)
-{
-    static const char *names[BUILTIN_COUNT + 1], *notes[BUILTIN_COUNT];
-    for (int k = 0; k < BUILTIN_COUNT; k++) {
-        names[k] = BUILTINS[k].name;
-        notes[k] = BUILTINS[k].description;
-    }
-    return (cli_choice){names, notes, 0};
-}
+static const char *builtin_names[BUILTIN_COUNT + 1], *builtin_notes[BUILTIN_COUNT];
 
 /* In mlt_start's order. */
 static const char *const START_NAMES[] = {"bootstrap", "fixed", NULL};
@@ -169,7 +155,7 @@ static int render(cli_options *opts, const char *program, const mlt_flags *f, co
 int main(int argc, char **argv)
 {
     cli_options opts = cli_defaults("build/out/ch12.exr", 256, 256, 64);
-    mlt_flags f = {builtin_choice(), {START_NAMES, NULL, MLT_START_BOOTSTRAP}, NULL, 0.3f, 100000, 256, 64, false, false};
+    mlt_flags f = {pt_builtin_scene_choice(BUILTINS, BUILTIN_COUNT, builtin_names, builtin_notes), {START_NAMES, NULL, MLT_START_BOOTSTRAP}, NULL, 0.3f, 100000, 256, 64, false, false};
     const cli_flag extras[] = {
         {"--p-large", CLI_FLOAT, &f.p_large, "P", "probability of a large step (all new numbers; default 0.3)", 0.0,
          1.0},

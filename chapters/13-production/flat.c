@@ -6,11 +6,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "13-production/bvh4.h"
+#include "13-production/wide_bvh.h"
 #include "memory.h"
 #include "timer.h"
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(BVH4_NO_SIMD)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(WIDE_BVH_NO_SIMD)
 #define FLAT_HAVE_X86 1
 #include <immintrin.h>
 
@@ -158,7 +158,7 @@ static ALWAYS_INLINE int block_closest_scalar(const flat_block *b, const ray *r,
 #if FLAT_HAVE_X86
 /* The lanes' nearest hits, compared: the nearest t, of equal t the lowest
  * triangle index -- what testing them one by one in order gives. */
-typedef flat_hits8 lane_hits;
+typedef hits8 lane_hits;
 
 static int nearest_lane(const lane_hits *h, int lanes, float t_max)
 {
@@ -470,7 +470,7 @@ typedef struct {
 #undef FLAT_NAME
 #endif
 
-int flat_closest_hit8_raw(const accel *a, const flat_rays8 *rays, int active, flat_hits8 *hits,
+int flat_closest_hit8_raw(const accel *a, const rays8 *rays, int active, hits8 *hits,
                           ray_counters *counters)
 {
     const flat *f = (const flat *)a;
@@ -488,7 +488,7 @@ int flat_closest_hit8_raw(const accel *a, const flat_rays8 *rays, int active, fl
 #endif
     for (int k = 0; k < FLAT_LANES; k++) {
         hit_record record;
-        if (((active >> k) & 1) && accel_closest_hit(a, flat_rays8_get(rays, k), &record, counters)) {
+        if (((active >> k) & 1) && accel_closest_hit(a, rays8_get(rays, k), &record, counters)) {
             hits->t[k] = record.t;
             hits->index[k] = record.shape_id;
             hits->b1[k] = record.u;
@@ -499,7 +499,7 @@ int flat_closest_hit8_raw(const accel *a, const flat_rays8 *rays, int active, fl
     return hit;
 }
 
-int flat_any_hit8_raw(const accel *a, const flat_rays8 *rays, int active, ray_counters *counters)
+int flat_any_hit8_raw(const accel *a, const rays8 *rays, int active, ray_counters *counters)
 {
     const flat *f = (const flat *)a;
     int hit = 0;
@@ -514,26 +514,26 @@ int flat_any_hit8_raw(const accel *a, const flat_rays8 *rays, int active, ray_co
 #endif
     for (int k = 0; k < FLAT_LANES; k++)
         if ((active >> k) & 1)
-            hit |= accel_any_hit(a, flat_rays8_get(rays, k), counters) << k;
+            hit |= accel_any_hit(a, rays8_get(rays, k), counters) << k;
     return hit;
 }
 
 /* The ray[] forms: the rays copied into lanes (the active ones; the
  * kernels read no other lane). */
-static void rays8_copy(flat_rays8 *out, const ray rays[FLAT_LANES], int active)
+static void rays8_copy(rays8 *out, const ray rays[FLAT_LANES], int active)
 {
     for (int k = 0; k < FLAT_LANES; k++)
         if ((active >> k) & 1)
-            flat_rays8_set(out, k, rays[k]);
+            rays8_set(out, k, rays[k]);
 }
 
 void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, hit_record hits[FLAT_LANES],
                        bool found[FLAT_LANES], ray_counters *counters)
 {
     const flat *f = (const flat *)a;
-    flat_rays8 lanes = {0};
+    rays8 lanes = {0};
     rays8_copy(&lanes, rays, active);
-    flat_hits8 h;
+    hits8 h;
     int hit = flat_closest_hit8_raw(a, &lanes, active, &h, counters);
     for (int k = 0; k < FLAT_LANES; k++) {
         if (!((active >> k) & 1))
@@ -547,7 +547,7 @@ void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, h
 void flat_any_hit8(const accel *a, const ray rays[FLAT_LANES], int active, bool found[FLAT_LANES],
                    ray_counters *counters)
 {
-    flat_rays8 lanes = {0};
+    rays8 lanes = {0};
     rays8_copy(&lanes, rays, active);
     int hit = flat_any_hit8_raw(a, &lanes, active, counters);
     for (int k = 0; k < FLAT_LANES; k++)
@@ -575,7 +575,7 @@ static bool flat_use_triangle_test(accel *a, triangle_test test)
         flat_block *b = &f->blocks[i / FLAT_LANES];
         int k = i % FLAT_LANES;
         float p0[3], v1[3], v2[3];
-        bvh4_lane_coordinates(i < a->set->count ? &a->set->triangles[i] : NULL, test, p0, v1, v2);
+        wide_bvh_lane_coordinates(i < a->set->count ? &a->set->triangles[i] : NULL, test, p0, v1, v2);
         /* N = (P1 - P0) x (P2 - P0), watertight_plane_t()'s operations (for
          * the watertight test; with Moller-Trumbore's edges it is unused) */
         float e1x = v1[0] - p0[0], e1y = v1[1] - p0[1], e1z = v1[2] - p0[2];

@@ -10,7 +10,7 @@
  * with the arithmetic of chapter 06's 4-wide leaves made 8 wide.
  *
  * The triangles are kept in blocks of eight, structure of arrays (as
- * bvh4_packet, twice as wide). Four kernels give the same answers: AVX
+ * wide_bvh_packet, twice as wide). Four kernels give the same answers: AVX
  * where the processor has it (asked at run time, so one binary runs
  * everywhere; compiled once more for AVX-512's 32 registers, where it has
  * those), SSE (each block as two halves), and a plain C loop. Each
@@ -38,14 +38,16 @@
 #include <stdint.h>
 
 #include "03-aabb-slabs/accel.h"
+#include "13-production/rays8.h"
 
 /* Eight triangles by coordinate, then by lane, and which triangle each
  * lane is (-1: an empty lane). The lanes hold what the triangle
- * test reads, as bvh4_packet's do (bvh4.h, bvh4_lane_coordinates()): the
+ * test reads, as wide_bvh_packet's do (wide_bvh.h, wide_bvh_lane_coordinates()): the
  * corners P0, P1, P2 (empty and degenerate lanes NaN, which no ray hits),
  * or P0, E1 = P1 - P0 and E2 = P2 - P0 (empty lanes all zeros, whose
  * determinant 0 never hits). 416 bytes. */
 enum { FLAT_LANES = 8 };
+_Static_assert((int)FLAT_LANES == (int)RAYS8_LANES, "the eight-ray kernels take a bundle's lanes");
 
 typedef struct {
     _Alignas(32) float p0[3][FLAT_LANES];
@@ -107,7 +109,7 @@ bool flat_is(const accel *a);
 
 /* Eight rays at once, the other way round: each lane a ray, each step one
  * triangle for all eight (a path tracer that follows eight paths at once,
- * chapter 09's path_tracer_wide.c). Lane k, if bit k of `active` is set,
+ * this chapter's path_tracer_wide.c). Lane k, if bit k of `active` is set,
  * gets what accel_closest_hit() gives rays[k] alone, bit for bit (found[k],
  * hits[k]); other lanes are left as they were. With the AVX kernel, eight
  * rays per instruction, and a group (flat_group) whose box none of the
@@ -124,49 +126,14 @@ void flat_closest_hit8(const accel *a, const ray rays[FLAT_LANES], int active, h
 void flat_any_hit8(const accel *a, const ray rays[FLAT_LANES], int active, bool found[FLAT_LANES],
                    ray_counters *counters);
 
-/* The eight rays as the kernels hold them: by coordinate, then by lane
- * (structure of arrays). A caller that keeps its rays this way hands them
- * over as they are (path_tracer_wide.c); the two functions above copy
- * theirs in. */
-typedef struct {
-    _Alignas(32) float origin[3][FLAT_LANES], direction[3][FLAT_LANES];
-    float t_min[FLAT_LANES], t_max[FLAT_LANES];
-} flat_rays8;
-
-static inline void flat_rays8_set(flat_rays8 *rays, int k, ray r)
-{
-    const float o[3] = {r.origin.x, r.origin.y, r.origin.z}, d[3] = {r.direction.x, r.direction.y, r.direction.z};
-    for (int c = 0; c < 3; c++) {
-        rays->origin[c][k] = o[c];
-        rays->direction[c][k] = d[c];
-    }
-    rays->t_min[k] = r.t_min;
-    rays->t_max[k] = r.t_max;
-}
-
-static inline ray flat_rays8_get(const flat_rays8 *rays, int k)
-{
-    ray r = ray_make(vec3_make(rays->origin[0][k], rays->origin[1][k], rays->origin[2][k]),
-                     vec3_make(rays->direction[0][k], rays->direction[1][k], rays->direction[2][k]));
-    r.t_min = rays->t_min[k];
-    r.t_max = rays->t_max[k];
-    return r;
-}
-
-/* flat_closest_hit8() stopped before the hit records are made: lane k's
- * nearest t, the index of its triangle in the set and the barycentrics
- * b1, b2, what triangle_set_fill_hit() makes lane k's record from; the
- * bits of the lanes that hit. For a caller that makes its own records,
- * eight at a time (path_tracer_wide.c). The other lanes' entries mean
- * nothing. */
-typedef struct {
-    _Alignas(32) float t[FLAT_LANES];
-    int32_t index[FLAT_LANES];
-    float b1[FLAT_LANES], b2[FLAT_LANES];
-} flat_hits8;
-int flat_closest_hit8_raw(const accel *a, const flat_rays8 *rays, int active, flat_hits8 *hits,
+/* flat_closest_hit8() with the eight rays as the kernels hold them
+ * (rays8.h; a caller that keeps its rays this way hands them over as they
+ * are, path_tracer_wide.c; the two functions above copy theirs in), stopped
+ * before the hit records are made: the bits of the lanes that hit, and
+ * their nearest hits in `hits`. */
+int flat_closest_hit8_raw(const accel *a, const rays8 *rays, int active, hits8 *hits,
                           ray_counters *counters);
 /* flat_any_hit8() as bits: bit k set if rays lane k is blocked. */
-int flat_any_hit8_raw(const accel *a, const flat_rays8 *rays, int active, ray_counters *counters);
+int flat_any_hit8_raw(const accel *a, const rays8 *rays, int active, ray_counters *counters);
 
 #endif

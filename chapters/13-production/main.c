@@ -6,7 +6,7 @@
 
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
-#include "13-production/bvh4.h"
+#include "13-production/wide_bvh.h"
 #include "13-production/flat.h"
 #include "13-production/path_tracer_wide.h"
 #include "13-production/speed.h"
@@ -64,8 +64,8 @@ static void report_structures(const pt_scene *sc, bool walls_asked)
     else if (flat_is(all))
         printf("13-production: %d triangles: the flat set (at most 64: every triangle tested, eight rays per AVX "
                "instruction)\n", sc->triangles.count);
-    else if (bvh4_is(all))
-        printf("13-production: %d triangles: the " BVH4_NAME " (more than the 64 the flat set holds), each lane's ray "
+    else if (wide_bvh_is(all))
+        printf("13-production: %d triangles: the " WIDE_BVH_NAME " (more than the 64 the flat set holds), each lane's ray "
                "walking it alone\n", sc->triangles.count);
     if (!walls_asked)
         printf("13-production: walls off (--walls off)\n");
@@ -199,7 +199,7 @@ int main(int argc, char **argv)
     cli_spec spec = {"13-production",
                      "What production renderers do: chapter 09's path tracer, eight paths at a time, on\n"
                      "any scene chapter 09 renders (meshes, spheres, every material, area and point lights,\n"
-                     "the environment): the flat set for at most 64 triangles, the " BVH4_NAME " above, shadow\n"
+                     "the environment): the flat set for at most 64 triangles, the " WIDE_BVH_NAME " above, shadow\n"
                      "rays that skip a room's walls where it has them; it says which. --bench measures each step.",
                      extras, sizeof extras / sizeof extras[0], "the path tree (every ray, hit, light sample and Russian roulette decision, one path at a time)"};
     cli_parse_or_exit(argc, argv, &spec, &opts);

@@ -72,7 +72,9 @@
 #define PRODUCTION_INTEGRATOR ((pt_integrator)PT_MIS)
 path_tracer production_path_tracer_defaults(const pt_scene *scene);
 
-/* Can pt render eight paths at a time? If not, why (into why, if not NULL). */
+/* Can pt render eight paths at a time? If not, why (into why, if not NULL):
+ * --explain, triangles in no structure, or a material of a kind the lanes
+ * do not render (named; they take diffuse, glossy, mirror and glass). */
 bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_size);
 
 /* What the renderer traces the scene's triangles with: every triangle

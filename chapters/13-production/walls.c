@@ -7,7 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "13-production/bvh4.h"
+#include "13-production/wide_bvh.h"
+#include "13-production/flat.h"
 #include "memory.h"
 
 #if defined(__SSE2__)
@@ -53,7 +54,7 @@ accel *production_accel_build(const triangle_set *set)
     /* Four boxes per node tested at once. Inside a room every ray meets the
      * boxes of the walls; a binary tree visits them one level at a time, a
      * 4-wide one in one or two nodes. */
-    return bvh4_build(set, BVH_SPLIT_SAH);
+    return wide_bvh_build(set, BVH_SPLIT_SAH);
 }
 
 /* ---- walls cast no shadows ----------------------------------------------------
@@ -313,7 +314,7 @@ bool walls_segment_inside(const accel *a, const ray *r) { return walls_is(a) && 
 /* segment_inside_walls() for eight rays, one per lane: the same float
  * operations in the same order as its SSE version, so each lane gets the
  * very answer a ray alone gets. */
-__attribute__((target("avx"))) static int segments8_inside_walls_avx(const walls_accel *sc, const flat_rays8 *rays)
+__attribute__((target("avx"))) static int segments8_inside_walls_avx(const walls_accel *sc, const rays8 *rays)
 {
     const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
     const __m256 t_min = _mm256_load_ps(rays->t_min), t_max = _mm256_load_ps(rays->t_max);
@@ -353,7 +354,7 @@ __attribute__((target("avx"))) static int segments8_inside_walls_avx(const walls
 }
 #endif
 
-int walls_segments8_inside(const accel *a, const flat_rays8 *rays, int active)
+int walls_segments8_inside(const accel *a, const rays8 *rays, int active)
 {
     if (!walls_is(a))
         return 0;
@@ -365,9 +366,9 @@ int walls_segments8_inside(const accel *a, const flat_rays8 *rays, int active)
         return segments8_inside_walls_avx(sc, rays) & active;
 #endif
     int inside = 0;
-    for (int k = 0; k < FLAT_LANES; k++)
+    for (int k = 0; k < RAYS8_LANES; k++)
         if ((active >> k) & 1) {
-            ray r = flat_rays8_get(rays, k);
+            ray r = rays8_get(rays, k);
             inside |= segment_inside_walls(sc, &r) << k;
         }
     return inside;

@@ -29,7 +29,8 @@
 #include <stdbool.h>
 
 #include "09-path-tracing/scene_pt.h"
-#include "13-production/flat.h"
+#include "03-aabb-slabs/accel.h"
+#include "13-production/rays8.h"
 
 /* The flat set for at most 64 triangles, else the 8-wide BVH (binned SAH). */
 accel *production_accel_build(const triangle_set *set);
@@ -67,9 +68,9 @@ const accel *walls_occluders(const accel *a);
  * plane, by more than the rounding of the test? False for an infinite
  * t_max, when there are no walls, and when a is not a walls_accel. */
 bool walls_segment_inside(const accel *a, const ray *r);
-/* The same for the lanes of `active` of eight rays (flat.h's lanes): bit k
+/* The same for the lanes of `active` of eight rays (rays8.h): bit k
  * is walls_segment_inside() of lane k, eight lanes per AVX instruction
  * where the processor has AVX. */
-int walls_segments8_inside(const accel *a, const flat_rays8 *rays, int active);
+int walls_segments8_inside(const accel *a, const rays8 *rays, int active);
 
 #endif

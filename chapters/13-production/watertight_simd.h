@@ -1,6 +1,6 @@
 /* watertight_simd.h -- parts of chapter 01's watertight triangle test
  * (shapes.h) written once for every vector width, so that the kernels of
- * bvh4_traverse.c and flat.c (SSE, AVX, AVX-512 registers) cannot drift
+ * wide_bvh_traverse.c and flat.c (SSE, AVX, AVX-512 registers) cannot drift
  * apart from the scalar test or from each other: V is the vector type, P
  * the intrinsics' prefix (_mm, _mm256). Included after <immintrin.h>. */
 #ifndef WATERTIGHT_SIMD_H

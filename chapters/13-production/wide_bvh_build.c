@@ -1,7 +1,7 @@
-/* bvh4_build.c -- a 4-wide BVH by collapsing the binary one: every 4-wide
+/* wide_bvh_build.c -- a 4-wide BVH by collapsing the binary one: every 4-wide
  * node is a binary node with some of its descendants pulled up, and every
  * leaf's triangles are copied into packets of four. */
-#include "13-production/bvh4.h"
+#include "13-production/wide_bvh.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,19 +37,19 @@
  * meets only the one it leaves through. On the benchmark's boxes with a
  * mesh in them, packets per ray fell from 2.5 to 1.6 (2.9 to 1.5 with the
  * glass ball) and the tree of the tori field stayed the same. */
-static const bvh_sah_params BVH4_SAH = {1.0f, 4, 8, 0.1f, 0.25f};
+static const bvh_sah_params WIDE_BVH_SAH = {1.0f, 4, 8, 0.1f, 0.25f};
 
 typedef struct {
     const bvh *binary;
     const triangle_set *set;
-    bvh4_node *nodes;
+    wide_bvh_node *nodes;
     int node_count, node_capacity;
-    bvh4_packet *packets;
+    wide_bvh_packet *packets;
     int packet_count, packet_capacity;
     int leaves, max_depth;
 } collapser;
 
-static void set_child_box(bvh4_node *node, int k, aabb box)
+static void set_child_box(wide_bvh_node *node, int k, aabb box)
 {
     node->bounds[0][k] = box.lo.x;
     node->bounds[1][k] = box.lo.y;
@@ -60,10 +60,10 @@ static void set_child_box(bvh4_node *node, int k, aabb box)
 }
 
 /* Nodes start on a cache line (aligned_alloc wants a multiple of it). */
-static bvh4_node *nodes_allocate(int count)
+static wide_bvh_node *nodes_allocate(int count)
 {
-    size_t bytes = ((size_t)count * sizeof(bvh4_node) + 63) / 64 * 64;
-    bvh4_node *nodes = aligned_alloc(64, bytes);
+    size_t bytes = ((size_t)count * sizeof(wide_bvh_node) + 63) / 64 * 64;
+    wide_bvh_node *nodes = aligned_alloc(64, bytes);
     if (nodes == NULL) {
         fprintf(stderr, "out of memory (asked for %zu bytes)\n", bytes);
         exit(1);
@@ -76,31 +76,31 @@ static int new_node(collapser *c)
 {
     if (c->node_count == c->node_capacity) {
         int capacity = c->node_capacity * 2;
-        bvh4_node *grown = nodes_allocate(capacity);
-        memcpy(grown, c->nodes, (size_t)c->node_count * sizeof(bvh4_node));
+        wide_bvh_node *grown = nodes_allocate(capacity);
+        memcpy(grown, c->nodes, (size_t)c->node_count * sizeof(wide_bvh_node));
         free(c->nodes);
         c->nodes = grown;
         c->node_capacity = capacity;
     }
-    bvh4_node *node = &c->nodes[c->node_count];
-    for (int k = 0; k < BVH4_WIDTH; k++) {
+    wide_bvh_node *node = &c->nodes[c->node_count];
+    for (int k = 0; k < WIDE_BVH_WIDTH; k++) {
         set_child_box(node, k, (aabb){vec3_make(INFINITY, INFINITY, INFINITY), vec3_make(-INFINITY, -INFINITY, -INFINITY)});
-        node->child[k] = BVH4_EMPTY;
+        node->child[k] = WIDE_BVH_EMPTY;
     }
     return c->node_count++;
 }
 
 /* Copy triangles [first, first + count) of the binary tree's leaf order into
- * new packets; returns the leaf's reference, or, for more than BVH4_LEAF_MAX
+ * new packets; returns the leaf's reference, or, for more than WIDE_BVH_LEAF_MAX
  * triangles (only ever many coincident triangles), a node over up to
- * BVH4_WIDTH smaller leaves with the same box. */
+ * WIDE_BVH_WIDTH smaller leaves with the same box. */
 static uint32_t emit_leaf(collapser *c, int first, int count, aabb box, int depth)
 {
     if (depth > c->max_depth)
         c->max_depth = depth;
-    if (count > BVH4_LEAF_MAX) {
-        int n = new_node(c), part = (count + BVH4_WIDTH - 1) / BVH4_WIDTH;
-        for (int k = 0; k < BVH4_WIDTH && k * part < count; k++) {
+    if (count > WIDE_BVH_LEAF_MAX) {
+        int n = new_node(c), part = (count + WIDE_BVH_WIDTH - 1) / WIDE_BVH_WIDTH;
+        for (int k = 0; k < WIDE_BVH_WIDTH && k * part < count; k++) {
             int size = count - k * part < part ? count - k * part : part;
             uint32_t ref = emit_leaf(c, first + k * part, size, box, depth + 1);
             set_child_box(&c->nodes[n], k, box);
@@ -110,8 +110,8 @@ static uint32_t emit_leaf(collapser *c, int first, int count, aabb box, int dept
     }
     int packets = (count + 3) / 4;
     int p = c->packet_count;
-    if (p + packets >= (1 << BVH4_PACKET_SHIFT)) {
-        fprintf(stderr, "bvh4: more than %d packets of triangles\n", 1 << BVH4_PACKET_SHIFT);
+    if (p + packets >= (1 << WIDE_BVH_PACKET_SHIFT)) {
+        fprintf(stderr, "wide BVH: more than %d packets of triangles\n", 1 << WIDE_BVH_PACKET_SHIFT);
         exit(1);
     }
     c->packets = memory_grow(c->packets, &c->packet_capacity, p + packets, sizeof *c->packets);
@@ -119,17 +119,17 @@ static uint32_t emit_leaf(collapser *c, int first, int count, aabb box, int dept
     memset(&c->packets[p], 0, (size_t)packets * sizeof *c->packets);
     for (int i = 0; i < 4 * packets; i++) {
         int lane = i % 4;
-        bvh4_packet *packet = &c->packets[p + i / 4];
+        wide_bvh_packet *packet = &c->packets[p + i / 4];
         if (i >= count) {
             packet->index[lane] = -1;
             continue;
         }
         /* the triangle's index now; its coordinates once the packets are
-         * in place (bvh4_packets_fill) */
+         * in place (wide_bvh_packets_fill) */
         packet->index[lane] = c->binary->triangle_index[first + i];
     }
     c->leaves++;
-    return BVH4_LEAF | (uint32_t)count << BVH4_PACKET_SHIFT | (uint32_t)p;
+    return WIDE_BVH_LEAF | (uint32_t)count << WIDE_BVH_PACKET_SHIFT | (uint32_t)p;
 }
 
 /* The finished arrays, in memory the kernel may map with 2 MB pages. With
@@ -162,7 +162,7 @@ static void *huge_copy(const void *data, size_t bytes)
 
 /* Fill node n, already allocated, as the 4-wide node standing for binary
  * interior node `binary_node`: start from its two children and, while there
- * are fewer than BVH4_WIDTH, replace the interior one with the largest
+ * are fewer than WIDE_BVH_WIDTH, replace the interior one with the largest
  * surface area (the one a ray is most likely to enter) by its two children. Order
  * is kept: a child's two children take its place, side by side. The nodes
  * of its interior children are allocated together, before any of their
@@ -173,9 +173,9 @@ static void collapse_interior(collapser *c, int binary_node, int n, int depth)
     if (depth > c->max_depth)
         c->max_depth = depth;
     const bvh_node *nodes = c->binary->nodes;
-    int kids[BVH4_WIDTH] = {nodes[binary_node].first, nodes[binary_node].first + 1};
+    int kids[WIDE_BVH_WIDTH] = {nodes[binary_node].first, nodes[binary_node].first + 1};
     int count = 2;
-    while (count < BVH4_WIDTH) {
+    while (count < WIDE_BVH_WIDTH) {
         int best = -1;
         double best_area = -1.0;
         for (int k = 0; k < count; k++) {
@@ -197,7 +197,7 @@ static void collapse_interior(collapser *c, int binary_node, int n, int depth)
         kids[best + 1] = first + 1;
         count++;
     }
-    int kid_node[BVH4_WIDTH];
+    int kid_node[WIDE_BVH_WIDTH];
     for (int k = 0; k < count; k++)
         kid_node[k] = bvh_node_is_leaf(&nodes[kids[k]]) ? -1 : new_node(c);
     for (int k = 0; k < count; k++) {
@@ -217,7 +217,7 @@ static void collapse_interior(collapser *c, int binary_node, int n, int depth)
 
 /* ---- the lanes' coordinates ------------------------------------------------------ */
 
-bool bvh4_lane_coordinates(const triangle *tri, triangle_test test, float p0[3], float v1[3], float v2[3])
+bool wide_bvh_lane_coordinates(const triangle *tri, triangle_test test, float p0[3], float v1[3], float v2[3])
 {
     if (test == TRIANGLE_TEST_MOLLER_TRUMBORE) {
         if (tri == NULL) {
@@ -246,52 +246,52 @@ bool bvh4_lane_coordinates(const triangle *tri, triangle_test test, float p0[3],
     return true;
 }
 
-void bvh4_packet_set_lane(bvh4_packet *packet, int k, const triangle *tri, int index, triangle_test test)
+void wide_bvh_packet_set_lane(wide_bvh_packet *packet, int k, const triangle *tri, int index, triangle_test test)
 {
     float p0[3], v1[3], v2[3]; /* P0 and the corners P1, P2 or the edges E1, E2 */
-    bool exact = bvh4_lane_coordinates(tri, test, p0, v1, v2);
+    bool exact = wide_bvh_lane_coordinates(tri, test, p0, v1, v2);
     for (int axis = 0; axis < 3; axis++) {
         packet->p0[axis][k] = p0[axis];
-        packet->p1[axis][k] = v1[axis]; /* p1 and e1 are the same floats (bvh4.h) */
+        packet->p1[axis][k] = v1[axis]; /* p1 and e1 are the same floats (wide_bvh.h) */
         packet->p2[axis][k] = v2[axis];
     }
-    packet->index[k] = index < 0 ? -1 : index | (exact ? BVH4_LANE_EXACT : 0);
+    packet->index[k] = index < 0 ? -1 : index | (exact ? WIDE_BVH_LANE_EXACT : 0);
 }
 
-bool bvh4_use_triangle_test(accel *a, triangle_test test)
+bool wide_bvh_use_triangle_test(accel *a, triangle_test test)
 {
-    bvh4 *b = (bvh4 *)a;
+    wide_bvh *b = (wide_bvh *)a;
     a->triangle_test = test;
     for (int i = 0; i < 4 * b->packet_count; i++) {
-        bvh4_packet *packet = &b->packets[i / 4];
-        int index = bvh4_lane_triangle(packet->index[i % 4]);
-        bvh4_packet_set_lane(packet, i % 4, index >= 0 ? &a->set->triangles[index] : NULL, index, test);
+        wide_bvh_packet *packet = &b->packets[i / 4];
+        int index = wide_bvh_lane_triangle(packet->index[i % 4]);
+        wide_bvh_packet_set_lane(packet, i % 4, index >= 0 ? &a->set->triangles[index] : NULL, index, test);
     }
     return true;
 }
 
-accel *bvh4_build(const triangle_set *set, bvh_split split)
+accel *wide_bvh_build(const triangle_set *set, bvh_split split)
 {
-    return bvh4_build_with_top(set, split, BVH4_SAH.top_area_fraction);
+    return wide_bvh_build_with_top(set, split, WIDE_BVH_SAH.top_area_fraction);
 }
 
-accel *bvh4_build_with_top(const triangle_set *set, bvh_split split, float top_area_fraction)
+accel *wide_bvh_build_with_top(const triangle_set *set, bvh_split split, float top_area_fraction)
 {
     double start = timer_seconds();
-    bvh_sah_params sah = BVH4_SAH;
+    bvh_sah_params sah = WIDE_BVH_SAH;
     sah.top_area_fraction = top_area_fraction;
     accel *binary_accel = bvh_build_with(set, split, &sah);
     const bvh *binary = (const bvh *)binary_accel;
 
-    bvh4 *b = memory_allocate(1, sizeof *b);
-    b->base.ops = bvh4_default_ops();
+    wide_bvh *b = memory_allocate(1, sizeof *b);
+    b->base.ops = wide_bvh_default_ops();
     b->base.set = set;
-    b->kernel = BVH4_HAVE_SSE ? BVH4_KERNEL_SSE : BVH4_KERNEL_SCALAR;
+    b->kernel = WIDE_BVH_HAVE_SSE ? WIDE_BVH_KERNEL_SSE : WIDE_BVH_KERNEL_SCALAR;
     b->triangle_count = set->count;
 
     collapser c = {binary, set, NULL, 0, 0, NULL, 0, 0, 0, 0};
-    if (set->count >= BVH4_LANE_EXACT) {
-        fprintf(stderr, "bvh4: more than %d triangles\n", BVH4_LANE_EXACT - 1);
+    if (set->count >= WIDE_BVH_LANE_EXACT) {
+        fprintf(stderr, "wide BVH: more than %d triangles\n", WIDE_BVH_LANE_EXACT - 1);
         exit(1);
     }
     if (binary->node_count > 0) {
@@ -316,25 +316,25 @@ accel *bvh4_build_with_top(const triangle_set *set, bvh_split split, float top_a
         }
     }
     for (int n = 0; n < c.node_count; n++) {
-        bvh4_node *node = &c.nodes[n];
+        wide_bvh_node *node = &c.nodes[n];
         node->children = 0;
-        for (int k = 0; k < BVH4_WIDTH; k++)
-            node->children += node->child[k] != BVH4_EMPTY;
+        for (int k = 0; k < WIDE_BVH_WIDTH; k++)
+            node->children += node->child[k] != WIDE_BVH_EMPTY;
     }
     b->node_count = c.node_count;
     b->packet_count = c.packet_count;
-    b->nodes = c.node_count > 0 ? huge_copy(c.nodes, (size_t)c.node_count * sizeof(bvh4_node)) : NULL;
-    b->packets = c.packet_count > 0 ? huge_copy(c.packets, (size_t)c.packet_count * sizeof(bvh4_packet)) : NULL;
+    b->nodes = c.node_count > 0 ? huge_copy(c.nodes, (size_t)c.node_count * sizeof(wide_bvh_node)) : NULL;
+    b->packets = c.packet_count > 0 ? huge_copy(c.packets, (size_t)c.packet_count * sizeof(wide_bvh_packet)) : NULL;
     free(c.nodes);
     free(c.packets);
     accel_destroy(binary_accel);
-    bvh4_use_triangle_test(&b->base, TRIANGLE_TEST_WATERTIGHT); /* the lanes' coordinates */
-    if (bvh4_kernel_runs(BVH4_KERNEL_AVX))
-        bvh4_set_kernel(&b->base, BVH4_KERNEL_AVX);
+    wide_bvh_use_triangle_test(&b->base, TRIANGLE_TEST_WATERTIGHT); /* the lanes' coordinates */
+    if (wide_bvh_kernel_runs(WIDE_BVH_KERNEL_AVX))
+        wide_bvh_set_kernel(&b->base, WIDE_BVH_KERNEL_AVX);
 
-    b->base.stats.name = split == BVH_SPLIT_SAH ? "bvh4 sah" : "bvh4 median";
-    b->base.stats.bytes = sizeof *b + (size_t)b->node_count * sizeof(bvh4_node) +
-                          (size_t)b->packet_count * sizeof(bvh4_packet);
+    b->base.stats.name = split == BVH_SPLIT_SAH ? "wide bvh sah" : "wide bvh median";
+    b->base.stats.bytes = sizeof *b + (size_t)b->node_count * sizeof(wide_bvh_node) +
+                          (size_t)b->packet_count * sizeof(wide_bvh_packet);
     b->base.stats.nodes = b->node_count;
     b->base.stats.leaves = c.leaves;
     b->base.stats.max_depth = c.max_depth;

@@ -1,0 +1,646 @@
+/* wide_bvh_traverse.c -- a ray through the wide BVH: at each node, slab-test
+ * the children's boxes at once (eight, or four: WIDE_BVH_WIDTH), go on with
+ * the nearest child hit and put the others on the stack, farthest deepest; in
+ * a leaf, test its triangles four at a time, with the watertight test (or
+ * Moller-Trumbore, when asked). The tests themselves are
+ * wide_bvh_kernels.h's, each with SSE intrinsics and as a plain C loop
+ * (the same answers; test_ch13 runs both). */
+#include <stddef.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "13-production/wide_bvh.h"
+#include "13-production/wide_bvh_kernels.h"
+
+/* ---- the node's and the leaf's tests on their own (wide_bvh.h; for the tests) ---- */
+
+int wide_bvh_slab_test(const wide_bvh_node *node, ray r, float t_min, float t_max, float t_enter[WIDE_BVH_WIDTH], wide_bvh_kernel kernel)
+{
+    wide_bvh_ray r4 = wide_bvh_ray_make(&r);
+#if WIDE_BVH_HAVE_AVX
+    if (kernel == WIDE_BVH_KERNEL_AVX)
+        return slab_test_avx_alone(node, &r4, t_min, t_max, t_enter);
+#endif
+#if WIDE_BVH_HAVE_SSE
+    if (kernel == WIDE_BVH_KERNEL_SSE)
+        return slab_test4_sse(node, &r4, t_min, t_max, t_enter);
+#endif
+    (void)kernel;
+    return slab_test4_scalar(node, &r4, t_min, t_max, t_enter);
+}
+
+int wide_bvh_triangle_test(const wide_bvh_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
+                       wide_bvh_kernel kernel, triangle_test test)
+{
+    wide_bvh_ray r4 = wide_bvh_ray_make(&r);
+    float lane_t[4], lane_b1[4], lane_b2[4];
+    int mask = triangle_test4(packet, &r4, &r, t_max, lane_t, lane_b1, lane_b2, kernel != WIDE_BVH_KERNEL_SCALAR,
+                              test == TRIANGLE_TEST_WATERTIGHT);
+    for (int k = 0; k < 4; k++) /* lanes not hit keep what they had */
+        if (mask >> k & 1) {
+            t[k] = lane_t[k];
+            b1[k] = lane_b1[k];
+            b2[k] = lane_b2[k];
+        }
+    return mask;
+}
+
+/* ---- traversal ------------------------------------------------------------------- */
+
+
+/* What a traversal found: the closest triangle so far (4 packet + lane). */
+typedef struct {
+    int lane; /* -1: none */
+    float t, b1, b2;
+} wide_bvh_found;
+
+typedef struct {
+    uint32_t ref;
+    float t_enter;
+} wide_bvh_entry;
+
+static inline int lowest_bit(unsigned mask) { return __builtin_ctz(mask); }
+
+/* Ask for a child's memory before it is needed: a node's cache lines,
+ * or a leaf's packets (160 bytes each). The children hit at a node are all
+ * fetched at once, in parallel, instead of one after the other as the
+ * traversal reaches them.
+ *
+ * Always inlined, and that matters: GCC counts __builtin_prefetch as having
+ * no effect, so it takes a function made of prefetches for a pure one, and
+ * a call to a pure function whose result is unused for dead code. Where
+ * this function was not inlined early, as in the closest-hit traversal, the
+ * call and every prefetch in it silently vanished (objdump showed none). */
+static ALWAYS_INLINE void prefetch_child(const wide_bvh *b, uint32_t ref)
+{
+#if defined(__GNUC__)
+    if (!wide_bvh_is_leaf(ref)) {
+        const char *p = (const char *)&b->nodes[ref];
+        for (size_t line = 0; line < sizeof(wide_bvh_node); line += 64)
+            __builtin_prefetch(p + line);
+        return;
+    }
+    const char *p = (const char *)&b->packets[wide_bvh_leaf_first_packet(ref)];
+    __builtin_prefetch(p);
+    __builtin_prefetch(p + 64);
+    __builtin_prefetch(p + 128);
+    if (wide_bvh_leaf_triangles(ref) > 4) {
+        __builtin_prefetch(p + 192);
+        __builtin_prefetch(p + 256);
+    }
+#else
+    (void)b;
+    (void)ref;
+#endif
+}
+
+/* A hit will be turned into a hit record from the set's material and unit
+ * normal of the triangle (and the mesh's face, for vertex normals) and,
+ * unless the packet gives the vertices back exactly (WIDE_BVH_LANE_EXACT), the
+ * set's copy of the triangle: ask for them as soon as a hit is found, so
+ * they are in the cache by the end of the traversal (usually the first hit
+ * found is the closest). */
+static ALWAYS_INLINE void prefetch_hit(const wide_bvh *b, int32_t lane_index)
+{
+#if defined(__GNUC__)
+    int index = wide_bvh_lane_triangle(lane_index);
+    if (!(lane_index & WIDE_BVH_LANE_EXACT))
+        __builtin_prefetch(&b->base.set->triangles[index]);
+    const triangle_set *set = b->base.set;
+    __builtin_prefetch(&set->surfaces[index]);
+    if (set->source != NULL && set->vertex_normals)
+        __builtin_prefetch(&set->source->faces[index]);
+#else
+    (void)b;
+    (void)lane_index;
+#endif
+}
+
+/* The leaf's packets against (t_min, found->t). The lanes hit in a packet
+ * all lie before found->t; the closest of them, the first among equals,
+ * wins: what testing the triangles one by one in lane order gives. */
+static ALWAYS_INLINE bool test_leaf4(const wide_bvh *b, uint32_t ref, const wide_bvh_ray *r4, const ray *r, wide_bvh_found *found,
+                              bool stop_at_first, bool sse, bool watertight, uint64_t *primitive_tests)
+{
+    int count = wide_bvh_leaf_triangles(ref), first = wide_bvh_leaf_first_packet(ref);
+    for (int p = 0; p * 4 < count; p++) {
+        float t[4], b1[4], b2[4];
+        const wide_bvh_packet *packet = &b->packets[first + p];
+        int mask = triangle_test4(packet, r4, r, found->t, t, b1, b2, sse, watertight);
+        *primitive_tests += (uint64_t)(count - 4 * p < 4 ? count - 4 * p : 4);
+        if (mask == 0)
+            continue;
+        while (mask != 0) {
+            int k = lowest_bit((unsigned)mask);
+            mask &= mask - 1;
+            if (t[k] < found->t)
+                *found = (wide_bvh_found){4 * (first + p) + k, t[k], b1[k], b2[k]};
+        }
+        if (stop_at_first)
+            return true;
+        prefetch_hit(b, packet->index[found->lane % 4]);
+    }
+    return false;
+}
+
+/* One ray's walk through the tree, as data: what the loop of a traversal
+ * keeps between one node and the next. Kept in a struct, rather than in
+ * local variables, so that several rays can take turns (the stream below);
+ * for one ray alone the compiler keeps the scalars in registers all the
+ * same. */
+typedef struct {
+    wide_bvh_ray r4;
+    ray r;
+    wide_bvh_found found;
+    uint32_t current; /* the node or leaf to visit next */
+    int top;          /* entries on the stack */
+    uint64_t box_tests, primitive_tests;
+    wide_bvh_entry stack[WIDE_BVH_STACK_SIZE];
+} wide_bvh_traversal;
+
+/* Start at the root; false if there is no tree to walk. */
+static ALWAYS_INLINE bool traversal_begin(const wide_bvh *b, const ray *r, wide_bvh_traversal *w)
+{
+    w->r = *r;
+    w->r4 = wide_bvh_ray_make(r);
+    w->found = (wide_bvh_found){-1, r->t_max, 0.0f, 0.0f};
+    w->current = 0; /* the root */
+    w->top = 0;
+    w->box_tests = w->primitive_tests = 0;
+    return b->node_count > 0;
+}
+
+/* Visit w->current -- slab-test a node's children, or test a leaf's
+ * triangles -- and choose the next one to visit. Returns false when the
+ * walk is over: the stack is empty, or (any hit) a triangle was hit. */
+static ALWAYS_INLINE bool traversal_step(const wide_bvh *b, wide_bvh_traversal *w, bool stop_at_first, bool sse, bool avx,
+                                         bool watertight)
+{
+    if (!wide_bvh_is_leaf(w->current)) {
+        const wide_bvh_node *node = &b->nodes[w->current];
+        float t_enter[WIDE_BVH_WIDTH];
+        float cull = w->found.t * BVH_CULL_SLACK;
+        int mask;
+#if WIDE_BVH_HAVE_AVX
+        if (avx)
+            mask = slab_test_avx(node, &w->r4, w->r.t_min, cull, t_enter);
+        else
+#endif
+#if WIDE_BVH_HAVE_SSE
+        if (sse)
+            mask = slab_test4_sse(node, &w->r4, w->r.t_min, cull, t_enter);
+        else
+#endif
+            mask = slab_test4_scalar(node, &w->r4, w->r.t_min, cull, t_enter);
+        w->box_tests += node->children;
+        if (mask != 0 && stop_at_first) {
+            /* Any hit: every child hit may end the walk, whichever is
+             * first; no order to sort. Visit the nearest (the likeliest to
+             * block), push the others as they come. */
+            int k = lowest_bit((unsigned)mask);
+            mask &= mask - 1;
+            while (mask != 0) {
+                int j = lowest_bit((unsigned)mask);
+                mask &= mask - 1;
+                bool nearer = t_enter[j] < t_enter[k];
+                int pushed = nearer ? k : j;
+                k = nearer ? j : k;
+                prefetch_child(b, node->child[pushed]);
+                w->stack[w->top++] = (wide_bvh_entry){node->child[pushed], t_enter[pushed]};
+            }
+            w->current = node->child[k];
+            return true;
+        }
+        if (mask != 0) {
+            int k = lowest_bit((unsigned)mask);
+            mask &= mask - 1;
+            if (mask == 0) {
+                /* one child hit: no order to decide */
+                w->current = node->child[k];
+                return true;
+            }
+            int k2 = lowest_bit((unsigned)mask);
+            mask &= mask - 1;
+            if (mask == 0) {
+                /* two (the commonest case): one comparison orders them */
+                bool second_first = t_enter[k2] < t_enter[k];
+                int near = second_first ? k2 : k, far = second_first ? k : k2;
+                prefetch_child(b, node->child[far]);
+                w->stack[w->top++] = (wide_bvh_entry){node->child[far], t_enter[far]};
+                w->current = node->child[near];
+                return true;
+            }
+            mask |= 1 << k2;
+            /* Three or more: sort them by t_enter, nearest last
+             * (insertion sort), push all but the nearest, visit it. */
+            wide_bvh_entry hits[WIDE_BVH_WIDTH];
+            int n = 0;
+            hits[n++] = (wide_bvh_entry){node->child[k], t_enter[k]};
+            prefetch_child(b, node->child[k]);
+            while (mask != 0) {
+                k = lowest_bit((unsigned)mask);
+                mask &= mask - 1;
+                wide_bvh_entry e = {node->child[k], t_enter[k]};
+                prefetch_child(b, e.ref);
+                int j = n++;
+                while (j > 0 && hits[j - 1].t_enter < e.t_enter) {
+                    hits[j] = hits[j - 1];
+                    j--;
+                }
+                hits[j] = e;
+            }
+            for (int j = 0; j < n - 1; j++)
+                w->stack[w->top++] = hits[j];
+            w->current = hits[n - 1].ref;
+            return true;
+        }
+    } else if (test_leaf4(b, w->current, &w->r4, &w->r, &w->found, stop_at_first, sse, watertight,
+                          &w->primitive_tests)) {
+        return false;
+    }
+    /* Next from the stack, skipping entries that begin beyond the
+     * closest hit (their box test would fail now). */
+    float cull = w->found.t * BVH_CULL_SLACK;
+    while (w->top > 0 && w->stack[w->top - 1].t_enter > cull)
+        w->top--;
+    if (w->top == 0)
+        return false;
+    w->current = w->stack[--w->top].ref;
+    return true;
+}
+
+static ALWAYS_INLINE wide_bvh_found traverse4(const wide_bvh *b, const ray *r, bool stop_at_first, bool sse, bool avx,
+                                          bool watertight, ray_counters *counters)
+{
+    wide_bvh_traversal w;
+    if (traversal_begin(b, r, &w))
+        while (traversal_step(b, &w, stop_at_first, sse, avx, watertight))
+            ;
+    counters->box_tests += w.box_tests;
+    counters->primitive_tests += w.primitive_tests;
+    return w.found;
+}
+
+/* ---- the accel interface ------------------------------------------------------------- */
+
+static bool finish_closest(const wide_bvh *b, const wide_bvh_found *found, const ray *r, hit_record *record)
+{
+    if (found->lane < 0)
+        return false;
+    const wide_bvh_packet *p = &b->packets[found->lane / 4];
+    int k = found->lane % 4, index = wide_bvh_lane_triangle(p->index[k]);
+    if (!(p->index[k] & WIDE_BVH_LANE_EXACT)) {
+        triangle_set_fill_hit(b->base.set, index, *r, found->t, found->b1, found->b2, record);
+        return true;
+    }
+    /* the set's triangle, bit for bit, from the cache lines the test read */
+    vec3 p0 = vec3_make(p->p0[0][k], p->p0[1][k], p->p0[2][k]);
+    vec3 v1 = vec3_make(p->p1[0][k], p->p1[1][k], p->p1[2][k]), v2 = vec3_make(p->p2[0][k], p->p2[1][k], p->p2[2][k]);
+    triangle tri = {p0, v1, v2}; /* the watertight test's corners */
+    if (b->base.triangle_test == TRIANGLE_TEST_MOLLER_TRUMBORE)
+        tri = (triangle){p0, vec3_add(p0, v1), vec3_add(p0, v2)}; /* P0 + E1, P0 + E2 */
+    triangle_set_fill_hit_from(b->base.set, &tri, index, *r, found->t, found->b1, found->b2, record);
+    return true;
+}
+
+/* One walk per kernel and query, each with the kernel and the query
+ * constant inside (ALWAYS_INLINE), the triangle test chosen once per ray.
+ * The AVX ones are compiled for AVX, everything they call inlined
+ * (flatten), the SSE tests included, in AVX's encoding. */
+static ALWAYS_INLINE wide_bvh_found traverse4_with(const accel *a, const ray *r, bool stop_at_first, bool sse, bool avx,
+                                               ray_counters *counters)
+{
+    const wide_bvh *b = (const wide_bvh *)a;
+    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
+        return traverse4(b, r, stop_at_first, sse, avx, true, counters);
+    return traverse4(b, r, stop_at_first, sse, avx, false, counters);
+}
+
+static wide_bvh_found closest_scalar(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, false, false, false, counters);
+}
+
+static wide_bvh_found any_scalar(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, true, false, false, counters);
+}
+
+#if WIDE_BVH_HAVE_SSE
+static wide_bvh_found closest_sse(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, false, true, false, counters);
+}
+
+static wide_bvh_found any_sse(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, true, true, false, counters);
+}
+#endif
+
+#if WIDE_BVH_HAVE_AVX
+AVX_CODE __attribute__((flatten)) static wide_bvh_found closest_avx(const accel *a, const ray *r,
+                                                                      ray_counters *counters)
+{
+    return traverse4_with(a, r, false, true, true, counters);
+}
+
+AVX_CODE __attribute__((flatten)) static wide_bvh_found any_avx(const accel *a, const ray *r, ray_counters *counters)
+{
+    return traverse4_with(a, r, true, true, true, counters);
+}
+#endif
+
+/* The walk of the tree's kernel. */
+static wide_bvh_found closest_found(const accel *a, const ray *r, ray_counters *counters)
+{
+    switch (((const wide_bvh *)a)->kernel) {
+#if WIDE_BVH_HAVE_AVX
+    case WIDE_BVH_KERNEL_AVX:
+        return closest_avx(a, r, counters);
+#endif
+#if WIDE_BVH_HAVE_SSE
+    case WIDE_BVH_KERNEL_SSE:
+        return closest_sse(a, r, counters);
+#endif
+    default:
+        return closest_scalar(a, r, counters);
+    }
+}
+
+static bool closest_hit_scalar(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    wide_bvh_found found = closest_scalar(a, &r, counters);
+    return finish_closest((const wide_bvh *)a, &found, &r, hit);
+}
+
+static bool any_hit_scalar(const accel *a, ray r, ray_counters *counters)
+{
+    return any_scalar(a, &r, counters).lane >= 0;
+}
+
+#if WIDE_BVH_HAVE_SSE
+static bool closest_hit_sse(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    wide_bvh_found found = closest_sse(a, &r, counters);
+    return finish_closest((const wide_bvh *)a, &found, &r, hit);
+}
+
+static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
+{
+    return any_sse(a, &r, counters).lane >= 0;
+}
+#endif
+
+#if WIDE_BVH_HAVE_AVX
+static bool closest_hit_avx(const accel *a, ray r, hit_record *hit, ray_counters *counters)
+{
+    wide_bvh_found found = closest_avx(a, &r, counters);
+    return finish_closest((const wide_bvh *)a, &found, &r, hit);
+}
+
+static bool any_hit_avx(const accel *a, ray r, ray_counters *counters)
+{
+    return any_avx(a, &r, counters).lane >= 0;
+}
+#endif
+
+/* ---- a stream of rays, taking turns ---------------------------------------------------
+ * On a mesh far larger than the cache, one ray's walk is a chain of waits:
+ * a node must arrive from memory before its boxes can say which node comes
+ * next. The processor overlaps little of that, because each fetch depends
+ * on the one before. Rays of a stream do not depend on each other, so
+ * WIDE_BVH_STREAM_LANES of them take turns: each visits one node, asks for
+ * the memory of the node it will visit next (prefetch), and waits while the
+ * others take their turn. By the time a ray's turn comes round again its
+ * node has arrived. Each ray does exactly what it would alone, in the same
+ * order: the same hits, bit for bit. */
+static ALWAYS_INLINE void stream4(const wide_bvh *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                                  wide_bvh_found *raw, bool stop_at_first, bool sse, bool avx, bool watertight,
+                                  ray_counters *counters)
+{
+    wide_bvh_traversal lanes[WIDE_BVH_STREAM_LANES];
+    int ray_of[WIDE_BVH_STREAM_LANES]; /* the ray each lane walks, -1: none left */
+    int next = 0, walking = 0;
+    /* Closest hits found, waiting to become hit records. Making one reads
+     * the triangle's material (and maybe its vertices) from the set, memory
+     * that prefetch_hit() asked for when the hit was found, often just
+     * before the walk ended: a ray waits here while WIDE_BVH_STREAM_LANES others
+     * finish, so that the memory has arrived. */
+    struct {
+        int ray;
+        wide_bvh_found found;
+    } waiting[WIDE_BVH_STREAM_LANES];
+    int waiting_count = 0, waiting_oldest = 0;
+    for (int k = 0; k < WIDE_BVH_STREAM_LANES; k++)
+        ray_of[k] = -1;
+    /* Not needed (a lane is read only after traversal_begin() filled it),
+     * but GCC cannot see that with one lane and warns. Everything but the
+     * stacks: a few hundred bytes a lane. */
+    for (int k = 0; k < WIDE_BVH_STREAM_LANES; k++)
+        memset(&lanes[k], 0, offsetof(wide_bvh_traversal, stack));
+    for (;;) {
+        /* Give every idle lane the next ray; a ray with no tree to walk
+         * (an empty tree) finishes at once. */
+        for (int k = 0; k < WIDE_BVH_STREAM_LANES && next < count; k++) {
+            if (ray_of[k] >= 0)
+                continue;
+            if (traversal_begin(b, &rays[next], &lanes[k])) {
+                ray_of[k] = next;
+                walking++;
+            } else {
+                hit_found[next] = false;
+            }
+            next++;
+        }
+        if (walking == 0)
+            break;
+        for (int k = 0; k < WIDE_BVH_STREAM_LANES; k++) {
+            if (ray_of[k] < 0)
+                continue;
+            wide_bvh_traversal *w = &lanes[k];
+            if (traversal_step(b, w, stop_at_first, sse, avx, watertight)) {
+                prefetch_child(b, w->current);
+                continue;
+            }
+            int i = ray_of[k];
+            hit_found[i] = w->found.lane >= 0;
+            if (raw != NULL) /* the caller makes its own records */
+                raw[i] = w->found;
+            else if (!stop_at_first && hit_found[i]) {
+                if (waiting_count == WIDE_BVH_STREAM_LANES) {
+                    int j = waiting[waiting_oldest].ray;
+                    finish_closest(b, &waiting[waiting_oldest].found, &rays[j], &hits[j]);
+                    waiting_oldest = (waiting_oldest + 1) % WIDE_BVH_STREAM_LANES;
+                    waiting_count--;
+                }
+                int slot = (waiting_oldest + waiting_count++) % WIDE_BVH_STREAM_LANES;
+                waiting[slot].ray = i;
+                waiting[slot].found = w->found;
+            }
+            counters->box_tests += w->box_tests;
+            counters->primitive_tests += w->primitive_tests;
+            ray_of[k] = -1;
+            walking--;
+        }
+    }
+    for (; waiting_count > 0; waiting_count--) {
+        int j = waiting[waiting_oldest].ray;
+        finish_closest(b, &waiting[waiting_oldest].found, &rays[j], &hits[j]);
+        waiting_oldest = (waiting_oldest + 1) % WIDE_BVH_STREAM_LANES;
+    }
+}
+
+/* The query and the triangle test chosen once per stream, so stream4() is
+ * compiled with them fixed, for each kernel. */
+static ALWAYS_INLINE void stream4_with(const wide_bvh *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                                       wide_bvh_found *raw, bool stop_at_first, bool sse, bool avx,
+                                       ray_counters *counters)
+{
+    bool watertight = b->base.triangle_test == TRIANGLE_TEST_WATERTIGHT;
+    if (stop_at_first) {
+        if (watertight)
+            stream4(b, rays, count, hits, hit_found, NULL, true, sse, avx, true, counters);
+        else
+            stream4(b, rays, count, hits, hit_found, NULL, true, sse, avx, false, counters);
+    } else if (raw != NULL) {
+        stream4(b, rays, count, hits, hit_found, raw, false, sse, avx, watertight, counters);
+    } else if (watertight) {
+        stream4(b, rays, count, hits, hit_found, NULL, false, sse, avx, true, counters);
+    } else {
+        stream4(b, rays, count, hits, hit_found, NULL, false, sse, avx, false, counters);
+    }
+}
+
+#if WIDE_BVH_HAVE_AVX
+AVX_CODE __attribute__((flatten)) static void stream4_avx(const wide_bvh *b, const ray *rays, int count,
+                                                                hit_record *hits, bool *hit_found, wide_bvh_found *raw,
+                                                                bool stop_at_first, ray_counters *counters)
+{
+    stream4_with(b, rays, count, hits, hit_found, raw, stop_at_first, true, true, counters);
+}
+#endif
+
+static void stream4_with_kernel(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                                wide_bvh_found *raw, bool stop_at_first, ray_counters *counters)
+{
+    const wide_bvh *b = (const wide_bvh *)a;
+#if WIDE_BVH_HAVE_AVX
+    if (b->kernel == WIDE_BVH_KERNEL_AVX) {
+        stream4_avx(b, rays, count, hits, hit_found, raw, stop_at_first, counters);
+        return;
+    }
+#endif
+#if WIDE_BVH_HAVE_SSE
+    if (b->kernel == WIDE_BVH_KERNEL_SSE) {
+        stream4_with(b, rays, count, hits, hit_found, raw, stop_at_first, true, false, counters);
+        return;
+    }
+#endif
+    bool watertight = a->triangle_test == TRIANGLE_TEST_WATERTIGHT;
+    stream4(b, rays, count, hits, hit_found, raw, stop_at_first, false, false, watertight, counters);
+}
+
+void wide_bvh_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                             ray_counters *counters)
+{
+    stream4_with_kernel(a, rays, count, hits, hit_found, NULL, false, counters);
+}
+
+void wide_bvh_any_hit_stream(const accel *a, const ray *rays, int count, bool *hit_found, ray_counters *counters)
+{
+    stream4_with_kernel(a, rays, count, NULL, hit_found, NULL, true, counters);
+}
+
+void wide_bvh_closest_hit_raw(const accel *a, ray r, wide_bvh_raw_hit *hit, ray_counters *counters)
+{
+    const wide_bvh *b = (const wide_bvh *)a;
+    wide_bvh_found found = closest_found(a, &r, counters);
+    hit->index = found.lane < 0 ? -1 : wide_bvh_lane_triangle(b->packets[found.lane / 4].index[found.lane % 4]);
+    hit->t = found.t;
+    hit->b1 = found.b1;
+    hit->b2 = found.b2;
+}
+
+void wide_bvh_closest_hit_stream_raw(const accel *a, const ray *rays, int count, wide_bvh_raw_hit *hits, bool *hit_found,
+                                 ray_counters *counters)
+{
+    enum { CHUNK = 64 };
+    const wide_bvh *b = (const wide_bvh *)a;
+    wide_bvh_found found[CHUNK];
+    for (int first = 0; first < count; first += CHUNK) {
+        int n = count - first < CHUNK ? count - first : CHUNK;
+        stream4_with_kernel(a, rays + first, n, NULL, hit_found + first, found, false, counters);
+        for (int i = 0; i < n; i++) {
+            wide_bvh_raw_hit *h = &hits[first + i];
+            h->index = found[i].lane < 0 ? -1
+                                         : wide_bvh_lane_triangle(b->packets[found[i].lane / 4].index[found[i].lane % 4]);
+            h->t = found[i].t;
+            h->b1 = found[i].b1;
+            h->b2 = found[i].b2;
+        }
+    }
+}
+
+static void wide_bvh_destroy(accel *a)
+{
+    wide_bvh *b = (wide_bvh *)a;
+    free(b->nodes);
+    free(b->packets);
+    free(b);
+}
+
+static const accel_ops wide_bvh_ops_scalar = {closest_hit_scalar, any_hit_scalar, wide_bvh_destroy, wide_bvh_use_triangle_test};
+#if WIDE_BVH_HAVE_SSE
+static const accel_ops wide_bvh_ops_sse = {closest_hit_sse, any_hit_sse, wide_bvh_destroy, wide_bvh_use_triangle_test};
+#endif
+#if WIDE_BVH_HAVE_AVX
+static const accel_ops wide_bvh_ops_avx = {closest_hit_avx, any_hit_avx, wide_bvh_destroy, wide_bvh_use_triangle_test};
+#endif
+
+bool wide_bvh_is(const accel *a) { return a != NULL && a->ops->destroy == wide_bvh_destroy; }
+
+const accel_ops *wide_bvh_default_ops(void)
+{
+#if WIDE_BVH_HAVE_SSE
+    return &wide_bvh_ops_sse;
+#else
+    return &wide_bvh_ops_scalar;
+#endif
+}
+
+bool wide_bvh_kernel_runs(wide_bvh_kernel kernel)
+{
+    switch (kernel) {
+    case WIDE_BVH_KERNEL_SCALAR:
+        return true;
+    case WIDE_BVH_KERNEL_SSE:
+        return WIDE_BVH_HAVE_SSE;
+    case WIDE_BVH_KERNEL_AVX:
+#if WIDE_BVH_HAVE_AVX
+        return __builtin_cpu_supports("avx");
+#else
+        return false;
+#endif
+    }
+    return false;
+}
+
+bool wide_bvh_set_kernel(accel *a, wide_bvh_kernel kernel)
+{
+    static const accel_ops *const ops[] = {
+#if WIDE_BVH_HAVE_SSE
+        [WIDE_BVH_KERNEL_SSE] = &wide_bvh_ops_sse,
+#endif
+#if WIDE_BVH_HAVE_AVX
+        [WIDE_BVH_KERNEL_AVX] = &wide_bvh_ops_avx,
+#endif
+        [WIDE_BVH_KERNEL_SCALAR] = &wide_bvh_ops_scalar,
+    };
+    if (!wide_bvh_kernel_runs(kernel))
+        return false;
+    wide_bvh *b = (wide_bvh *)a;
+    b->kernel = kernel;
+    b->base.ops = ops[kernel];
+    return true;
+}

@@ -32,6 +32,7 @@
 #include "image_check.h"
 #include "pt_scene_check.h"
 #include "test_support.h"
+#include "chi2.h"
 
 /* How many standard errors a pixel may be from the truth, in the per-pixel
  * comparisons (count_disagreements) that are left. */
@@ -1035,6 +1036,269 @@ static void test_ggx_samples_follow_their_pdf_at_an_angle(void **state)
                   worst, worst_twin);
     assert_true(worst < 4.0);
     assert_true(worst_twin > 4.0);
+}
+
+/* ---- chi-square: every sampler against its pdf (tests/chi2.h) ---------------------
+ * Each sampler of the path tracer -- the BSDFs' bsdf_sample, the lights'
+ * pt_scene_sample_light -- draws N attempts, counted in bins over the
+ * sphere of directions that follow the pdf (chi2.h says how), and
+ * Pearson's test compares the counts with N times the pdf's integral per
+ * bin: what would catch a pdf off by a cosine, a Jacobian dropped, a lobe
+ * chosen with the wrong probability, or a wrong branch at grazing angles.
+ * Every case runs twice, with independent random numbers and with the
+ * scrambled Sobol points of --sampler sobol. A family (one test function)
+ * fails a correct renderer with probability CHI2_FAMILY_ALPHA = 1e-6
+ * (Holm's correction); each twin feeds one deliberate mistake and must
+ * fall below the family's strictest threshold. */
+
+/* Attempts per case: with about 24 x 24 bins of equal probability, each
+ * bin expects ~170 samples (relative noise 1 / sqrt(170) = 8 % per bin),
+ * which sees a lobe whose width is off by 10 % (X^2 in the thousands) and
+ * keeps the family at a few seconds. */
+enum { CHI2_ATTEMPTS = 100000 };
+
+/* Sobol points: attempt i is point i of one pixel's scrambled sequence,
+ * coordinates 0, 1, ... (as a path's first numbers). */
+typedef struct {
+    uint64_t seed;
+    pcg32 rng; /* beyond the sequence's dimensions (never, here) */
+} chi2_sobol_state;
+
+static void chi2_fill_sobol(void *state, uint32_t index, float *u, int count)
+{
+    chi2_sobol_state *st = state;
+    sobol_sampler s = sobol_sampler_start(st->seed, 0, index, &st->rng);
+    for (int k = 0; k < count; k++)
+        u[k] = sobol_sampler_next(&s);
+}
+
+/* The two sources of points, seeded from `seed`. */
+typedef struct {
+    pcg32 rng;
+    chi2_sobol_state sobol;
+} chi2_sources;
+
+static chi2_points chi2_source(chi2_sources *src, uint64_t seed, int which)
+{
+    if (which == 0) {
+        src->rng = pcg32_for_pixel(test_seed(seed), 0);
+        return chi2_random_points(&src->rng);
+    }
+    src->sobol.seed = test_seed(seed);
+    src->sobol.rng = pcg32_for_pixel(test_seed(seed), 1);
+    return (chi2_points){"sobol", chi2_fill_sobol, &src->sobol};
+}
+
+static vec3 vec3_from_double(const double w[3]) { return vec3_make((float)w[0], (float)w[1], (float)w[2]); }
+
+/* -- BSDFs: the sphere about the normal -- */
+
+typedef enum {
+    BSDF_TWIN_NONE,
+    BSDF_TWIN_PDF_WITHOUT_COS, /* diffuse: the uniform hemisphere's 1 / (2 pi) */
+    BSDF_TWIN_NO_JACOBIAN,     /* GGX: the density of h, the reflection's 1 / (4 wo.h) dropped */
+    BSDF_TWIN_D_COS,           /* GGX: h drawn from D(h) cos(theta_h), counted against the visible normals' pdf */
+    BSDF_TWIN_WIDER_LOBE,      /* GGX: drawn at 1.1 alpha, counted against alpha's pdf */
+} bsdf_twin;
+
+typedef struct {
+    pt_material m;
+    vec3 n, wo;
+    chi2_frame frame; /* about n, made independently of the renderer's basis */
+    bsdf_twin twin;
+} bsdf_chi2;
+
+/* The normal is tilted off every axis, so that the renderer's frame
+ * (vec3_basis) is exercised; wo at cos(theta_o) from it, at some azimuth. */
+static bsdf_chi2 bsdf_chi2_make(pt_material m, double cos_o, bsdf_twin twin)
+{
+    bsdf_chi2 b;
+    b.m = m;
+    b.twin = twin;
+    b.n = vec3_normalize(vec3_make(0.3f, -0.2f, 0.93f));
+    b.frame = chi2_frame_around(b.n);
+    double sin_o = sqrt(1.0 - cos_o * cos_o), local[3] = {sin_o * cos(0.7), sin_o * sin(0.7), cos_o}, w[3];
+    chi2_frame_world(&b.frame, local, w);
+    b.wo = vec3_normalize(vec3_from_double(w));
+    return b;
+}
+
+static bool bsdf_chi2_sample(const void *ctx, const float *u, double point[3])
+{
+    const bsdf_chi2 *b = ctx;
+    vec3 wi;
+    if (b->twin == BSDF_TWIN_D_COS) {
+        wi = ggx_direction_from_d_cos(&b->m, b->n, b->wo, vec2_make(u[0], u[1]));
+        if (!(vec3_dot(b->n, wi) > 0.0f))
+            return false;
+    } else {
+        pt_material m = b->m;
+        if (b->twin == BSDF_TWIN_WIDER_LOBE)
+            m.roughness *= 1.1f;
+        bsdf_sample_result s;
+        if (!bsdf_sample(&m, b->n, b->wo, vec2_make(u[0], u[1]), 0.5f, true, &s))
+            return false;
+        wi = s.wi;
+    }
+    double w[3] = {wi.x, wi.y, wi.z};
+    chi2_frame_local(&b->frame, w, point);
+    return true;
+}
+
+static double bsdf_chi2_pdf(const void *ctx, const double point[3])
+{
+    const bsdf_chi2 *b = ctx;
+    double w[3];
+    chi2_frame_world(&b->frame, point, w);
+    vec3 wi = vec3_from_double(w);
+    switch (b->twin) {
+    case BSDF_TWIN_PDF_WITHOUT_COS:
+        return vec3_dot(b->n, wi) > 0.0f ? 1.0 / (2.0 * PI) : 0.0;
+    case BSDF_TWIN_NO_JACOBIAN: {
+        vec3 h = vec3_normalize(vec3_add(b->wo, wi));
+        return bsdf_pdf(&b->m, b->n, b->wo, wi) * 4.0 * vec3_dot(b->wo, h);
+    }
+    default:
+        return bsdf_pdf(&b->m, b->n, b->wo, wi);
+    }
+}
+
+static chi2_case bsdf_chi2_case(const bsdf_chi2 *b)
+{
+    return (chi2_case){"bsdf", CHI2_SPHERE, PI, 0.0, 2, bsdf_chi2_sample, bsdf_chi2_pdf, b};
+}
+
+/* The incident angles, normal to grazing, and GGX's roughnesses. */
+static const double CHI2_COS_O[] = {1.0, 0.7, 0.3, 0.1, 0.05};
+static const float CHI2_ALPHAS[] = {0.05f, 0.1f, 0.3f, 0.6f, 1.0f};
+/* Leaving glass of index 1.5, light refracts only below the critical
+ * angle, cos(theta_o) > 0.745: these reach it (the refracted ray grazing
+ * at 0.76) and pass it (0.3, total internal reflection, one lobe). */
+static const double CHI2_COS_O_LEAVING[] = {1.0, 0.9, 0.8, 0.76, 0.3};
+enum { CHI2_ANGLES = 5, CHI2_ROUGHNESSES = 5 };
+
+/* Adds one material at one angle to the family, with both sources. */
+static void bsdf_chi2_add(chi2_family *family, const bsdf_chi2 *b, const char *what, uint64_t seed)
+{
+    chi2_case c = bsdf_chi2_case(b);
+    chi2_table tab = chi2_tabulate(&c, 0, 0);
+    for (int which = 0; which < 2; which++) {
+        chi2_sources src;
+        chi2_points points = chi2_source(&src, seed, which);
+        chi2_result r = chi2_run(&c, &tab, points, CHI2_ATTEMPTS);
+        char name[CHI2_NAME_SIZE];
+        snprintf(name, sizeof name, "%s, cos(theta_o) %.2f, %s", what, b->wo.x * b->n.x + b->wo.y * b->n.y + b->wo.z * b->n.z,
+                 points.name);
+        chi2_family_add(family, name, &r);
+    }
+    chi2_table_free(&tab);
+}
+
+/* -- glass: two delta lobes, a choice between them -- */
+
+/* Of N draws of u_lobe (the direction's u does not matter to a delta
+ * lobe), how many reflect and how many refract, against the probability
+ * each lobe's sample reports as its pdf; the two must sum to 1. With
+ * total internal reflection only one lobe is left (p = 1). `twin`
+ * reflects with 1.1 times the probability it reports. */
+static chi2_result glass_lobe_chi2(double cos_o, bool entering, bool twin, chi2_points points)
+{
+    pt_material m = pt_glass(1.5f);
+    bsdf_chi2 b = bsdf_chi2_make(m, cos_o, BSDF_TWIN_NONE);
+    double observed[2] = {0, 0}, probability[2] = {0, 0};
+    for (long k = 0; k < CHI2_ATTEMPTS; k++) {
+        float u;
+        points.fill(points.state, (uint32_t)k, &u, 1);
+        bsdf_sample_result s;
+        bool ok = bsdf_sample(&m, b.n, b.wo, vec2_make(0.5f, 0.5f), twin ? u / 1.1f : u, entering, &s);
+        assert_true(ok && s.is_delta);
+        observed[s.is_transmission] += 1.0;
+        probability[s.is_transmission] = s.pdf;
+    }
+    /* a lobe never drawn reports no pdf: it is 1 minus the other's */
+    if (observed[0] == 0.0)
+        probability[0] = 1.0 - probability[1];
+    if (observed[1] == 0.0)
+        probability[1] = 1.0 - probability[0];
+    assert_close(probability[0] + probability[1], 1.0, 1e-6);
+    chi2_result r = chi2_verdict(observed, probability, 2, CHI2_ATTEMPTS);
+    r.samples = CHI2_ATTEMPTS;
+    r.total = probability[0] + probability[1];
+    return r;
+}
+
+/* The BSDF family: diffuse, GGX at five roughnesses, and glass's choice of
+ * lobe entering and leaving, each at five angles from normal to grazing
+ * (leaving glass: up to and past the critical angle),
+ * with random and Sobol points: 80 tests. The mirror has one delta lobe
+ * of probability 1 (nothing to count: test_bsdf_samples_agree_with_eval_
+ * and_pdf checks its direction and pdf). */
+enum { BSDF_FAMILY = 2 * CHI2_ANGLES * (1 + CHI2_ROUGHNESSES + 2) };
+
+static void test_chi2_bsdfs_sample_their_pdf(void **state)
+{
+    (void)state;
+    chi2_family family = {.count = 0};
+    for (int a = 0; a < CHI2_ANGLES; a++) {
+        bsdf_chi2 b = bsdf_chi2_make(pt_diffuse(vec3_splat(0.8f)), CHI2_COS_O[a], BSDF_TWIN_NONE);
+        bsdf_chi2_add(&family, &b, "diffuse", 300 + (uint64_t)a);
+        for (int k = 0; k < CHI2_ROUGHNESSES; k++) {
+            char what[48];
+            snprintf(what, sizeof what, "GGX alpha %.2f", (double)CHI2_ALPHAS[k]);
+            b = bsdf_chi2_make(pt_glossy(vec3_splat(0.9f), CHI2_ALPHAS[k]), CHI2_COS_O[a], BSDF_TWIN_NONE);
+            bsdf_chi2_add(&family, &b, what, 310 + 10 * (uint64_t)a + (uint64_t)k);
+        }
+        for (int side = 0; side < 2; side++)
+            for (int which = 0; which < 2; which++) {
+                chi2_sources src;
+                chi2_points points = chi2_source(&src, 370 + 2 * (uint64_t)a + (uint64_t)side, which);
+                double cos_o = side == 0 ? CHI2_COS_O[a] : CHI2_COS_O_LEAVING[a];
+                chi2_result r = glass_lobe_chi2(cos_o, side == 0, false, points);
+                char name[CHI2_NAME_SIZE];
+                snprintf(name, sizeof name, "glass lobes %s, cos(theta_o) %.2f, %s", side == 0 ? "entering" : "leaving",
+                         cos_o, points.name);
+                chi2_family_add(&family, name, &r);
+            }
+    }
+    assert_int_equal(family.count, BSDF_FAMILY);
+    assert_int_equal(chi2_family_holm(&family, CHI2_FAMILY_ALPHA), 0);
+}
+
+/* Each twin's one mistake, where it shows. */
+static void test_chi2_bsdf_twins_fail(void **state)
+{
+    (void)state;
+    chi2_sources src;
+    struct {
+        const char *name;
+        pt_material m;
+        double cos_o;
+        bsdf_twin twin;
+    } twins[] = {
+        {"diffuse, pdf without its cos (1 / 2 pi)", pt_diffuse(vec3_splat(0.8f)), 0.7, BSDF_TWIN_PDF_WITHOUT_COS},
+        {"GGX alpha 0.3, Jacobian 1 / (4 wo.h) dropped", pt_glossy(vec3_splat(0.9f), 0.3f), 0.7, BSDF_TWIN_NO_JACOBIAN},
+        {"GGX alpha 0.3, h from D cos (not visible normals)", pt_glossy(vec3_splat(0.9f), 0.3f), 0.3, BSDF_TWIN_D_COS},
+        {"GGX alpha 0.05, drawn 10 % wider", pt_glossy(vec3_splat(0.9f), 0.05f), 1.0, BSDF_TWIN_WIDER_LOBE},
+        {"GGX alpha 0.6, drawn 10 % wider, grazing", pt_glossy(vec3_splat(0.9f), 0.6f), 0.05, BSDF_TWIN_WIDER_LOBE},
+    };
+    for (size_t i = 0; i < sizeof twins / sizeof twins[0]; i++) {
+        bsdf_chi2 b = bsdf_chi2_make(twins[i].m, twins[i].cos_o, twins[i].twin);
+        chi2_case c = bsdf_chi2_case(&b);
+        chi2_table tab = chi2_tabulate(&c, 0, 0);
+        chi2_result r = chi2_run(&c, &tab, chi2_source(&src, 390 + i, 0), CHI2_ATTEMPTS);
+        chi2_assert_twin_fails(twins[i].name, &r, BSDF_FAMILY);
+        if (i == 3) { /* and with Sobol points */
+            r = chi2_run(&c, &tab, chi2_source(&src, 390 + i, 1), CHI2_ATTEMPTS);
+            chi2_assert_twin_fails("GGX alpha 0.05, drawn 10 % wider, Sobol", &r, BSDF_FAMILY);
+        }
+        chi2_table_free(&tab);
+    }
+    /* glass reflecting 10 % more often than its pdf says: at grazing (R =
+     * 0.6) and at normal incidence (R = 0.04, the hardest to see) */
+    chi2_result r = glass_lobe_chi2(0.1, true, true, chi2_source(&src, 396, 0));
+    chi2_assert_twin_fails("glass entering, reflection 10 % too often, cos 0.1", &r, BSDF_FAMILY);
+    r = glass_lobe_chi2(1.0, true, true, chi2_source(&src, 397, 0));
+    chi2_assert_twin_fails("glass entering, reflection 10 % too often, cos 1", &r, BSDF_FAMILY);
 }
 
 /* ---- scene files and effects ------------------------------------------------------ */
@@ -2172,6 +2436,8 @@ int main(void)
         cmocka_unit_test(test_ggx_sampling_matches_its_pdf),
         cmocka_unit_test(test_ggx_weights_never_exceed_one),
         cmocka_unit_test(test_ggx_samples_follow_their_pdf_at_an_angle),
+        cmocka_unit_test(test_chi2_bsdfs_sample_their_pdf),
+        cmocka_unit_test(test_chi2_bsdf_twins_fail),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
         cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),

@@ -4,7 +4,7 @@
  * every BSDF, light and lens sampler to. Include after <cmocka.h> and
  * test_support.h.
  *
- *   chi2_case c = {"GGX, alpha 0.3", CHI2_SPHERE, PI, 0, 2, sample, pdf, &ctx};
+ *   chi2_case c = {.measure = CHI2_SPHERE, .s_max = PI, .dimensions = 2, .sample = sample, .pdf = pdf, .ctx = &ctx};
  *   chi2_table t = chi2_tabulate(&c, 0, 0);       the pdf integrated per bin
  *   chi2_result r = chi2_run(&c, &t, chi2_random_points(&rng), 100000);
  *   chi2_family_add(&family, c.name, r);
@@ -40,16 +40,26 @@
  * allowed: they are fixed before any sample is drawn.
  *
  * The domains, in coordinates (s, t):
- *   CHI2_SPHERE  directions: s = theta in [0, s_max] from the frame's z
- *                axis, t = phi in [0, 2 pi); Jacobian sin(theta); the pdf
- *                per steradian. s_max = pi is the whole sphere; a light
- *                seen from afar fills a cone about its direction.
- *   CHI2_DISK    points of a disk: s = r in [0, s_max], t = phi; Jacobian
- *                r; the pdf per unit area.
- *   CHI2_PLANE   points (s, t) of [0, s_max] x [0, t_max]; Jacobian 1.
+ *   CHI2_SPHERE     directions: s = theta in [0, s_max] from the frame's
+ *                   z axis, t = phi in [0, 2 pi); Jacobian sin(theta); the
+ *                   pdf per steradian. s_max = pi is the whole sphere.
+ *   CHI2_GNOMONIC   directions within 90 degrees of the frame's z axis,
+ *                   as the point where they meet the plane z = 1: s = x/z
+ *                   in [s_min, s_max], t = y/z in [t_min, t_max];
+ *                   Jacobian (1 + s^2 + t^2)^(-3/2); per steradian. The
+ *                   projection maps straight lines to straight lines, so
+ *                   a polygonal light's image is the polygon of its
+ *                   vertices' images, and the rectangle around those holds
+ *                   it all: seen at grazing, a thin sliver that this
+ *                   rectangle fits (in (theta, phi) it would cross a few
+ *                   fine cells and no quadrature would see it).
+ *   CHI2_DISK       points of a disk: s = r in [0, s_max], t = phi;
+ *                   Jacobian r; the pdf per unit area.
+ *   CHI2_PLANE      points (s, t) of [s_min, s_max] x [t_min, t_max];
+ *                   Jacobian 1.
  * A case speaks in points (x, y, z): a unit direction in its own frame
- * (CHI2_SPHERE), a point (x, y) (the others); the header does the
- * coordinates.
+ * (CHI2_SPHERE, CHI2_GNOMONIC), a point (x, y) (the others); the header
+ * does the coordinates.
  *
  * Points other than independent random ones. chi2_points gives the
  * uniform numbers of attempt i; scrambled Sobol points (chapter 09) are
@@ -110,12 +120,15 @@ enum {
     CHI2_FAMILY_MAX = 128,
 };
 
-typedef enum { CHI2_SPHERE, CHI2_DISK, CHI2_PLANE } chi2_measure;
+typedef enum { CHI2_SPHERE, CHI2_GNOMONIC, CHI2_DISK, CHI2_PLANE } chi2_measure;
 
 typedef struct {
     const char *name;
     chi2_measure measure;
-    double s_max, t_max;   /* t_max: CHI2_PLANE only (the others go round, 2 pi) */
+    /* The domain: s in [s_min, s_max]; t in [t_min, t_max] for
+     * CHI2_GNOMONIC and CHI2_PLANE, [0, 2 pi) for the others (which also
+     * take s_min = 0). */
+    double s_min, s_max, t_min, t_max;
     int dimensions;        /* uniform numbers per attempt */
     /* One attempt from u: the sample's point, or false for no sample. */
     bool (*sample)(const void *ctx, const float *u, double point[3]);
@@ -134,11 +147,26 @@ typedef struct {
     double total;        /* the pdf's integral over the domain */
 } chi2_table;
 
-static inline double chi2_t_max(const chi2_case *c) { return c->measure == CHI2_PLANE ? c->t_max : 2.0 * PI; }
+/* t's range. */
+static inline bool chi2_t_is_phi(const chi2_case *c) { return c->measure == CHI2_SPHERE || c->measure == CHI2_DISK; }
+static inline double chi2_t_min(const chi2_case *c) { return chi2_t_is_phi(c) ? 0.0 : c->t_min; }
+static inline double chi2_t_max(const chi2_case *c) { return chi2_t_is_phi(c) ? 2.0 * PI : c->t_max; }
 
-static inline double chi2_jacobian(chi2_measure measure, double s)
+static inline double chi2_jacobian(chi2_measure measure, double s, double t)
 {
-    return measure == CHI2_SPHERE ? sin(s) : measure == CHI2_DISK ? s : 1.0;
+    switch (measure) {
+    case CHI2_SPHERE:
+        return sin(s);
+    case CHI2_GNOMONIC: {
+        double q = 1.0 + s * s + t * t;
+        return 1.0 / (q * sqrt(q));
+    }
+    case CHI2_DISK:
+        return s;
+    case CHI2_PLANE:
+        break;
+    }
+    return 1.0;
 }
 
 static inline void chi2_point_at(chi2_measure measure, double s, double t, double point[3])
@@ -147,6 +175,11 @@ static inline void chi2_point_at(chi2_measure measure, double s, double t, doubl
     case CHI2_SPHERE:
         point[0] = sin(s) * cos(t), point[1] = sin(s) * sin(t), point[2] = cos(s);
         return;
+    case CHI2_GNOMONIC: {
+        double l = sqrt(1.0 + s * s + t * t);
+        point[0] = s / l, point[1] = t / l, point[2] = 1.0 / l;
+        return;
+    }
     case CHI2_DISK:
         point[0] = s * cos(t), point[1] = s * sin(t), point[2] = 0.0;
         return;
@@ -156,11 +189,17 @@ static inline void chi2_point_at(chi2_measure measure, double s, double t, doubl
     }
 }
 
-/* (s, t) of a point; phi in [0, 2 pi). */
+/* (s, t) of a point; phi in [0, 2 pi); NaN for a direction the
+ * gnomonic plane does not see. */
 static inline void chi2_coordinates(chi2_measure measure, const double point[3], double *s, double *t)
 {
     if (measure == CHI2_PLANE) {
         *s = point[0], *t = point[1];
+        return;
+    }
+    if (measure == CHI2_GNOMONIC) {
+        *s = point[2] > 0.0 ? point[0] / point[2] : NAN;
+        *t = point[2] > 0.0 ? point[1] / point[2] : NAN;
         return;
     }
     double phi = atan2(point[1], point[0]);
@@ -213,12 +252,12 @@ static inline double chi2_cell(const chi2_case *c, double s0, double s1, double 
         for (int b = -1; b <= 1; b += 2) {
             double s = s0 + (0.5 + a * node) * hs, t = t0 + (0.5 + b * node) * ht;
             chi2_point_at(c->measure, s, t, point);
-            gauss += c->pdf(c->ctx, point) * chi2_jacobian(c->measure, s);
+            gauss += c->pdf(c->ctx, point) * chi2_jacobian(c->measure, s, t);
         }
     gauss *= 0.25 * hs * ht;
     double sm = 0.5 * (s0 + s1), tm = 0.5 * (t0 + t1);
     chi2_point_at(c->measure, sm, tm, point);
-    double midpoint = c->pdf(c->ctx, point) * chi2_jacobian(c->measure, sm) * hs * ht;
+    double midpoint = c->pdf(c->ctx, point) * chi2_jacobian(c->measure, sm, tm) * hs * ht;
     if (depth >= CHI2_REFINE_DEPTH || fabs(gauss - midpoint) <= CHI2_REFINE_RELATIVE * gauss + CHI2_REFINE_FLOOR)
         return gauss;
     return chi2_cell(c, s0, sm, t0, tm, depth + 1) + chi2_cell(c, sm, s1, t0, tm, depth + 1) +
@@ -234,10 +273,12 @@ static inline chi2_table chi2_tabulate(const chi2_case *c, int rows, int cols)
     size_t cells = (size_t)tab.rows * (size_t)tab.cols;
     double *mass = malloc(cells * sizeof *mass);
     tab.bin = malloc(cells * sizeof *tab.bin);
-    double hs = c->s_max / tab.rows, ht = chi2_t_max(c) / tab.cols;
+    double s0 = c->s_min, t0 = chi2_t_min(c);
+    double hs = (c->s_max - s0) / tab.rows, ht = (chi2_t_max(c) - t0) / tab.cols;
     for (int i = 0; i < tab.rows; i++)
         for (int j = 0; j < tab.cols; j++)
-            mass[(size_t)i * tab.cols + j] = chi2_cell(c, i * hs, (i + 1) * hs, j * ht, (j + 1) * ht, 0);
+            mass[(size_t)i * tab.cols + j] =
+                chi2_cell(c, s0 + i * hs, s0 + (i + 1) * hs, t0 + j * ht, t0 + (j + 1) * ht, 0);
     /* bands of rows, then bins within each band */
     double *row_mass = calloc((size_t)tab.rows, sizeof *row_mass);
     int *ring = malloc((size_t)tab.rows * sizeof *ring);
@@ -375,7 +416,7 @@ static inline chi2_result chi2_run(const chi2_case *c, const chi2_table *tab, ch
     double *observed = calloc((size_t)tab->bin_count + 1, sizeof *observed);
     double *probability = malloc(((size_t)tab->bin_count + 1) * sizeof *probability);
     long impossible = 0, outside = 0, refused = 0;
-    double s_max = c->s_max, t_max = chi2_t_max(c);
+    double s0 = c->s_min, t0 = chi2_t_min(c), ds = c->s_max - s0, dt = chi2_t_max(c) - t0;
     for (long n = 0; n < attempts; n++) {
         float u[CHI2_MAX_DIMENSIONS];
         points.fill(points.state, (uint32_t)n, u, c->dimensions);
@@ -389,14 +430,15 @@ static inline chi2_result chi2_run(const chi2_case *c, const chi2_table *tab, ch
             continue;
         }
         chi2_coordinates(c->measure, point, &s, &t);
-        if (!(s >= 0.0 && s <= s_max * (1.0 + CHI2_EDGE_ROUNDING) && t >= 0.0 &&
-              t <= t_max * (1.0 + CHI2_EDGE_ROUNDING))) {
+        double fs = (s - s0) / ds, ft = (t - t0) / dt; /* the fraction of the way across */
+        if (!(fs >= -CHI2_EDGE_ROUNDING && fs <= 1.0 + CHI2_EDGE_ROUNDING && ft >= -CHI2_EDGE_ROUNDING &&
+              ft <= 1.0 + CHI2_EDGE_ROUNDING)) {
             outside++;
             continue;
         }
-        int i = (int)(s / s_max * tab->rows), j = (int)(t / t_max * tab->cols);
-        i = i < tab->rows ? i : tab->rows - 1;
-        j = j < tab->cols ? j : tab->cols - 1;
+        int i = (int)(fs * tab->rows), j = (int)(ft * tab->cols);
+        i = i < 0 ? 0 : i < tab->rows ? i : tab->rows - 1;
+        j = j < 0 ? 0 : j < tab->cols ? j : tab->cols - 1;
         observed[tab->bin[(size_t)i * tab->cols + j]] += 1.0;
     }
     memcpy(probability, tab->probability, (size_t)tab->bin_count * sizeof *probability);
@@ -486,23 +528,22 @@ static inline void chi2_assert_twin_fails(const char *name, const chi2_result *r
 
 /* ---- frames --------------------------------------------------------------- */
 
-/* An orthonormal frame around an axis, in double, made here (Gram-Schmidt
- * against the world axis least aligned with it) rather than with the
- * renderer's vec3_basis, so that a wrong basis there shows as a mismatch. */
+/* An orthonormal frame about an axis, in double, made here (Gram-Schmidt)
+ * rather than with the renderer's vec3_basis, so that a wrong basis there
+ * shows as a mismatch. */
 typedef struct {
     double x[3], y[3], z[3];
 } chi2_frame;
 
-static inline chi2_frame chi2_frame_around(vec3 axis)
+/* z along `axis`, x as near `toward` as that allows (toward must not be
+ * parallel to axis). */
+static inline chi2_frame chi2_frame_toward(vec3 axis, vec3 toward)
 {
     chi2_frame f;
-    double a[3] = {axis.x, axis.y, axis.z};
-    double length = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    double a[3] = {axis.x, axis.y, axis.z}, e[3] = {toward.x, toward.y, toward.z};
+    double al = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
     for (int k = 0; k < 3; k++)
-        f.z[k] = a[k] / length;
-    int least = fabs(f.z[0]) <= fabs(f.z[1]) && fabs(f.z[0]) <= fabs(f.z[2]) ? 0 : fabs(f.z[1]) <= fabs(f.z[2]) ? 1 : 2;
-    double e[3] = {0, 0, 0};
-    e[least] = 1.0;
+        f.z[k] = a[k] / al;
     double d = e[0] * f.z[0] + e[1] * f.z[1] + e[2] * f.z[2], xl = 0.0;
     for (int k = 0; k < 3; k++)
         f.x[k] = e[k] - d * f.z[k], xl += f.x[k] * f.x[k];
@@ -512,6 +553,14 @@ static inline chi2_frame chi2_frame_around(vec3 axis)
     f.y[1] = f.z[2] * f.x[0] - f.z[0] * f.x[2];
     f.y[2] = f.z[0] * f.x[1] - f.z[1] * f.x[0];
     return f;
+}
+
+/* x towards the world axis least aligned with `axis`. */
+static inline chi2_frame chi2_frame_around(vec3 axis)
+{
+    float ax = fabsf(axis.x), ay = fabsf(axis.y), az = fabsf(axis.z);
+    vec3 least = ax <= ay && ax <= az ? vec3_make(1, 0, 0) : ay <= az ? vec3_make(0, 1, 0) : vec3_make(0, 0, 1);
+    return chi2_frame_toward(axis, least);
 }
 
 /* World direction -> the frame's coordinates, normalized. */

@@ -1165,7 +1165,8 @@ static double bsdf_chi2_pdf(const void *ctx, const double point[3])
 
 static chi2_case bsdf_chi2_case(const bsdf_chi2 *b)
 {
-    return (chi2_case){"bsdf", CHI2_SPHERE, PI, 0.0, 2, bsdf_chi2_sample, bsdf_chi2_pdf, b};
+    return (chi2_case){.measure = CHI2_SPHERE, .s_max = PI, .dimensions = 2, .sample = bsdf_chi2_sample,
+                       .pdf = bsdf_chi2_pdf, .ctx = b};
 }
 
 /* The incident angles, normal to grazing, and GGX's roughnesses. */
@@ -1299,6 +1300,420 @@ static void test_chi2_bsdf_twins_fail(void **state)
     chi2_assert_twin_fails("glass entering, reflection 10 % too often, cos 0.1", &r, BSDF_FAMILY);
     r = glass_lobe_chi2(1.0, true, true, chi2_source(&src, 397, 0));
     chi2_assert_twin_fails("glass entering, reflection 10 % too often, cos 1", &r, BSDF_FAMILY);
+}
+
+/* -- lights: the directions in which pt_scene_sample_light's points are seen -- */
+
+/* A light sample is a point x' on an emitting triangle, picked by power,
+ * uniform on it: per unit area pdf_light = mean(L_e) / total power. Seen
+ * from a point p, the direction to x' has the density the path tracer
+ * weighs it with (path_tracer.c, sample_direct_light):
+ *   pdf_w = |x' - p|^2 pdf_light / |cos(theta')|,
+ * summed over the triangles a ray from p in that direction passes
+ * through. The pdf below finds them with its own ray-triangle test in
+ * double, so that the chi-square compares the sampler with the formula,
+ * not with itself. */
+typedef enum {
+    LIGHT_TWIN_NONE,
+    LIGHT_TWIN_NO_COS,  /* pdf_w = |x' - p|^2 pdf_light: the cos(theta') of the Jacobian dropped */
+    LIGHT_TWIN_NO_SQRT, /* the triangle's warp without its sqrt: b0 = 1 - u1, crowding vertex 0 */
+} light_twin;
+
+typedef struct {
+    const pt_scene *sc;
+    double p[3];      /* where the light is seen from */
+    chi2_frame frame; /* about the direction to the light's centre */
+    light_twin twin;
+} light_chi2;
+
+/* A point drawn on an edge is computed in float, a few 1e-8 of the
+ * triangle's size off the exact edge, and may fall outside by that much:
+ * barycentrics down to -1e-6 count as inside (changing the pdf's integral
+ * by about 1e-6). */
+static const double LIGHT_EDGE_SLACK = 1e-6;
+
+static void dsub(const double a[3], const double b[3], double out[3])
+{
+    for (int k = 0; k < 3; k++)
+        out[k] = a[k] - b[k];
+}
+static double ddot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void dcross(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+static void dvec(vec3 v, double out[3]) { out[0] = v.x, out[1] = v.y, out[2] = v.z; }
+
+/* Distance along the unit direction d from p to triangle (a, b, c), or -1. */
+static double ray_triangle_double(const double p[3], const double d[3], vec3 a, vec3 b, vec3 c)
+{
+    double v0[3], v1[3], v2[3], e1[3], e2[3], q[3], s[3], r[3];
+    dvec(a, v0), dvec(b, v1), dvec(c, v2);
+    dsub(v1, v0, e1), dsub(v2, v0, e2);
+    dcross(d, e2, q);
+    double det = ddot(e1, q);
+    if (det == 0.0)
+        return -1.0;
+    dsub(p, v0, s);
+    double b1 = ddot(s, q) / det;
+    dcross(s, e1, r);
+    double b2 = ddot(d, r) / det, t = ddot(e2, r) / det;
+    if (b1 < -LIGHT_EDGE_SLACK || b2 < -LIGHT_EDGE_SLACK || b1 + b2 > 1.0 + LIGHT_EDGE_SLACK || t <= 0.0)
+        return -1.0;
+    return t;
+}
+
+static bool light_chi2_sample(const void *ctx, const float *u, double point[3])
+{
+    const light_chi2 *l = ctx;
+    /* the twin hands the sampler u1^2, whose sqrt is u1: the warp without it */
+    float u1 = l->twin == LIGHT_TWIN_NO_SQRT ? u[1] * u[1] : u[1];
+    pt_light_sample x;
+    if (!pt_scene_sample_light(l->sc, u[0], u1, u[2], &x))
+        return false;
+    double w[3] = {(double)x.point.x - l->p[0], (double)x.point.y - l->p[1], (double)x.point.z - l->p[2]};
+    chi2_frame_local(&l->frame, w, point);
+    return true;
+}
+
+static double light_chi2_pdf(const void *ctx, const double point[3])
+{
+    const light_chi2 *l = ctx;
+    const pt_scene *sc = l->sc;
+    double d[3], pdf = 0.0;
+    chi2_frame_world(&l->frame, point, d);
+    for (int e = 0; e < sc->emitter_count; e++) {
+        const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
+        double distance = ray_triangle_double(l->p, d, t->p0, t->p1, t->p2);
+        if (distance < 0.0)
+            continue;
+        double n[3];
+        dvec(sc->emitter_normals[e], n);
+        double cos_light = fabs(ddot(n, d));
+        double pdf_area = pt_scene_emitter_pdf_area(sc, sc->geometry.faces[sc->emitters[e]].material);
+        pdf += distance * distance * pdf_area / (l->twin == LIGHT_TWIN_NO_COS ? 1.0 : cos_light);
+    }
+    return pdf;
+}
+
+/* Seen from p, in the gnomonic plane of a frame about the direction to
+ * the centre of the emitters' vertices (chi2.h): the rectangle around the
+ * vertices' images holds the whole light; padded by 2 %. The frame's x
+ * axis lies in the light's plane, so that a light seen at grazing, a thin
+ * sliver along that plane, fills the rectangle rather than crossing it
+ * diagonally. From near a large light, where some vertex is more than
+ * LIGHT_AXIS_MAX_ANGLE from that direction, the axis is the light's normal
+ * (towards its plane): every point of the light is then within 90
+ * degrees. */
+static const double LIGHT_AXIS_MAX_ANGLE = 75.0 * PI / 180.0;
+
+static bool light_vertices_within(const light_chi2 *l, double angle)
+{
+    for (int e = 0; e < l->sc->emitter_count; e++) {
+        const triangle *t = &l->sc->triangles.triangles[l->sc->emitters[e]];
+        vec3 v[3] = {t->p0, t->p1, t->p2};
+        for (int k = 0; k < 3; k++) {
+            double w[3], local[3];
+            dvec(v[k], w);
+            dsub(w, l->p, w);
+            chi2_frame_local(&l->frame, w, local);
+            if (!(local[2] > cos(angle)))
+                return false;
+        }
+    }
+    return true;
+}
+
+typedef struct {
+    double s_min, s_max, t_min, t_max;
+} light_box;
+
+static light_chi2 light_chi2_make(const pt_scene *sc, vec3 p, light_twin twin, light_box *box)
+{
+    light_chi2 l = {.sc = sc, .twin = twin};
+    dvec(p, l.p);
+    vec3 centre = vec3_splat(0.0f);
+    for (int e = 0; e < sc->emitter_count; e++) {
+        const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
+        centre = vec3_add(centre, vec3_scale(vec3_add(t->p0, vec3_add(t->p1, t->p2)), 1.0f / 3.0f));
+    }
+    centre = vec3_scale(centre, 1.0f / (float)sc->emitter_count);
+    vec3 axis = vec3_normalize(vec3_sub(centre, p));
+    vec3 in_plane = vec3_cross(sc->emitter_normals[0], axis);
+    const triangle *first = &sc->triangles.triangles[sc->emitters[0]];
+    l.frame = chi2_frame_toward(axis, vec3_length(in_plane) > 0.1f ? in_plane : vec3_sub(first->p1, first->p0));
+    if (!light_vertices_within(&l, LIGHT_AXIS_MAX_ANGLE)) {
+        vec3 n = sc->emitter_normals[0];
+        l.frame = chi2_frame_toward(vec3_dot(n, vec3_sub(p, centre)) > 0.0f ? vec3_neg(n) : n,
+                                    vec3_sub(first->p1, first->p0));
+    }
+    *box = (light_box){INFINITY, -INFINITY, INFINITY, -INFINITY};
+    for (int e = 0; e < sc->emitter_count; e++) {
+        const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
+        vec3 v[3] = {t->p0, t->p1, t->p2};
+        for (int k = 0; k < 3; k++) {
+            double w[3], local[3];
+            dvec(v[k], w);
+            dsub(w, l.p, w);
+            chi2_frame_local(&l.frame, w, local);
+            assert_true(local[2] > 0.0); /* within 90 degrees of the axis */
+            box->s_min = fmin(box->s_min, local[0] / local[2]), box->s_max = fmax(box->s_max, local[0] / local[2]);
+            box->t_min = fmin(box->t_min, local[1] / local[2]), box->t_max = fmax(box->t_max, local[1] / local[2]);
+        }
+    }
+    double ps = 0.02 * (box->s_max - box->s_min), pt = 0.02 * (box->t_max - box->t_min);
+    *box = (light_box){box->s_min - ps, box->s_max + ps, box->t_min - pt, box->t_max + pt};
+    return l;
+}
+
+/* A sphere light, sampled as one would be from outside it: the cone of
+ * directions it subtends, sin(theta_max) = r / d, uniform in solid angle
+ * (chapter 08's sample_uniform_cone about the direction to its centre).
+ * The renderer samples no sphere lights (scene_pt.h: emitting spheres are
+ * found by the rays that hit them); this checks the construction a
+ * sphere light would use, against the density MIS would give a ray that
+ * hits the sphere. The twin takes the cone's angle from tan(theta_max)
+ * = r / d: too narrow, seen from near. */
+typedef struct {
+    vec3 centre, p;
+    float radius;
+    chi2_frame frame;
+    bool tan_twin;
+} sphere_chi2;
+
+/* The cone's edge is computed in float: cos(theta_max) is off by up to
+ * 6e-8, its angle by 6e-8 / sin(theta_max), 1.2e-6 radians at 20 radii
+ * away (theta_max = 0.05), and sample_uniform_cone's sin(theta) from
+ * 1 - cos^2 in float adds about as much. A ray within 1e-5 radians of the
+ * silhouette counts as a hit (which adds 2 x 1e-5 / 0.05 = 4e-4 to the
+ * pdf's integral there, far below the test's noise). */
+static const double SPHERE_SILHOUETTE_SLACK = 1e-5;
+
+static float sphere_chi2_cos_max(const sphere_chi2 *s)
+{
+    float d = vec3_length(vec3_sub(s->centre, s->p)), r = s->radius;
+    return s->tan_twin ? d / sqrtf(d * d + r * r) : sqrtf(fmaxf(0.0f, 1.0f - (r * r) / (d * d)));
+}
+
+static bool sphere_chi2_sample(const void *ctx, const float *u, double point[3])
+{
+    const sphere_chi2 *s = ctx;
+    vec3 axis = vec3_normalize(vec3_sub(s->centre, s->p));
+    vec3 w = frame_to_world(axis, sample_uniform_cone(vec2_make(u[0], u[1]), sphere_chi2_cos_max(s)));
+    double wd[3];
+    dvec(w, wd);
+    chi2_frame_local(&s->frame, wd, point);
+    return true;
+}
+
+static double sphere_chi2_pdf(const void *ctx, const double point[3])
+{
+    const sphere_chi2 *s = ctx;
+    double d[3], c[3], p[3], pc[3];
+    chi2_frame_world(&s->frame, point, d);
+    dvec(s->centre, c), dvec(s->p, p);
+    dsub(c, p, pc);
+    /* the angle between d and the centre, against the silhouette's */
+    double cross[3];
+    dcross(pc, d, cross);
+    double angle = atan2(sqrt(ddot(cross, cross)), ddot(pc, d));
+    double silhouette = asin((double)s->radius / sqrt(ddot(pc, pc)));
+    return angle <= silhouette + SPHERE_SILHOUETTE_SLACK ? uniform_cone_pdf(sphere_chi2_cos_max(s)) : 0.0;
+}
+
+/* The light scenes: one triangle; a quad cut into two triangles of
+ * different areas (2 and 0.8), so that the pick between them matters;
+ * each alone, as the path tracer would sample it. */
+static void light_scene_triangle(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_make(4.0f, 3.0f, 2.0f)));
+    pt_scene_add_triangle(sc, vec3_make(-0.5f, 1.0f, -0.3f), vec3_make(0.6f, 1.1f, -0.2f), vec3_make(0.1f, 0.95f, 0.5f),
+                          light);
+    pt_scene_finish(sc);
+}
+
+static void light_scene_quad(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_splat(5.0f)));
+    pt_scene_add_quad(sc, vec3_make(-1, 2, -1), vec3_make(1, 2, -1), vec3_make(0.4f, 2, 1), vec3_make(-0.4f, 2, 1), light);
+    pt_scene_finish(sc);
+}
+
+/* Four triangles of different areas and radiances: the pick by power. */
+static const float PICK_EMISSION[4] = {1.0f, 8.0f, 3.0f, 0.5f};
+static const float PICK_SIZE[4] = {1.0f, 0.4f, 0.7f, 2.0f};
+
+static void light_scene_four(pt_scene *sc, double probability[4])
+{
+    pt_scene_init(sc);
+    double total = 0.0;
+    for (int k = 0; k < 4; k++) {
+        int m = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_make(PICK_EMISSION[k], PICK_EMISSION[k] * 0.5f,
+                                                                                 PICK_EMISSION[k] * 1.5f)));
+        float x = 3.0f * (float)k, h = PICK_SIZE[k];
+        pt_scene_add_triangle(sc, vec3_make(x, 0, 0), vec3_make(x + h, 0, 0), vec3_make(x, 0, h), m);
+        probability[k] = 0.5 * (double)h * (double)h * (double)PICK_EMISSION[k]; /* area x mean(L_e) */
+        total += probability[k];
+    }
+    for (int k = 0; k < 4; k++)
+        probability[k] /= total;
+    pt_scene_finish(sc);
+}
+
+/* Which of the four is picked, N times (its material says which). */
+static chi2_result light_pick_chi2(const pt_scene *sc, const double probability[4], chi2_points points)
+{
+    double observed[4] = {0, 0, 0, 0};
+    for (long n = 0; n < CHI2_ATTEMPTS; n++) {
+        float u[3];
+        points.fill(points.state, (uint32_t)n, u, 3);
+        vec3 point, normal;
+        float error;
+        int material;
+        assert_true(pt_scene_sample_emitter(sc, u[0], u[1], u[2], &point, &error, &normal, &material));
+        observed[material] += 1.0;
+    }
+    chi2_result r = chi2_verdict(observed, probability, 4, CHI2_ATTEMPTS);
+    r.samples = CHI2_ATTEMPTS;
+    r.total = 1.0;
+    return r;
+}
+
+/* Where a light is seen from: near (a third of its size off its face),
+ * far (30 times its size), grazing (1 degree above its plane). */
+typedef enum { VIEW_NEAR, VIEW_FAR, VIEW_GRAZING } light_view;
+static const char *const LIGHT_VIEW_NAMES[] = {"near", "far", "grazing"};
+
+static vec3 light_viewpoint(const pt_scene *sc, light_view view)
+{
+    const triangle *t = &sc->triangles.triangles[sc->emitters[0]];
+    vec3 centre = vec3_scale(vec3_add(t->p0, vec3_add(t->p1, t->p2)), 1.0f / 3.0f);
+    vec3 n = sc->emitter_normals[0], along = vec3_normalize(vec3_sub(t->p1, t->p0));
+    switch (view) {
+    case VIEW_NEAR:
+        return vec3_add(centre, vec3_add(vec3_scale(n, 0.3f), vec3_scale(along, 0.1f)));
+    case VIEW_FAR:
+        return vec3_add(centre, vec3_add(vec3_scale(n, 30.0f), vec3_scale(along, 8.0f)));
+    case VIEW_GRAZING:
+        break;
+    }
+    vec3 across = vec3_normalize(vec3_cross(n, along));
+    return vec3_add(centre, vec3_add(vec3_scale(across, 2.0f), vec3_scale(n, 0.035f)));
+}
+
+static chi2_result light_chi2_run(const pt_scene *sc, vec3 p, light_twin twin, chi2_points points)
+{
+    light_box box;
+    light_chi2 l = light_chi2_make(sc, p, twin, &box);
+    chi2_case c = {.measure = CHI2_GNOMONIC, .s_min = box.s_min, .s_max = box.s_max, .t_min = box.t_min,
+                   .t_max = box.t_max, .dimensions = 3, .sample = light_chi2_sample, .pdf = light_chi2_pdf, .ctx = &l};
+    chi2_table tab = chi2_tabulate(&c, 0, 0);
+    chi2_result r = chi2_run(&c, &tab, points, CHI2_ATTEMPTS);
+    chi2_table_free(&tab);
+    return r;
+}
+
+static chi2_result sphere_light_chi2_run(vec3 p, bool tan_twin, chi2_points points)
+{
+    sphere_chi2 s = {.centre = vec3_make(0.5f, -0.2f, 1.0f), .p = p, .radius = 0.75f, .tan_twin = tan_twin};
+    s.frame = chi2_frame_around(vec3_sub(s.centre, p));
+    double theta_max = fmin(PI, 1.02 * asin((double)s.radius / vec3_length(vec3_sub(s.centre, p))) + 1e-4);
+    chi2_case c = {.measure = CHI2_SPHERE, .s_max = theta_max, .dimensions = 2, .sample = sphere_chi2_sample,
+                   .pdf = sphere_chi2_pdf, .ctx = &s};
+    chi2_table tab = chi2_tabulate(&c, 0, 0);
+    chi2_result r = chi2_run(&c, &tab, points, CHI2_ATTEMPTS);
+    chi2_table_free(&tab);
+    return r;
+}
+
+/* Seen from near (1.05 radii from the centre), 3 and 20 radii. */
+static vec3 sphere_viewpoint(int k)
+{
+    const float distances[3] = {1.05f, 3.0f, 20.0f};
+    return vec3_add(vec3_make(0.5f, -0.2f, 1.0f), vec3_scale(vec3_normalize(vec3_make(0.2f, 1.0f, -0.4f)),
+                                                             0.75f * distances[k]));
+}
+
+/* The light family: a triangle and a quad from near, far and grazing, a
+ * sphere from near, 3 and 20 radii, and the pick among four lights by
+ * power, with random and Sobol points: 20 tests. Point lights need none:
+ * a point light is one direction, taken with probability 1
+ * (point_lights() in path_tracer.c adds each, unsampled). */
+enum { LIGHT_FAMILY = 2 * (3 + 3 + 3 + 1) };
+
+static void test_chi2_lights_sample_their_pdf(void **state)
+{
+    (void)state;
+    chi2_family family = {.count = 0};
+    pt_scene triangle_light, quad_light, four;
+    light_scene_triangle(&triangle_light);
+    light_scene_quad(&quad_light);
+    double probability[4];
+    light_scene_four(&four, probability);
+    for (int which = 0; which < 2; which++) {
+        chi2_sources src;
+        char name[CHI2_NAME_SIZE];
+        for (int v = 0; v < 3; v++) {
+            chi2_points points = chi2_source(&src, 400 + (uint64_t)v, which);
+            chi2_result r = light_chi2_run(&triangle_light, light_viewpoint(&triangle_light, v), LIGHT_TWIN_NONE, points);
+            snprintf(name, sizeof name, "triangle light seen %s, %s", LIGHT_VIEW_NAMES[v], points.name);
+            chi2_family_add(&family, name, &r);
+            points = chi2_source(&src, 410 + (uint64_t)v, which);
+            r = light_chi2_run(&quad_light, light_viewpoint(&quad_light, v), LIGHT_TWIN_NONE, points);
+            snprintf(name, sizeof name, "quad light seen %s, %s", LIGHT_VIEW_NAMES[v], points.name);
+            chi2_family_add(&family, name, &r);
+            points = chi2_source(&src, 420 + (uint64_t)v, which);
+            r = sphere_light_chi2_run(sphere_viewpoint(v), false, points);
+            snprintf(name, sizeof name, "sphere light seen from %s radii, %s", v == 0 ? "1.05" : v == 1 ? "3" : "20",
+                     points.name);
+            chi2_family_add(&family, name, &r);
+        }
+        chi2_points points = chi2_source(&src, 430, which);
+        chi2_result r = light_pick_chi2(&four, probability, points);
+        snprintf(name, sizeof name, "four lights picked by power, %s", points.name);
+        chi2_family_add(&family, name, &r);
+    }
+    assert_int_equal(family.count, LIGHT_FAMILY);
+    assert_int_equal(chi2_family_holm(&family, CHI2_FAMILY_ALPHA), 0);
+    pt_scene_free(&triangle_light);
+    pt_scene_free(&quad_light);
+    pt_scene_free(&four);
+}
+
+static void test_chi2_light_twins_fail(void **state)
+{
+    (void)state;
+    chi2_sources src;
+    pt_scene quad_light, triangle_light, four;
+    light_scene_quad(&quad_light);
+    light_scene_triangle(&triangle_light);
+    chi2_result r = light_chi2_run(&quad_light, light_viewpoint(&quad_light, VIEW_GRAZING), LIGHT_TWIN_NO_COS,
+                                   chi2_source(&src, 440, 0));
+    chi2_assert_twin_fails("quad light seen grazing, cos(theta') dropped", &r, LIGHT_FAMILY);
+    r = light_chi2_run(&triangle_light, light_viewpoint(&triangle_light, VIEW_NEAR), LIGHT_TWIN_NO_SQRT,
+                       chi2_source(&src, 441, 0));
+    chi2_assert_twin_fails("triangle light seen near, warp without its sqrt", &r, LIGHT_FAMILY);
+    r = light_chi2_run(&triangle_light, light_viewpoint(&triangle_light, VIEW_FAR), LIGHT_TWIN_NO_SQRT,
+                       chi2_source(&src, 442, 1));
+    chi2_assert_twin_fails("triangle light seen far, warp without its sqrt, Sobol", &r, LIGHT_FAMILY);
+    r = sphere_light_chi2_run(sphere_viewpoint(0), true, chi2_source(&src, 443, 0));
+    chi2_assert_twin_fails("sphere light from 1.05 radii, cone from tan", &r, LIGHT_FAMILY);
+    /* the pick with one light's power 10 % too large in the running sum */
+    double probability[4];
+    light_scene_four(&four, probability);
+    double extra = 0.1 * (four.emitter_cdf[1] - four.emitter_cdf[0]);
+    for (int k = 1; k < four.emitter_count; k++)
+        four.emitter_cdf[k] += extra;
+    four.emitter_power += extra;
+    r = light_pick_chi2(&four, probability, chi2_source(&src, 444, 0));
+    chi2_assert_twin_fails("four lights, one's power 10 % too large", &r, LIGHT_FAMILY);
+    pt_scene_free(&quad_light);
+    pt_scene_free(&triangle_light);
+    pt_scene_free(&four);
 }
 
 /* ---- scene files and effects ------------------------------------------------------ */
@@ -2438,6 +2853,8 @@ int main(void)
         cmocka_unit_test(test_ggx_samples_follow_their_pdf_at_an_angle),
         cmocka_unit_test(test_chi2_bsdfs_sample_their_pdf),
         cmocka_unit_test(test_chi2_bsdf_twins_fail),
+        cmocka_unit_test(test_chi2_lights_sample_their_pdf),
+        cmocka_unit_test(test_chi2_light_twins_fail),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
         cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),

@@ -33,6 +33,7 @@
 #include "pt_scene_check.h"
 #include "test_support.h"
 #include "chi2.h"
+#include "chi2_sobol.h"
 
 /* How many standard errors a pixel may be from the truth, in the per-pixel
  * comparisons (count_disagreements) that are left. */
@@ -1056,38 +1057,6 @@ static void test_ggx_samples_follow_their_pdf_at_an_angle(void **state)
  * which sees a lobe whose width is off by 10 % (X^2 in the thousands) and
  * keeps the family at a few seconds. */
 enum { CHI2_ATTEMPTS = 100000 };
-
-/* Sobol points: attempt i is point i of one pixel's scrambled sequence,
- * coordinates 0, 1, ... (as a path's first numbers). */
-typedef struct {
-    uint64_t seed;
-    pcg32 rng; /* beyond the sequence's dimensions (never, here) */
-} chi2_sobol_state;
-
-static void chi2_fill_sobol(void *state, uint32_t index, float *u, int count)
-{
-    chi2_sobol_state *st = state;
-    sobol_sampler s = sobol_sampler_start(st->seed, 0, index, &st->rng);
-    for (int k = 0; k < count; k++)
-        u[k] = sobol_sampler_next(&s);
-}
-
-/* The two sources of points, seeded from `seed`. */
-typedef struct {
-    pcg32 rng;
-    chi2_sobol_state sobol;
-} chi2_sources;
-
-static chi2_points chi2_source(chi2_sources *src, uint64_t seed, int which)
-{
-    if (which == 0) {
-        src->rng = pcg32_for_pixel(test_seed(seed), 0);
-        return chi2_random_points(&src->rng);
-    }
-    src->sobol.seed = test_seed(seed);
-    src->sobol.rng = pcg32_for_pixel(test_seed(seed), 1);
-    return (chi2_points){"sobol", chi2_fill_sobol, &src->sobol};
-}
 
 static vec3 vec3_from_double(const double w[3]) { return vec3_make((float)w[0], (float)w[1], (float)w[2]); }
 

@@ -11,6 +11,7 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -1269,6 +1270,148 @@ static void test_chi2_bsdf_twins_fail(void **state)
     chi2_assert_twin_fails("glass entering, reflection 10 % too often, cos 0.1", &r, BSDF_FAMILY);
     r = glass_lobe_chi2(1.0, true, true, chi2_source(&src, 397, 0));
     chi2_assert_twin_fails("glass entering, reflection 10 % too often, cos 1", &r, BSDF_FAMILY);
+}
+
+/* ---- what a pdf integrates to, and sample against eval and pdf ----------------------
+ * A lobe's pdf over the whole sphere is the probability that bsdf_sample
+ * gives a direction at all: 1 for the diffuse lobe; for GGX, 1 less the
+ * visible normals whose mirror direction falls below the horizon (the
+ * sample refused), never above 1. That probability is also the fraction
+ * of the square of u that bsdf_sample accepts, counted here on a grid of
+ * U_GRID^2 midpoints: deterministic, no seed. */
+enum { U_GRID = 512 };
+/* The count is off by at most the grid cells the boundary of the refused
+ * region crosses, a fraction ~ its length / U_GRID; seen from straight
+ * above that boundary is a line u1 = const (theta_h depends on u1 only),
+ * off by up to half a column, 1 / (2 U_GRID) = 1e-3. The integral's
+ * quadrature (chi2_tabulate: refined cells, 1e-3 of a cell at most) adds
+ * ~1e-4. 2e-3 holds both; a pdf missing a factor such as G1(wo) or its
+ * Jacobian is off by several percent. */
+static const double PDF_INTEGRAL_TOLERANCE = 2e-3;
+
+static double accepted_fraction(const bsdf_chi2 *b)
+{
+    long accepted = 0;
+    for (int i = 0; i < U_GRID; i++)
+        for (int j = 0; j < U_GRID; j++) {
+            float u[2] = {(i + 0.5f) / U_GRID, (j + 0.5f) / U_GRID};
+            double point[3];
+            accepted += bsdf_chi2_sample(b, u, point);
+        }
+    return (double)accepted / ((double)U_GRID * U_GRID);
+}
+
+static double pdf_integral(const bsdf_chi2 *b)
+{
+    chi2_case c = bsdf_chi2_case(b);
+    chi2_table tab = chi2_tabulate(&c, 128, 256);
+    double total = tab.total;
+    chi2_table_free(&tab);
+    return total;
+}
+
+static void test_bsdf_pdfs_integrate_to_their_acceptance(void **state)
+{
+    (void)state;
+    for (int a = 0; a < CHI2_ANGLES; a++) {
+        bsdf_chi2 b = bsdf_chi2_make(pt_diffuse(vec3_splat(0.8f)), CHI2_COS_O[a], BSDF_TWIN_NONE);
+        assert_close(pdf_integral(&b), 1.0, PDF_INTEGRAL_TOLERANCE);
+        assert_close(accepted_fraction(&b), 1.0, 0.0);
+        for (int k = 0; k < CHI2_ROUGHNESSES; k++) {
+            b = bsdf_chi2_make(pt_glossy(vec3_splat(0.9f), CHI2_ALPHAS[k]), CHI2_COS_O[a], BSDF_TWIN_NONE);
+            double integral = pdf_integral(&b), accepted = accepted_fraction(&b);
+            print_message("GGX alpha %.2f, cos(theta_o) %.2f: pdf integrates to %.5f, sample accepts %.5f of u\n",
+                          (double)CHI2_ALPHAS[k], CHI2_COS_O[a], integral, accepted);
+            assert_true(integral <= 1.0 + PDF_INTEGRAL_TOLERANCE);
+            assert_close(integral, accepted, PDF_INTEGRAL_TOLERANCE);
+        }
+    }
+    /* the twin: the density of h, not of wi (the Jacobian dropped) */
+    bsdf_chi2 b = bsdf_chi2_make(pt_glossy(vec3_splat(0.9f), 0.3f), 0.7, BSDF_TWIN_NO_JACOBIAN);
+    double integral = pdf_integral(&b), accepted = accepted_fraction(&b);
+    print_message("twin, Jacobian dropped: integrates to %.4f against %.4f accepted\n", integral, accepted);
+    assert_false(fabs(integral - accepted) <= PDF_INTEGRAL_TOLERANCE);
+}
+
+/* A sample's pdf and weight are bsdf_pdf and bsdf_eval cos / bsdf_pdf at
+ * its direction, to float precision, for every material and angle (a
+ * 32 x 32 grid of u, and for glass 16 values of u_lobe on each side).
+ * The sample and the two functions round differently only where they
+ * compute cos(theta_i) differently (the diffuse sample takes it from its
+ * local z, bsdf_pdf from a dot product in world space): a few float steps
+ * of a unit vector, FLOAT_AGREEMENT absolute on the cosine; the weight is
+ * then the same quotient, agreeing to a few steps relative. Delta lobes
+ * have eval and pdf 0 for every direction one could name; their samples
+ * are the mirror direction (and for glass, the refracted one, by Snell's
+ * law), with the probability of their lobe as pdf, the two summing to 1. */
+static const double FLOAT_AGREEMENT = 8.0 * FLT_EPSILON;
+
+static void check_delta_sample(const pt_material *m, vec3 n, vec3 wo, bool entering, const bsdf_sample_result *s)
+{
+    assert_true(s->is_delta);
+    assert_true(vec3_is_black(bsdf_eval(m, n, wo, s->wi)));
+    assert_true(bsdf_pdf(m, n, wo, s->wi) == 0.0f);
+    assert_close(s->weight.x, m->albedo.x, 0.0);
+    double cos_o = vec3_dot(n, wo), cos_i = vec3_dot(n, s->wi);
+    /* in the plane of n and wo */
+    vec3 plane = vec3_normalize(vec3_cross(n, wo));
+    if (fabs(cos_o) < 1.0 - 1e-6)
+        assert_close(vec3_dot(plane, s->wi), 0.0, FLOAT_AGREEMENT);
+    if (!s->is_transmission) {
+        vec3 mirror = vec3_reflect(vec3_neg(wo), n);
+        assert_close(vec3_length(vec3_sub(s->wi, mirror)), 0.0, FLOAT_AGREEMENT);
+        return;
+    }
+    /* Snell: eta_o sin(theta_o) = eta_i sin(theta_i), on the other side */
+    double eta_o = entering ? 1.0 : m->ior, eta_i = entering ? m->ior : 1.0;
+    assert_true(cos_i < 0.0);
+    assert_close(eta_o * sqrt(1.0 - cos_o * cos_o), eta_i * sqrt(1.0 - cos_i * cos_i), 4.0 * FLOAT_AGREEMENT);
+}
+
+static void test_bsdf_samples_agree_with_eval_and_pdf(void **state)
+{
+    (void)state;
+    pt_material materials[2 + CHI2_ROUGHNESSES + 1];
+    materials[0] = pt_diffuse(vec3_make(0.8f, 0.5f, 0.2f));
+    for (int k = 0; k < CHI2_ROUGHNESSES; k++)
+        materials[1 + k] = pt_glossy(vec3_make(0.9f, 0.6f, 0.3f), CHI2_ALPHAS[k]);
+    materials[1 + CHI2_ROUGHNESSES] = pt_mirror(vec3_splat(0.95f));
+    materials[2 + CHI2_ROUGHNESSES] = pt_glass(1.5f);
+    long checked = 0;
+    for (size_t mi = 0; mi < sizeof materials / sizeof materials[0]; mi++)
+        for (int a = 0; a < CHI2_ANGLES; a++)
+            for (int side = 0; side < (materials[mi].kind == BSDF_GLASS ? 2 : 1); side++) {
+                const pt_material *m = &materials[mi];
+                double cos_o = side == 0 ? CHI2_COS_O[a] : CHI2_COS_O_LEAVING[a];
+                bsdf_chi2 b = bsdf_chi2_make(*m, cos_o, BSDF_TWIN_NONE);
+                double lobe_pdf[2] = {0, 0};
+                for (int i = 0; i < 32; i++)
+                    for (int j = 0; j < 32; j++) {
+                        vec2 u = vec2_make((i + 0.5f) / 32, (j + 0.5f) / 32);
+                        bsdf_sample_result s;
+                        if (!bsdf_sample(m, b.n, b.wo, u, (j + 0.5f) / 32, side == 0, &s))
+                            continue;
+                        checked++;
+                        if (bsdf_is_delta(m)) {
+                            check_delta_sample(m, b.n, b.wo, side == 0, &s);
+                            lobe_pdf[s.is_transmission] = s.pdf;
+                            continue;
+                        }
+                        float cos_i = vec3_dot(b.n, s.wi), pdf = bsdf_pdf(m, b.n, b.wo, s.wi);
+                        vec3 f = bsdf_eval(m, b.n, b.wo, s.wi);
+                        float tolerance = (float)FLOAT_AGREEMENT * (s.pdf + (float)(1.0 / PI));
+                        assert_close(s.pdf, pdf, tolerance);
+                        float expected[3] = {f.x * cos_i / pdf, f.y * cos_i / pdf, f.z * cos_i / pdf};
+                        float weight[3] = {s.weight.x, s.weight.y, s.weight.z};
+                        for (int c = 0; c < 3; c++)
+                            assert_close(weight[c], expected[c], FLOAT_AGREEMENT * expected[c]);
+                    }
+                if (m->kind == BSDF_MIRROR)
+                    assert_close(lobe_pdf[0], 1.0, 0.0);
+                if (m->kind == BSDF_GLASS && lobe_pdf[1] > 0.0)
+                    assert_close(lobe_pdf[0] + lobe_pdf[1], 1.0, FLOAT_AGREEMENT);
+            }
+    assert_true(checked > 40000);
 }
 
 /* -- lights: the directions in which pt_scene_sample_light's points are seen -- */
@@ -2822,6 +2965,8 @@ int main(void)
         cmocka_unit_test(test_ggx_samples_follow_their_pdf_at_an_angle),
         cmocka_unit_test(test_chi2_bsdfs_sample_their_pdf),
         cmocka_unit_test(test_chi2_bsdf_twins_fail),
+        cmocka_unit_test(test_bsdf_pdfs_integrate_to_their_acceptance),
+        cmocka_unit_test(test_bsdf_samples_agree_with_eval_and_pdf),
         cmocka_unit_test(test_chi2_lights_sample_their_pdf),
         cmocka_unit_test(test_chi2_light_twins_fail),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),

@@ -563,13 +563,23 @@ static inline chi2_frame chi2_frame_around(vec3 axis)
     return chi2_frame_toward(axis, least);
 }
 
-/* World direction -> the frame's coordinates, normalized. */
+/* World vector -> the frame's coordinates: a rotation only, so that a
+ * sampler's float direction, taken to the frame and back with
+ * chi2_frame_world, rounds to the very same floats. (Normalizing it on
+ * the way, as this once did, moved a direction drawn within 1e-8 of the
+ * horizon below it: GGX's pdf there is 0, and a correct sample counted as
+ * impossible, once in 200 seeds.) */
 static inline void chi2_frame_local(const chi2_frame *f, const double w[3], double local[3])
 {
+    local[0] = w[0] * f->x[0] + w[1] * f->x[1] + w[2] * f->x[2];
+    local[1] = w[0] * f->y[0] + w[1] * f->y[1] + w[2] * f->y[2];
+    local[2] = w[0] * f->z[0] + w[1] * f->z[1] + w[2] * f->z[2];
+}
+
+static inline void chi2_normalize(double w[3])
+{
     double l = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
-    local[0] = (w[0] * f->x[0] + w[1] * f->x[1] + w[2] * f->x[2]) / l;
-    local[1] = (w[0] * f->y[0] + w[1] * f->y[1] + w[2] * f->y[2]) / l;
-    local[2] = (w[0] * f->z[0] + w[1] * f->z[1] + w[2] * f->z[2]) / l;
+    w[0] /= l, w[1] /= l, w[2] /= l;
 }
 
 static inline void chi2_frame_world(const chi2_frame *f, const double local[3], double w[3])

@@ -1486,6 +1486,7 @@ static bool light_chi2_sample(const void *ctx, const float *u, double point[3])
     if (!pt_scene_sample_light(l->sc, u[0], u1, u[2], &x))
         return false;
     double w[3] = {(double)x.point.x - l->p[0], (double)x.point.y - l->p[1], (double)x.point.z - l->p[2]};
+    chi2_normalize(w);
     chi2_frame_local(&l->frame, w, point);
     return true;
 }
@@ -1496,6 +1497,7 @@ static double light_chi2_pdf(const void *ctx, const double point[3])
     const pt_scene *sc = l->sc;
     double d[3], pdf = 0.0;
     chi2_frame_world(&l->frame, point, d);
+    chi2_normalize(d); /* the distance along it is |x' - p| */
     for (int e = 0; e < sc->emitter_count; e++) {
         const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
         double distance = ray_triangle_double(l->p, d, t->p0, t->p1, t->p2);
@@ -1530,6 +1532,7 @@ static bool light_vertices_within(const light_chi2 *l, double angle)
             double w[3], local[3];
             dvec(v[k], w);
             dsub(w, l->p, w);
+            chi2_normalize(w);
             chi2_frame_local(&l->frame, w, local);
             if (!(local[2] > cos(angle)))
                 return false;

@@ -11,6 +11,7 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -33,6 +34,8 @@
 #include "image_check.h"
 #include "pt_scene_check.h"
 #include "test_support.h"
+#include "chi2.h"
+#include "chi2_sobol.h"
 
 /* How many standard errors a pixel may be from the truth, in the per-pixel
  * comparisons (count_disagreements) that are left. */
@@ -1039,6 +1042,817 @@ static void test_ggx_samples_follow_their_pdf_at_an_angle(void **state)
                   worst, worst_twin);
     assert_true(worst < 4.0);
     assert_true(worst_twin > 4.0);
+}
+
+/* ---- chi-square: every sampler against its pdf (tests/chi2.h) ---------------------
+ * Each sampler of the path tracer -- the BSDFs' bsdf_sample, the lights'
+ * pt_scene_sample_light -- draws N attempts, counted in bins over the
+ * sphere of directions that follow the pdf (chi2.h says how), and
+ * Pearson's test compares the counts with N times the pdf's integral per
+ * bin: what would catch a pdf off by a cosine, a Jacobian dropped, a lobe
+ * chosen with the wrong probability, or a wrong branch at grazing angles.
+ * Every case runs twice, with independent random numbers and with the
+ * scrambled Sobol points of --sampler sobol. A family (one test function)
+ * fails a correct renderer with probability CHI2_FAMILY_ALPHA = 1e-6
+ * (Holm's correction); each twin feeds one deliberate mistake and must
+ * fall below the family's strictest threshold. */
+
+/* Attempts per case: with about 24 x 24 bins of equal probability, each
+ * bin expects ~170 samples (relative noise 1 / sqrt(170) = 8 % per bin),
+ * which sees a lobe whose width is off by 10 % (X^2 in the thousands) and
+ * keeps the family at a few seconds. */
+enum { CHI2_ATTEMPTS = 100000, GLASS_TWIN_ATTEMPTS = 400000 };
+
+static vec3 vec3_from_double(const double w[3]) { return vec3_make((float)w[0], (float)w[1], (float)w[2]); }
+
+/* -- BSDFs: the sphere about the normal -- */
+
+typedef enum {
+    BSDF_TWIN_NONE,
+    BSDF_TWIN_PDF_WITHOUT_COS, /* diffuse: the uniform hemisphere's 1 / (2 pi) */
+    BSDF_TWIN_NO_JACOBIAN,     /* GGX: the density of h, the reflection's 1 / (4 wo.h) dropped */
+    BSDF_TWIN_D_COS,           /* GGX: h drawn from D(h) cos(theta_h), counted against the visible normals' pdf */
+    BSDF_TWIN_WIDER_LOBE,      /* GGX: drawn at 1.1 alpha, counted against alpha's pdf */
+} bsdf_twin;
+
+typedef struct {
+    pt_material m;
+    vec3 n, wo;
+    chi2_frame frame; /* about n, made independently of the renderer's basis */
+    bsdf_twin twin;
+} bsdf_chi2;
+
+/* The normal is tilted off every axis, so that the renderer's frame
+ * (vec3_basis) is exercised; wo at cos(theta_o) from it, at some azimuth. */
+static bsdf_chi2 bsdf_chi2_make(pt_material m, double cos_o, bsdf_twin twin)
+{
+    bsdf_chi2 b;
+    b.m = m;
+    b.twin = twin;
+    b.n = vec3_normalize(vec3_make(0.3f, -0.2f, 0.93f));
+    b.frame = chi2_frame_around(b.n);
+    double sin_o = sqrt(1.0 - cos_o * cos_o), local[3] = {sin_o * cos(0.7), sin_o * sin(0.7), cos_o}, w[3];
+    chi2_frame_world(&b.frame, local, w);
+    b.wo = vec3_normalize(vec3_from_double(w));
+    return b;
+}
+
+static bool bsdf_chi2_sample(const void *ctx, const float *u, double point[3])
+{
+    const bsdf_chi2 *b = ctx;
+    vec3 wi;
+    if (b->twin == BSDF_TWIN_D_COS) {
+        wi = ggx_direction_from_d_cos(&b->m, b->n, b->wo, vec2_make(u[0], u[1]));
+        if (!(vec3_dot(b->n, wi) > 0.0f))
+            return false;
+    } else {
+        pt_material m = b->m;
+        if (b->twin == BSDF_TWIN_WIDER_LOBE)
+            m.roughness *= 1.1f;
+        bsdf_sample_result s;
+        if (!bsdf_sample(&m, b->n, b->wo, vec2_make(u[0], u[1]), 0.5f, true, &s))
+            return false;
+        wi = s.wi;
+    }
+    double w[3] = {wi.x, wi.y, wi.z};
+    chi2_frame_local(&b->frame, w, point);
+    return true;
+}
+
+static double bsdf_chi2_pdf(const void *ctx, const double point[3])
+{
+    const bsdf_chi2 *b = ctx;
+    double w[3];
+    chi2_frame_world(&b->frame, point, w);
+    vec3 wi = vec3_from_double(w);
+    switch (b->twin) {
+    case BSDF_TWIN_PDF_WITHOUT_COS:
+        return vec3_dot(b->n, wi) > 0.0f ? 1.0 / (2.0 * PI) : 0.0;
+    case BSDF_TWIN_NO_JACOBIAN: {
+        vec3 h = vec3_normalize(vec3_add(b->wo, wi));
+        return bsdf_pdf(&b->m, b->n, b->wo, wi) * 4.0 * vec3_dot(b->wo, h);
+    }
+    default:
+        return bsdf_pdf(&b->m, b->n, b->wo, wi);
+    }
+}
+
+static chi2_case bsdf_chi2_case(const bsdf_chi2 *b)
+{
+    return (chi2_case){.measure = CHI2_SPHERE, .s_max = PI, .dimensions = 2, .sample = bsdf_chi2_sample,
+                       .pdf = bsdf_chi2_pdf, .ctx = b};
+}
+
+/* The incident angles, normal to grazing, and GGX's roughnesses. */
+static const double CHI2_COS_O[] = {1.0, 0.7, 0.3, 0.1, 0.05};
+static const float CHI2_ALPHAS[] = {0.05f, 0.1f, 0.3f, 0.6f, 1.0f};
+/* Leaving glass of index 1.5, light refracts only below the critical
+ * angle, cos(theta_o) > 0.745: these reach it (the refracted ray grazing
+ * at 0.76) and pass it (0.3, total internal reflection, one lobe). */
+static const double CHI2_COS_O_LEAVING[] = {1.0, 0.9, 0.8, 0.76, 0.3};
+enum { CHI2_ANGLES = 5, CHI2_ROUGHNESSES = 5 };
+
+/* Adds one material at one angle to the family, with both sources. */
+static void bsdf_chi2_add(chi2_family *family, const bsdf_chi2 *b, const char *what, uint64_t seed)
+{
+    chi2_case c = bsdf_chi2_case(b);
+    chi2_table tab = chi2_tabulate(&c, 0, 0);
+    for (int which = 0; which < 2; which++) {
+        chi2_sources src;
+        chi2_points points = chi2_source(&src, seed, which);
+        chi2_result r = chi2_run(&c, &tab, points, CHI2_ATTEMPTS);
+        char name[CHI2_NAME_SIZE];
+        snprintf(name, sizeof name, "%s, cos(theta_o) %.2f, %s", what, (double)vec3_dot(b->wo, b->n), points.name);
+        chi2_family_add(family, name, &r);
+    }
+    chi2_table_free(&tab);
+}
+
+/* -- glass: two delta lobes, a choice between them -- */
+
+/* Of N draws of u_lobe (the direction's u does not matter to a delta
+ * lobe), how many reflect and how many refract, against the probability
+ * each lobe's sample reports as its pdf; the two must sum to 1. With
+ * total internal reflection only one lobe is left (p = 1). `twin`
+ * reflects with 1.1 times the probability it reports. */
+static chi2_result glass_lobe_chi2(double cos_o, bool entering, bool twin, chi2_points points, long attempts)
+{
+    pt_material m = pt_glass(1.5f);
+    bsdf_chi2 b = bsdf_chi2_make(m, cos_o, BSDF_TWIN_NONE);
+    double observed[2] = {0, 0}, probability[2] = {0, 0};
+    for (long k = 0; k < attempts; k++) {
+        float u;
+        points.fill(points.state, (uint32_t)k, &u, 1);
+        bsdf_sample_result s;
+        bool ok = bsdf_sample(&m, b.n, b.wo, vec2_make(0.5f, 0.5f), twin ? u / 1.1f : u, entering, &s);
+        assert_true(ok && s.is_delta);
+        observed[s.is_transmission] += 1.0;
+        probability[s.is_transmission] = s.pdf;
+    }
+    /* a lobe never drawn reports no pdf: it is 1 minus the other's */
+    if (observed[0] == 0.0)
+        probability[0] = 1.0 - probability[1];
+    if (observed[1] == 0.0)
+        probability[1] = 1.0 - probability[0];
+    assert_close(probability[0] + probability[1], 1.0, 1e-6);
+    chi2_result r = chi2_verdict(observed, probability, 2, attempts);
+    r.samples = attempts;
+    r.total = probability[0] + probability[1];
+    return r;
+}
+
+/* The BSDF family: diffuse, GGX at five roughnesses, and glass's choice of
+ * lobe entering and leaving, each at five angles from normal to grazing
+ * (leaving glass: up to and past the critical angle),
+ * with random and Sobol points: 80 tests. The mirror has one delta lobe
+ * of probability 1 (nothing to count: test_bsdf_samples_agree_with_eval_
+ * and_pdf checks its direction and pdf). */
+enum { BSDF_FAMILY = 2 * CHI2_ANGLES * (1 + CHI2_ROUGHNESSES + 2) };
+
+static void test_chi2_bsdfs_sample_their_pdf(void **state)
+{
+    (void)state;
+    chi2_family family = {.count = 0};
+    for (int a = 0; a < CHI2_ANGLES; a++) {
+        bsdf_chi2 b = bsdf_chi2_make(pt_diffuse(vec3_splat(0.8f)), CHI2_COS_O[a], BSDF_TWIN_NONE);
+        bsdf_chi2_add(&family, &b, "diffuse", 300 + (uint64_t)a);
+        for (int k = 0; k < CHI2_ROUGHNESSES; k++) {
+            char what[48];
+            snprintf(what, sizeof what, "GGX alpha %.2f", (double)CHI2_ALPHAS[k]);
+            b = bsdf_chi2_make(pt_glossy(vec3_splat(0.9f), CHI2_ALPHAS[k]), CHI2_COS_O[a], BSDF_TWIN_NONE);
+            bsdf_chi2_add(&family, &b, what, 310 + 10 * (uint64_t)a + (uint64_t)k);
+        }
+        for (int side = 0; side < 2; side++)
+            for (int which = 0; which < 2; which++) {
+                chi2_sources src;
+                chi2_points points = chi2_source(&src, 370 + 2 * (uint64_t)a + (uint64_t)side, which);
+                double cos_o = side == 0 ? CHI2_COS_O[a] : CHI2_COS_O_LEAVING[a];
+                chi2_result r = glass_lobe_chi2(cos_o, side == 0, false, points, CHI2_ATTEMPTS);
+                char name[CHI2_NAME_SIZE];
+                snprintf(name, sizeof name, "glass lobes %s, cos(theta_o) %.2f, %s", side == 0 ? "entering" : "leaving",
+                         cos_o, points.name);
+                chi2_family_add(&family, name, &r);
+            }
+    }
+    assert_int_equal(family.count, BSDF_FAMILY);
+    assert_int_equal(chi2_family_holm(&family, CHI2_FAMILY_ALPHA), 0);
+}
+
+/* Each twin's one mistake, where it shows. */
+static void test_chi2_bsdf_twins_fail(void **state)
+{
+    (void)state;
+    chi2_sources src;
+    struct {
+        const char *name;
+        pt_material m;
+        double cos_o;
+        bsdf_twin twin;
+    } twins[] = {
+        {"diffuse, pdf without its cos (1 / 2 pi)", pt_diffuse(vec3_splat(0.8f)), 0.7, BSDF_TWIN_PDF_WITHOUT_COS},
+        {"GGX alpha 0.3, Jacobian 1 / (4 wo.h) dropped", pt_glossy(vec3_splat(0.9f), 0.3f), 0.7, BSDF_TWIN_NO_JACOBIAN},
+        {"GGX alpha 0.3, h from D cos (not visible normals)", pt_glossy(vec3_splat(0.9f), 0.3f), 0.3, BSDF_TWIN_D_COS},
+        {"GGX alpha 0.05, drawn 10 % wider", pt_glossy(vec3_splat(0.9f), 0.05f), 1.0, BSDF_TWIN_WIDER_LOBE},
+        {"GGX alpha 0.6, drawn 10 % wider, grazing", pt_glossy(vec3_splat(0.9f), 0.6f), 0.05, BSDF_TWIN_WIDER_LOBE},
+    };
+    for (size_t i = 0; i < sizeof twins / sizeof twins[0]; i++) {
+        bsdf_chi2 b = bsdf_chi2_make(twins[i].m, twins[i].cos_o, twins[i].twin);
+        chi2_case c = bsdf_chi2_case(&b);
+        chi2_table tab = chi2_tabulate(&c, 0, 0);
+        chi2_result r = chi2_run(&c, &tab, chi2_source(&src, 390 + i, 0), CHI2_ATTEMPTS);
+        chi2_assert_twin_fails(twins[i].name, &r, BSDF_FAMILY);
+        if (i == 3) { /* and with Sobol points */
+            r = chi2_run(&c, &tab, chi2_source(&src, 390 + i, 1), CHI2_ATTEMPTS);
+            chi2_assert_twin_fails("GGX alpha 0.05, drawn 10 % wider, Sobol", &r, BSDF_FAMILY);
+        }
+        chi2_table_free(&tab);
+    }
+    /* Glass reflecting 10 % more often than its pdf says: at grazing (R =
+     * 0.6) and at normal incidence (R = 0.04, the hardest to see). There
+     * the count of reflections is off by 0.1 R N against a standard
+     * deviation sqrt(R (1 - R) N): 0.0204 sqrt(N) standard deviations,
+     * 6.4 at N = 1e5, barely past the family's threshold (alpha / 80 =
+     * 1.25e-8 is 5.7 standard deviations): the twin passed in 36 of 200
+     * seeds. At GLASS_TWIN_ATTEMPTS it is 12.9, 7 standard deviations
+     * clear of it. */
+    chi2_result r = glass_lobe_chi2(0.1, true, true, chi2_source(&src, 396, 0), CHI2_ATTEMPTS);
+    chi2_assert_twin_fails("glass entering, reflection 10 % too often, cos 0.1", &r, BSDF_FAMILY);
+    r = glass_lobe_chi2(1.0, true, true, chi2_source(&src, 397, 0), GLASS_TWIN_ATTEMPTS);
+    chi2_assert_twin_fails("glass entering, reflection 10 % too often, cos 1", &r, BSDF_FAMILY);
+}
+
+/* ---- what a pdf integrates to, and sample against eval and pdf ----------------------
+ * A lobe's pdf over the whole sphere is the probability that bsdf_sample
+ * gives a direction at all: 1 for the diffuse lobe; for GGX, 1 less the
+ * visible normals whose mirror direction falls below the horizon (the
+ * sample refused), never above 1. That probability is also the fraction
+ * of the square of u that bsdf_sample accepts, counted here on a grid of
+ * U_GRID^2 midpoints: deterministic, no seed. */
+enum { U_GRID = 512 };
+/* The count is off by at most the grid cells the boundary of the refused
+ * region crosses, a fraction ~ its length / U_GRID; seen from straight
+ * above that boundary is a line u1 = const (theta_h depends on u1 only),
+ * off by up to half a column, 1 / (2 U_GRID) = 1e-3. The integral's
+ * quadrature (chi2_tabulate: refined cells, 1e-3 of a cell at most) adds
+ * ~1e-4. 2e-3 holds both; a pdf missing a factor such as G1(wo) or its
+ * Jacobian is off by several percent. */
+static const double PDF_INTEGRAL_TOLERANCE = 2e-3;
+
+static double accepted_fraction(const bsdf_chi2 *b)
+{
+    long accepted = 0;
+    for (int i = 0; i < U_GRID; i++)
+        for (int j = 0; j < U_GRID; j++) {
+            float u[2] = {(i + 0.5f) / U_GRID, (j + 0.5f) / U_GRID};
+            double point[3];
+            accepted += bsdf_chi2_sample(b, u, point);
+        }
+    return (double)accepted / ((double)U_GRID * U_GRID);
+}
+
+static double pdf_integral(const bsdf_chi2 *b)
+{
+    chi2_case c = bsdf_chi2_case(b);
+    chi2_table tab = chi2_tabulate(&c, 128, 256);
+    double total = tab.total;
+    chi2_table_free(&tab);
+    return total;
+}
+
+static void test_bsdf_pdfs_integrate_to_their_acceptance(void **state)
+{
+    (void)state;
+    for (int a = 0; a < CHI2_ANGLES; a++) {
+        bsdf_chi2 b = bsdf_chi2_make(pt_diffuse(vec3_splat(0.8f)), CHI2_COS_O[a], BSDF_TWIN_NONE);
+        assert_close(pdf_integral(&b), 1.0, PDF_INTEGRAL_TOLERANCE);
+        assert_close(accepted_fraction(&b), 1.0, 0.0);
+        for (int k = 0; k < CHI2_ROUGHNESSES; k++) {
+            b = bsdf_chi2_make(pt_glossy(vec3_splat(0.9f), CHI2_ALPHAS[k]), CHI2_COS_O[a], BSDF_TWIN_NONE);
+            double integral = pdf_integral(&b), accepted = accepted_fraction(&b);
+            print_message("GGX alpha %.2f, cos(theta_o) %.2f: pdf integrates to %.5f, sample accepts %.5f of u\n",
+                          (double)CHI2_ALPHAS[k], CHI2_COS_O[a], integral, accepted);
+            assert_true(integral <= 1.0 + PDF_INTEGRAL_TOLERANCE);
+            assert_close(integral, accepted, PDF_INTEGRAL_TOLERANCE);
+        }
+    }
+    /* the twin: the density of h, not of wi (the Jacobian dropped) */
+    bsdf_chi2 b = bsdf_chi2_make(pt_glossy(vec3_splat(0.9f), 0.3f), 0.7, BSDF_TWIN_NO_JACOBIAN);
+    double integral = pdf_integral(&b), accepted = accepted_fraction(&b);
+    print_message("twin, Jacobian dropped: integrates to %.4f against %.4f accepted\n", integral, accepted);
+    assert_false(fabs(integral - accepted) <= PDF_INTEGRAL_TOLERANCE);
+}
+
+/* A sample's pdf and weight are bsdf_pdf and bsdf_eval cos / bsdf_pdf at
+ * its direction, to float precision, for every material and angle (a
+ * 32 x 32 grid of u, and for glass 16 values of u_lobe on each side).
+ * The sample and the two functions round differently only where they
+ * compute cos(theta_i) differently (the diffuse sample takes it from its
+ * local z, bsdf_pdf from a dot product in world space): a few float steps
+ * of a unit vector, FLOAT_AGREEMENT absolute on the cosine; the weight is
+ * then the same quotient, agreeing to a few steps relative. Delta lobes
+ * have eval and pdf 0 for every direction one could name; their samples
+ * are the mirror direction (and for glass, the refracted one, by Snell's
+ * law), with the probability of their lobe as pdf, the two summing to 1. */
+static const double FLOAT_AGREEMENT = 8.0 * FLT_EPSILON;
+
+static void check_delta_sample(const pt_material *m, vec3 n, vec3 wo, bool entering, const bsdf_sample_result *s)
+{
+    assert_true(s->is_delta);
+    assert_true(vec3_is_black(bsdf_eval(m, n, wo, s->wi)));
+    assert_true(bsdf_pdf(m, n, wo, s->wi) == 0.0f);
+    assert_close(s->weight.x, m->albedo.x, 0.0);
+    double cos_o = vec3_dot(n, wo), cos_i = vec3_dot(n, s->wi);
+    /* in the plane of n and wo */
+    vec3 plane = vec3_normalize(vec3_cross(n, wo));
+    if (fabs(cos_o) < 1.0 - 1e-6)
+        assert_close(vec3_dot(plane, s->wi), 0.0, FLOAT_AGREEMENT);
+    if (!s->is_transmission) {
+        vec3 mirror = vec3_reflect(vec3_neg(wo), n);
+        assert_close(vec3_length(vec3_sub(s->wi, mirror)), 0.0, FLOAT_AGREEMENT);
+        return;
+    }
+    /* Snell: eta_o sin(theta_o) = eta_i sin(theta_i), on the other side */
+    double eta_o = entering ? 1.0 : m->ior, eta_i = entering ? m->ior : 1.0;
+    assert_true(cos_i < 0.0);
+    assert_close(eta_o * sqrt(1.0 - cos_o * cos_o), eta_i * sqrt(1.0 - cos_i * cos_i), 4.0 * FLOAT_AGREEMENT);
+}
+
+static void test_bsdf_samples_agree_with_eval_and_pdf(void **state)
+{
+    (void)state;
+    pt_material materials[2 + CHI2_ROUGHNESSES + 1];
+    materials[0] = pt_diffuse(vec3_make(0.8f, 0.5f, 0.2f));
+    for (int k = 0; k < CHI2_ROUGHNESSES; k++)
+        materials[1 + k] = pt_glossy(vec3_make(0.9f, 0.6f, 0.3f), CHI2_ALPHAS[k]);
+    materials[1 + CHI2_ROUGHNESSES] = pt_mirror(vec3_splat(0.95f));
+    materials[2 + CHI2_ROUGHNESSES] = pt_glass(1.5f);
+    long checked = 0;
+    for (size_t mi = 0; mi < sizeof materials / sizeof materials[0]; mi++)
+        for (int a = 0; a < CHI2_ANGLES; a++)
+            for (int side = 0; side < (materials[mi].kind == BSDF_GLASS ? 2 : 1); side++) {
+                const pt_material *m = &materials[mi];
+                double cos_o = side == 0 ? CHI2_COS_O[a] : CHI2_COS_O_LEAVING[a];
+                bsdf_chi2 b = bsdf_chi2_make(*m, cos_o, BSDF_TWIN_NONE);
+                double lobe_pdf[2] = {0, 0};
+                for (int i = 0; i < 32; i++)
+                    for (int j = 0; j < 32; j++) {
+                        vec2 u = vec2_make((i + 0.5f) / 32, (j + 0.5f) / 32);
+                        bsdf_sample_result s;
+                        if (!bsdf_sample(m, b.n, b.wo, u, (j + 0.5f) / 32, side == 0, &s))
+                            continue;
+                        checked++;
+                        if (bsdf_is_delta(m)) {
+                            check_delta_sample(m, b.n, b.wo, side == 0, &s);
+                            lobe_pdf[s.is_transmission] = s.pdf;
+                            continue;
+                        }
+                        float cos_i = vec3_dot(b.n, s.wi), pdf = bsdf_pdf(m, b.n, b.wo, s.wi);
+                        vec3 f = bsdf_eval(m, b.n, b.wo, s.wi);
+                        float tolerance = (float)FLOAT_AGREEMENT * (s.pdf + (float)(1.0 / PI));
+                        assert_close(s.pdf, pdf, tolerance);
+                        float expected[3] = {f.x * cos_i / pdf, f.y * cos_i / pdf, f.z * cos_i / pdf};
+                        float weight[3] = {s.weight.x, s.weight.y, s.weight.z};
+                        for (int c = 0; c < 3; c++)
+                            assert_close(weight[c], expected[c], FLOAT_AGREEMENT * expected[c]);
+                    }
+                if (m->kind == BSDF_MIRROR)
+                    assert_close(lobe_pdf[0], 1.0, 0.0);
+                if (m->kind == BSDF_GLASS && lobe_pdf[1] > 0.0)
+                    assert_close(lobe_pdf[0] + lobe_pdf[1], 1.0, FLOAT_AGREEMENT);
+            }
+    assert_true(checked > 40000);
+}
+
+/* -- lights: the directions in which pt_scene_sample_light's points are seen -- */
+
+/* A light sample is a point x' on an emitting triangle, picked by power,
+ * uniform on it: per unit area pdf_light = mean(L_e) / total power. Seen
+ * from a point p, the direction to x' has the density the path tracer
+ * weighs it with (path_tracer.c, sample_direct_light):
+ *   pdf_w = |x' - p|^2 pdf_light / |cos(theta')|,
+ * summed over the triangles a ray from p in that direction passes
+ * through. The pdf below finds them with its own ray-triangle test in
+ * double, so that the chi-square compares the sampler with the formula,
+ * not with itself. */
+typedef enum {
+    LIGHT_TWIN_NONE,
+    LIGHT_TWIN_NO_COS,  /* pdf_w = |x' - p|^2 pdf_light: the cos(theta') of the Jacobian dropped */
+    LIGHT_TWIN_NO_SQRT, /* the triangle's warp without its sqrt: b0 = 1 - u1, crowding vertex 0 */
+} light_twin;
+
+typedef struct {
+    const pt_scene *sc;
+    double p[3];      /* where the light is seen from */
+    chi2_frame frame; /* about the direction to the light's centre */
+    light_twin twin;
+} light_chi2;
+
+/* A point drawn on an edge is computed in float, a few 1e-8 of the
+ * triangle's size off the exact edge and off its plane, and may fall
+ * outside by that much. Seen at an angle, the ray through it meets the
+ * plane displaced by the off-plane part over cos(theta'): 57 times more
+ * at 1 degree of grazing, where this counted a correct sample outside in
+ * 62 of 200 seeds. So barycentrics down to -1e-6 / |cos(theta')| count
+ * as inside (changing the pdf's integral by ~1e-4 at grazing, 1e-6 face
+ * on). */
+static const double LIGHT_EDGE_SLACK = 1e-6, LIGHT_SLACK_COS_FLOOR = 1e-3;
+
+static void dsub(const double a[3], const double b[3], double out[3])
+{
+    for (int k = 0; k < 3; k++)
+        out[k] = a[k] - b[k];
+}
+static double ddot(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void dcross(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+static void dvec(vec3 v, double out[3]) { out[0] = v.x, out[1] = v.y, out[2] = v.z; }
+
+/* Distance along the unit direction d from p to triangle (a, b, c), or -1. */
+static double ray_triangle_double(const double p[3], const double d[3], vec3 a, vec3 b, vec3 c)
+{
+    double v0[3], v1[3], v2[3], e1[3], e2[3], q[3], s[3], r[3];
+    dvec(a, v0), dvec(b, v1), dvec(c, v2);
+    dsub(v1, v0, e1), dsub(v2, v0, e2);
+    dcross(d, e2, q);
+    double det = ddot(e1, q);
+    if (det == 0.0)
+        return -1.0;
+    dsub(p, v0, s);
+    double b1 = ddot(s, q) / det;
+    dcross(s, e1, r);
+    double b2 = ddot(d, r) / det, t = ddot(e2, r) / det;
+    double normal[3];
+    dcross(e1, e2, normal);
+    double cos_light = fabs(det) / sqrt(ddot(normal, normal)); /* det = d . (e1 x e2) */
+    double slack = LIGHT_EDGE_SLACK / fmax(cos_light, LIGHT_SLACK_COS_FLOOR);
+    if (b1 < -slack || b2 < -slack || b1 + b2 > 1.0 + slack || t <= 0.0)
+        return -1.0;
+    return t;
+}
+
+static bool light_chi2_sample(const void *ctx, const float *u, double point[3])
+{
+    const light_chi2 *l = ctx;
+    /* the twin hands the sampler u1^2, whose sqrt is u1: the warp without it */
+    float u1 = l->twin == LIGHT_TWIN_NO_SQRT ? u[1] * u[1] : u[1];
+    pt_light_sample x;
+    if (!pt_scene_sample_light(l->sc, u[0], u1, u[2], &x))
+        return false;
+    double w[3] = {(double)x.point.x - l->p[0], (double)x.point.y - l->p[1], (double)x.point.z - l->p[2]};
+    chi2_normalize(w);
+    chi2_frame_local(&l->frame, w, point);
+    return true;
+}
+
+static double light_chi2_pdf(const void *ctx, const double point[3])
+{
+    const light_chi2 *l = ctx;
+    const pt_scene *sc = l->sc;
+    double d[3], pdf = 0.0;
+    chi2_frame_world(&l->frame, point, d);
+    chi2_normalize(d); /* the distance along it is |x' - p| */
+    for (int e = 0; e < sc->emitter_count; e++) {
+        const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
+        double distance = ray_triangle_double(l->p, d, t->p0, t->p1, t->p2);
+        if (distance < 0.0)
+            continue;
+        double n[3];
+        dvec(sc->emitter_normals[e], n);
+        double cos_light = fabs(ddot(n, d));
+        double pdf_area = pt_scene_emitter_pdf_area(sc, sc->geometry.faces[sc->emitters[e]].material);
+        pdf += distance * distance * pdf_area / (l->twin == LIGHT_TWIN_NO_COS ? 1.0 : cos_light);
+    }
+    return pdf;
+}
+
+/* Seen from p, in the gnomonic plane of a frame about the direction to
+ * the centre of the emitters' vertices (chi2.h): the rectangle around the
+ * vertices' images holds the whole light; padded by 2 %. The frame's x
+ * axis lies in the light's plane, so that a light seen at grazing, a thin
+ * sliver along that plane, fills the rectangle rather than crossing it
+ * diagonally. From near a large light, where some vertex is more than
+ * LIGHT_AXIS_MAX_ANGLE from that direction, the axis is the light's normal
+ * (towards its plane): every point of the light is then within 90
+ * degrees. */
+static const double LIGHT_AXIS_MAX_ANGLE = 75.0 * PI / 180.0;
+
+static bool light_vertices_within(const light_chi2 *l, double angle)
+{
+    for (int e = 0; e < l->sc->emitter_count; e++) {
+        const triangle *t = &l->sc->triangles.triangles[l->sc->emitters[e]];
+        vec3 v[3] = {t->p0, t->p1, t->p2};
+        for (int k = 0; k < 3; k++) {
+            double w[3], local[3];
+            dvec(v[k], w);
+            dsub(w, l->p, w);
+            chi2_normalize(w);
+            chi2_frame_local(&l->frame, w, local);
+            if (!(local[2] > cos(angle)))
+                return false;
+        }
+    }
+    return true;
+}
+
+typedef struct {
+    double s_min, s_max, t_min, t_max;
+} light_box;
+
+static light_chi2 light_chi2_make(const pt_scene *sc, vec3 p, light_twin twin, light_box *box)
+{
+    light_chi2 l = {.sc = sc, .twin = twin};
+    dvec(p, l.p);
+    vec3 centre = vec3_splat(0.0f);
+    for (int e = 0; e < sc->emitter_count; e++) {
+        const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
+        centre = vec3_add(centre, vec3_scale(vec3_add(t->p0, vec3_add(t->p1, t->p2)), 1.0f / 3.0f));
+    }
+    centre = vec3_scale(centre, 1.0f / (float)sc->emitter_count);
+    vec3 axis = vec3_normalize(vec3_sub(centre, p));
+    vec3 in_plane = vec3_cross(sc->emitter_normals[0], axis);
+    const triangle *first = &sc->triangles.triangles[sc->emitters[0]];
+    l.frame = chi2_frame_toward(axis, vec3_length(in_plane) > 0.1f ? in_plane : vec3_sub(first->p1, first->p0));
+    if (!light_vertices_within(&l, LIGHT_AXIS_MAX_ANGLE)) {
+        vec3 n = sc->emitter_normals[0];
+        l.frame = chi2_frame_toward(vec3_dot(n, vec3_sub(p, centre)) > 0.0f ? vec3_neg(n) : n,
+                                    vec3_sub(first->p1, first->p0));
+    }
+    *box = (light_box){INFINITY, -INFINITY, INFINITY, -INFINITY};
+    for (int e = 0; e < sc->emitter_count; e++) {
+        const triangle *t = &sc->triangles.triangles[sc->emitters[e]];
+        vec3 v[3] = {t->p0, t->p1, t->p2};
+        for (int k = 0; k < 3; k++) {
+            double w[3], local[3];
+            dvec(v[k], w);
+            dsub(w, l.p, w);
+            chi2_frame_local(&l.frame, w, local);
+            assert_true(local[2] > 0.0); /* within 90 degrees of the axis */
+            box->s_min = fmin(box->s_min, local[0] / local[2]), box->s_max = fmax(box->s_max, local[0] / local[2]);
+            box->t_min = fmin(box->t_min, local[1] / local[2]), box->t_max = fmax(box->t_max, local[1] / local[2]);
+        }
+    }
+    double ps = 0.02 * (box->s_max - box->s_min), pt = 0.02 * (box->t_max - box->t_min);
+    *box = (light_box){box->s_min - ps, box->s_max + ps, box->t_min - pt, box->t_max + pt};
+    return l;
+}
+
+/* A sphere light, sampled as one would be from outside it: the cone of
+ * directions it subtends, sin(theta_max) = r / d, uniform in solid angle
+ * (chapter 08's sample_uniform_cone about the direction to its centre).
+ * The renderer samples no sphere lights (scene_pt.h: emitting spheres are
+ * found by the rays that hit them); this checks the construction a
+ * sphere light would use, against the density MIS would give a ray that
+ * hits the sphere. The twin takes the cone's angle from tan(theta_max)
+ * = r / d: too narrow, seen from near. */
+typedef struct {
+    vec3 centre, p;
+    float radius;
+    chi2_frame frame;
+    bool tan_twin;
+} sphere_chi2;
+
+/* The cone's edge is computed in float: cos(theta_max) is off by up to
+ * 6e-8, its angle by 6e-8 / sin(theta_max), 1.2e-6 radians at 20 radii
+ * away (theta_max = 0.05), and sample_uniform_cone's sin(theta) from
+ * 1 - cos^2 in float adds about as much. A ray within 1e-5 radians of the
+ * silhouette counts as a hit (which adds 2 x 1e-5 / 0.05 = 4e-4 to the
+ * pdf's integral there, far below the test's noise). */
+static const double SPHERE_SILHOUETTE_SLACK = 1e-5;
+
+static float sphere_chi2_cos_max(const sphere_chi2 *s)
+{
+    float d = vec3_length(vec3_sub(s->centre, s->p)), r = s->radius;
+    return s->tan_twin ? d / sqrtf(d * d + r * r) : sqrtf(fmaxf(0.0f, 1.0f - (r * r) / (d * d)));
+}
+
+static bool sphere_chi2_sample(const void *ctx, const float *u, double point[3])
+{
+    const sphere_chi2 *s = ctx;
+    vec3 axis = vec3_normalize(vec3_sub(s->centre, s->p));
+    vec3 w = frame_to_world(axis, sample_uniform_cone(vec2_make(u[0], u[1]), sphere_chi2_cos_max(s)));
+    double wd[3];
+    dvec(w, wd);
+    chi2_frame_local(&s->frame, wd, point);
+    return true;
+}
+
+static double sphere_chi2_pdf(const void *ctx, const double point[3])
+{
+    const sphere_chi2 *s = ctx;
+    double d[3], c[3], p[3], pc[3];
+    chi2_frame_world(&s->frame, point, d);
+    dvec(s->centre, c), dvec(s->p, p);
+    dsub(c, p, pc);
+    /* the angle between d and the centre, against the silhouette's */
+    double cross[3];
+    dcross(pc, d, cross);
+    double angle = atan2(sqrt(ddot(cross, cross)), ddot(pc, d));
+    double silhouette = asin((double)s->radius / sqrt(ddot(pc, pc)));
+    return angle <= silhouette + SPHERE_SILHOUETTE_SLACK ? uniform_cone_pdf(sphere_chi2_cos_max(s)) : 0.0;
+}
+
+/* The light scenes: one triangle; a quad cut into two triangles of
+ * different areas (2 and 0.8), so that the pick between them matters;
+ * each alone, as the path tracer would sample it. */
+static void light_scene_triangle(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_make(4.0f, 3.0f, 2.0f)));
+    pt_scene_add_triangle(sc, vec3_make(-0.5f, 1.0f, -0.3f), vec3_make(0.6f, 1.1f, -0.2f), vec3_make(0.1f, 0.95f, 0.5f),
+                          light);
+    pt_scene_finish(sc);
+}
+
+static void light_scene_quad(pt_scene *sc)
+{
+    pt_scene_init(sc);
+    int light = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_splat(5.0f)));
+    pt_scene_add_quad(sc, vec3_make(-1, 2, -1), vec3_make(1, 2, -1), vec3_make(0.4f, 2, 1), vec3_make(-0.4f, 2, 1),
+                      light);
+    pt_scene_finish(sc);
+}
+
+/* Four triangles of different areas and radiances: the pick by power. */
+static const float PICK_EMISSION[4] = {1.0f, 8.0f, 3.0f, 0.5f};
+static const float PICK_SIZE[4] = {1.0f, 0.4f, 0.7f, 2.0f};
+
+static void light_scene_four(pt_scene *sc, double probability[4])
+{
+    pt_scene_init(sc);
+    double total = 0.0;
+    for (int k = 0; k < 4; k++) {
+        float e = PICK_EMISSION[k];
+        int m = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_make(e, 0.5f * e, 1.5f * e)));
+        float x = 3.0f * (float)k, h = PICK_SIZE[k];
+        pt_scene_add_triangle(sc, vec3_make(x, 0, 0), vec3_make(x + h, 0, 0), vec3_make(x, 0, h), m);
+        probability[k] = 0.5 * (double)h * (double)h * (double)PICK_EMISSION[k]; /* area x mean(L_e) */
+        total += probability[k];
+    }
+    for (int k = 0; k < 4; k++)
+        probability[k] /= total;
+    pt_scene_finish(sc);
+}
+
+/* Which of the four is picked, N times (its material says which). */
+static chi2_result light_pick_chi2(const pt_scene *sc, const double probability[4], chi2_points points)
+{
+    double observed[4] = {0, 0, 0, 0};
+    for (long n = 0; n < CHI2_ATTEMPTS; n++) {
+        float u[3];
+        points.fill(points.state, (uint32_t)n, u, 3);
+        vec3 point, normal;
+        float error;
+        int material;
+        assert_true(pt_scene_sample_emitter(sc, u[0], u[1], u[2], &point, &error, &normal, &material));
+        observed[material] += 1.0;
+    }
+    chi2_result r = chi2_verdict(observed, probability, 4, CHI2_ATTEMPTS);
+    r.samples = CHI2_ATTEMPTS;
+    r.total = 1.0;
+    return r;
+}
+
+/* Where a light is seen from: near (a third of its size off its face),
+ * far (30 times its size), grazing (1 degree above its plane). */
+typedef enum { VIEW_NEAR, VIEW_FAR, VIEW_GRAZING } light_view;
+static const char *const LIGHT_VIEW_NAMES[] = {"near", "far", "grazing"};
+
+static vec3 light_viewpoint(const pt_scene *sc, light_view view)
+{
+    const triangle *t = &sc->triangles.triangles[sc->emitters[0]];
+    vec3 centre = vec3_scale(vec3_add(t->p0, vec3_add(t->p1, t->p2)), 1.0f / 3.0f);
+    vec3 n = sc->emitter_normals[0], along = vec3_normalize(vec3_sub(t->p1, t->p0));
+    switch (view) {
+    case VIEW_NEAR:
+        return vec3_add(centre, vec3_add(vec3_scale(n, 0.3f), vec3_scale(along, 0.1f)));
+    case VIEW_FAR:
+        return vec3_add(centre, vec3_add(vec3_scale(n, 30.0f), vec3_scale(along, 8.0f)));
+    case VIEW_GRAZING:
+        break;
+    }
+    vec3 across = vec3_normalize(vec3_cross(n, along));
+    return vec3_add(centre, vec3_add(vec3_scale(across, 2.0f), vec3_scale(n, 0.035f)));
+}
+
+static chi2_result light_chi2_run(const pt_scene *sc, vec3 p, light_twin twin, chi2_points points)
+{
+    light_box box;
+    light_chi2 l = light_chi2_make(sc, p, twin, &box);
+    chi2_case c = {.measure = CHI2_GNOMONIC, .s_min = box.s_min, .s_max = box.s_max, .t_min = box.t_min,
+                   .t_max = box.t_max, .dimensions = 3, .sample = light_chi2_sample, .pdf = light_chi2_pdf, .ctx = &l};
+    /* Across the sliver a light is seen as at grazing, 1024 fine cells:
+     * an edge of the light nearly along the cells' rows crosses a whole
+     * row of them between their quadrature points, where no refinement
+     * sees it; at 512 that shifted X^2 by +84 on 576 degrees of freedom
+     * on average (1024: -0.5, over 6 seeds). */
+    chi2_table tab = chi2_tabulate(&c, CHI2_FINE_ROWS, 2 * CHI2_FINE_COLS);
+    chi2_result r = chi2_run(&c, &tab, points, CHI2_ATTEMPTS);
+    chi2_table_free(&tab);
+    return r;
+}
+
+static chi2_result sphere_light_chi2_run(vec3 p, bool tan_twin, chi2_points points)
+{
+    sphere_chi2 s = {.centre = vec3_make(0.5f, -0.2f, 1.0f), .p = p, .radius = 0.75f, .tan_twin = tan_twin};
+    s.frame = chi2_frame_around(vec3_sub(s.centre, p));
+    double theta_max = fmin(PI, 1.02 * asin((double)s.radius / vec3_length(vec3_sub(s.centre, p))) + 1e-4);
+    chi2_case c = {.measure = CHI2_SPHERE, .s_max = theta_max, .dimensions = 2, .sample = sphere_chi2_sample,
+                   .pdf = sphere_chi2_pdf, .ctx = &s};
+    chi2_table tab = chi2_tabulate(&c, 0, 0);
+    chi2_result r = chi2_run(&c, &tab, points, CHI2_ATTEMPTS);
+    chi2_table_free(&tab);
+    return r;
+}
+
+/* Seen from near (1.05 radii from the centre), 3 and 20 radii. */
+static vec3 sphere_viewpoint(int k)
+{
+    const float distances[3] = {1.05f, 3.0f, 20.0f};
+    return vec3_add(vec3_make(0.5f, -0.2f, 1.0f), vec3_scale(vec3_normalize(vec3_make(0.2f, 1.0f, -0.4f)),
+                                                             0.75f * distances[k]));
+}
+
+/* The light family: a triangle and a quad from near, far and grazing, a
+ * sphere from near, 3 and 20 radii, and the pick among four lights by
+ * power, with random and Sobol points: 20 tests. Point lights need none:
+ * a point light is one direction, taken with probability 1
+ * (point_lights() in path_tracer.c adds each, unsampled). */
+enum { LIGHT_FAMILY = 2 * (3 + 3 + 3 + 1) };
+
+static void test_chi2_lights_sample_their_pdf(void **state)
+{
+    (void)state;
+    chi2_family family = {.count = 0};
+    pt_scene triangle_light, quad_light, four;
+    light_scene_triangle(&triangle_light);
+    light_scene_quad(&quad_light);
+    double probability[4];
+    light_scene_four(&four, probability);
+    for (int which = 0; which < 2; which++) {
+        chi2_sources src;
+        char name[CHI2_NAME_SIZE];
+        for (int v = 0; v < 3; v++) {
+            chi2_points points = chi2_source(&src, 400 + (uint64_t)v, which);
+            chi2_result r =
+                light_chi2_run(&triangle_light, light_viewpoint(&triangle_light, v), LIGHT_TWIN_NONE, points);
+            snprintf(name, sizeof name, "triangle light seen %s, %s", LIGHT_VIEW_NAMES[v], points.name);
+            chi2_family_add(&family, name, &r);
+            points = chi2_source(&src, 410 + (uint64_t)v, which);
+            r = light_chi2_run(&quad_light, light_viewpoint(&quad_light, v), LIGHT_TWIN_NONE, points);
+            snprintf(name, sizeof name, "quad light seen %s, %s", LIGHT_VIEW_NAMES[v], points.name);
+            chi2_family_add(&family, name, &r);
+            points = chi2_source(&src, 420 + (uint64_t)v, which);
+            r = sphere_light_chi2_run(sphere_viewpoint(v), false, points);
+            snprintf(name, sizeof name, "sphere light seen from %s radii, %s", v == 0 ? "1.05" : v == 1 ? "3" : "20",
+                     points.name);
+            chi2_family_add(&family, name, &r);
+        }
+        chi2_points points = chi2_source(&src, 430, which);
+        chi2_result r = light_pick_chi2(&four, probability, points);
+        snprintf(name, sizeof name, "four lights picked by power, %s", points.name);
+        chi2_family_add(&family, name, &r);
+    }
+    assert_int_equal(family.count, LIGHT_FAMILY);
+    assert_int_equal(chi2_family_holm(&family, CHI2_FAMILY_ALPHA), 0);
+    pt_scene_free(&triangle_light);
+    pt_scene_free(&quad_light);
+    pt_scene_free(&four);
+}
+
+static void test_chi2_light_twins_fail(void **state)
+{
+    (void)state;
+    chi2_sources src;
+    pt_scene quad_light, triangle_light, four;
+    light_scene_quad(&quad_light);
+    light_scene_triangle(&triangle_light);
+    chi2_result r = light_chi2_run(&quad_light, light_viewpoint(&quad_light, VIEW_GRAZING), LIGHT_TWIN_NO_COS,
+                                   chi2_source(&src, 440, 0));
+    chi2_assert_twin_fails("quad light seen grazing, cos(theta') dropped", &r, LIGHT_FAMILY);
+    r = light_chi2_run(&triangle_light, light_viewpoint(&triangle_light, VIEW_NEAR), LIGHT_TWIN_NO_SQRT,
+                       chi2_source(&src, 441, 0));
+    chi2_assert_twin_fails("triangle light seen near, warp without its sqrt", &r, LIGHT_FAMILY);
+    r = light_chi2_run(&triangle_light, light_viewpoint(&triangle_light, VIEW_FAR), LIGHT_TWIN_NO_SQRT,
+                       chi2_source(&src, 442, 1));
+    chi2_assert_twin_fails("triangle light seen far, warp without its sqrt, Sobol", &r, LIGHT_FAMILY);
+    r = sphere_light_chi2_run(sphere_viewpoint(0), true, chi2_source(&src, 443, 0));
+    chi2_assert_twin_fails("sphere light from 1.05 radii, cone from tan", &r, LIGHT_FAMILY);
+    /* the pick with one light's power 10 % too large in the running sum */
+    double probability[4];
+    light_scene_four(&four, probability);
+    double extra = 0.1 * (four.emitter_cdf[1] - four.emitter_cdf[0]);
+    for (int k = 1; k < four.emitter_count; k++)
+        four.emitter_cdf[k] += extra;
+    four.emitter_power += extra;
+    r = light_pick_chi2(&four, probability, chi2_source(&src, 444, 0));
+    chi2_assert_twin_fails("four lights, one's power 10 % too large", &r, LIGHT_FAMILY);
+    pt_scene_free(&quad_light);
+    pt_scene_free(&triangle_light);
+    pt_scene_free(&four);
 }
 
 /* ---- scene files and effects ------------------------------------------------------ */
@@ -2278,6 +3092,12 @@ int main(void)
         cmocka_unit_test(test_ggx_weights_never_exceed_one),
         cmocka_unit_test(test_ggx_samples_follow_their_pdf_at_an_angle),
         cmocka_unit_test(test_light_sample_forms_agree),
+        cmocka_unit_test(test_chi2_bsdfs_sample_their_pdf),
+        cmocka_unit_test(test_chi2_bsdf_twins_fail),
+        cmocka_unit_test(test_bsdf_pdfs_integrate_to_their_acceptance),
+        cmocka_unit_test(test_bsdf_samples_agree_with_eval_and_pdf),
+        cmocka_unit_test(test_chi2_lights_sample_their_pdf),
+        cmocka_unit_test(test_chi2_light_twins_fail),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),
         cmocka_unit_test(test_the_cornell_box_renders_the_same_at_every_scale),
         cmocka_unit_test(test_the_old_offsets_render_the_scaled_boxes_wrong),

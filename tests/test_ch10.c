@@ -9,6 +9,7 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,6 +22,8 @@
 #include "scene_file.h"
 #include "stats.h"
 #include "test_support.h"
+#include "chi2.h"
+#include "chi2_sobol.h"
 
 static const double STANDARD_ERRORS = 5.0;
 /* Below this a standard error is float rounding, not noise. */
@@ -152,6 +155,142 @@ static void test_aperture_zero_is_the_pinhole(void **state)
     render_result_free(&ra);
     render_result_free(&rb);
     render_result_free(&rc);
+    motion_scene_free(&ms);
+}
+
+/* ---- chi-square: the lens samples its disk (tests/chi2.h) --------------------------
+ * thin_lens_ray puts the ray's origin at a point of the aperture, a disk
+ * of radius a about the eye in the film's plane, uniformly: density
+ * 1 / (pi a^2) per unit area. The origins, in the camera's (right, up)
+ * coordinates, are counted in bins of equal probability over the disk and
+ * compared by Pearson's test (chi2.h) with N times the density's integral
+ * per bin; and every ray must pass through the point of the plane of focus
+ * its pinhole ray meets. Two cameras (the showcase's, far from the origin
+ * with a 25 mm aperture, and one of aperture 0.2 at the origin), two
+ * pixels (the centre and a corner), random and Sobol points: a family of
+ * 8, Holm-corrected to CHI2_FAMILY_ALPHA. */
+enum { LENS_ATTEMPTS = 100000, LENS_FAMILY = 8 };
+
+typedef struct {
+    thin_lens lens;
+    ray pinhole;
+    double right[3], up[3], eye[3];
+    double claimed_radius; /* the disk the pdf claims: the aperture, or the twin's */
+    double rim_slack;      /* relative: how far past the rim rounding may put a point */
+    bool unit_disk_pdf;    /* the twin: 1 / pi, the unit disk's density, not the aperture's */
+    double worst_focus_miss;
+} lens_chi2;
+
+static bool lens_chi2_sample(const void *ctx, const float *u, double point[3])
+{
+    lens_chi2 *l = (lens_chi2 *)ctx; /* keeps the worst miss of the focus point */
+    ray r = thin_lens_ray(&l->lens, l->pinhole, vec2_make(u[0], u[1]));
+    double o[3] = {(double)r.origin.x - l->eye[0], (double)r.origin.y - l->eye[1], (double)r.origin.z - l->eye[2]};
+    point[0] = o[0] * l->right[0] + o[1] * l->right[1] + o[2] * l->right[2];
+    point[1] = o[0] * l->up[0] + o[1] * l->up[1] + o[2] * l->up[2];
+    point[2] = 0.0;
+    /* the distance from the focus point to the ray's line */
+    vec3 focus = ray_at(l->pinhole, l->lens.focus_distance / vec3_dot(l->pinhole.direction, l->lens.forward));
+    vec3 to_focus = vec3_sub(focus, r.origin);
+    double miss = vec3_length(vec3_cross(to_focus, r.direction)) / vec3_length(to_focus);
+    l->worst_focus_miss = fmax(l->worst_focus_miss, miss);
+    return true;
+}
+
+static double lens_chi2_pdf(const void *ctx, const double point[3])
+{
+    const lens_chi2 *l = ctx;
+    double a = l->claimed_radius;
+    if (!(hypot(point[0], point[1]) <= a * (1.0 + l->rim_slack)))
+        return 0.0;
+    return l->unit_disk_pdf ? 1.0 / PI : 1.0 / (PI * a * a);
+}
+
+static lens_chi2 lens_chi2_make(const camera *cam, float aperture, float focus, float px, float py)
+{
+    lens_chi2 l = {.lens = thin_lens_make(cam, aperture, focus), .pinhole = camera_ray(cam, px, py),
+                   .claimed_radius = aperture};
+    vec3 v[3] = {cam->right, cam->up, cam->eye};
+    double *out[3] = {l.right, l.up, l.eye};
+    for (int k = 0; k < 3; k++)
+        out[k][0] = v[k].x, out[k][1] = v[k].y, out[k][2] = v[k].z;
+    /* The origin eye + a (x right + y up) is summed in float at the eye's
+     * magnitude: a few float steps there, relative to a. */
+    float magnitude = fmaxf(fabsf(cam->eye.x), fmaxf(fabsf(cam->eye.y), fabsf(cam->eye.z))) + aperture;
+    l.rim_slack = 8.0 * FLT_EPSILON * magnitude / aperture;
+    return l;
+}
+
+static chi2_result lens_chi2_run(lens_chi2 *l, chi2_points points)
+{
+    chi2_case c = {.measure = CHI2_DISK, .s_max = l->claimed_radius * (1.0 + l->rim_slack), .dimensions = 2,
+                   .sample = lens_chi2_sample, .pdf = lens_chi2_pdf, .ctx = l};
+    chi2_table tab = chi2_tabulate(&c, 64, 256);
+    chi2_result r = chi2_run(&c, &tab, points, LENS_ATTEMPTS);
+    chi2_table_free(&tab);
+    return r;
+}
+
+/* The ray through the focus point: float directions from origins a few
+ * float steps off, over focus distances of up to 1000: 1e-6 relative of
+ * the distance (~10 float steps). */
+static const double LENS_FOCUS_TOLERANCE = 1e-6;
+
+static void lens_cameras(motion_scene *ms, camera cams[2], float apertures[2], float focus[2])
+{
+    motion_scene_build_showcase(ms);
+    cams[0] = pt_scene_camera(&ms->base, 64, 48);
+    apertures[0] = 25.0f, focus[0] = 700.0f;
+    cams[1] = camera_look_at(vec3_make(0, 0, 0), vec3_make(0.3f, -0.2f, -1.0f), vec3_make(0, 1, 0), 50.0f, 64, 48);
+    apertures[1] = 0.2f, focus[1] = 3.0f;
+}
+
+static void test_chi2_thin_lens_samples_its_disk(void **state)
+{
+    (void)state;
+    motion_scene ms;
+    camera cams[2];
+    float apertures[2], focus[2];
+    lens_cameras(&ms, cams, apertures, focus);
+    chi2_family family = {.count = 0};
+    for (int k = 0; k < 2; k++)
+        for (int pixel = 0; pixel < 2; pixel++)
+            for (int which = 0; which < 2; which++) {
+                lens_chi2 l = lens_chi2_make(&cams[k], apertures[k], focus[k], pixel == 0 ? 32.0f : 0.5f,
+                                             pixel == 0 ? 24.0f : 47.5f);
+                chi2_sources src;
+                chi2_points points = chi2_source(&src, 500 + 4 * (uint64_t)k + 2 * (uint64_t)pixel, which);
+                chi2_result r = lens_chi2_run(&l, points);
+                char name[CHI2_NAME_SIZE];
+                snprintf(name, sizeof name, "lens of aperture %g, %s pixel, %s", (double)apertures[k],
+                         pixel == 0 ? "centre" : "corner", points.name);
+                chi2_family_add(&family, name, &r);
+                assert_true(l.worst_focus_miss <= LENS_FOCUS_TOLERANCE * focus[k]);
+            }
+    assert_int_equal(family.count, LENS_FAMILY);
+    assert_int_equal(chi2_family_holm(&family, CHI2_FAMILY_ALPHA), 0);
+    motion_scene_free(&ms);
+}
+
+/* The twins: a density claiming an aperture 10 % wider than the one
+ * sampled, and the unit disk's 1 / pi with the aperture's scale a^2 (the
+ * map's Jacobian) dropped. */
+static void test_chi2_thin_lens_twins_fail(void **state)
+{
+    (void)state;
+    motion_scene ms;
+    camera cams[2];
+    float apertures[2], focus[2];
+    lens_cameras(&ms, cams, apertures, focus);
+    chi2_sources src;
+    lens_chi2 l = lens_chi2_make(&cams[0], apertures[0], focus[0], 32.0f, 24.0f);
+    l.claimed_radius *= 1.1;
+    chi2_result r = lens_chi2_run(&l, chi2_source(&src, 510, 0));
+    chi2_assert_twin_fails("lens, pdf of an aperture 10 % wider", &r, LENS_FAMILY);
+    l = lens_chi2_make(&cams[1], apertures[1], focus[1], 32.0f, 24.0f);
+    l.unit_disk_pdf = true;
+    r = lens_chi2_run(&l, chi2_source(&src, 511, 1));
+    chi2_assert_twin_fails("lens of aperture 0.2, Jacobian a^2 dropped, Sobol", &r, LENS_FAMILY);
     motion_scene_free(&ms);
 }
 
@@ -641,6 +780,8 @@ int main(void)
         cmocka_unit_test(test_equals_path_tracer_without_indirect_diffuse),
         cmocka_unit_test(test_aperture_zero_is_the_pinhole),
         cmocka_unit_test(test_thin_lens_focus_and_circle_of_confusion),
+        cmocka_unit_test(test_chi2_thin_lens_samples_its_disk),
+        cmocka_unit_test(test_chi2_thin_lens_twins_fail),
         cmocka_unit_test(test_motion_blur_of_a_moving_square),
         cmocka_unit_test(test_time_zero_is_the_still),
         cmocka_unit_test(test_soft_shadow_irradiance),

@@ -66,6 +66,8 @@ typedef struct {
     int depth_limit;          /* the max depth actually used */
     int empty_leaves;
     double sah_cost;          /* the model's expected cost of a random ray, in C_isect units of the formula */
+    float fixed_hit_margin;   /* 0: stop by the hit's error bound (kdtree_trace.c); > 0: the earlier
+                                 fixed relative margin, kept for a test's twin */
 } kd_tree;
 
 accel *kdtree_build(const triangle_set *set);

@@ -66,8 +66,7 @@ static const float SPLIT_SLACK = 2.0f * (3.0f * 0x1.0p-24f) / (1.0f - 3.0f * 0x1
  * at most u of it. */
 static const float T_ERROR_GAMMA = 12.0f * 0x1.0p-24f / (1.0f - 12.0f * 0x1.0p-24f);
 
-/* |t - t*| <= this, for a hit at t on tri (both tests; see above). */
-static float kd_hit_t_error(triangle_test test, const triangle *tri, const ray *r, float t)
+float kdtree_hit_t_error(triangle_test test, const triangle *tri, const ray *r, float t)
 {
     const float *p0 = &tri->p0.x, *p1 = &tri->p1.x, *p2 = &tri->p2.x;
     const float o[3] = {r->origin.x, r->origin.y, r->origin.z};
@@ -119,7 +118,7 @@ static inline float kd_stop_after(triangle_test test, const triangle *tri, const
 {
     if (fixed_margin > 0.0f)
         return t + fabsf(t) * fixed_margin;
-    float upper = t + kd_hit_t_error(test, tri, r, t);
+    float upper = t + kdtree_hit_t_error(test, tri, r, t);
     return upper + fabsf(upper) * SPLIT_SLACK;
 }
 

@@ -66,6 +66,8 @@ typedef struct {
     int depth_limit;          /* the max depth actually used */
     int empty_leaves;
     double sah_cost;          /* the model's expected cost of a random ray, in C_isect units of the formula */
+    float fixed_hit_margin;   /* 0: stop by the hit's error bound (kdtree_trace.c); > 0: the earlier
+                                 fixed relative margin, kept for a test's twin */
 } kd_tree;
 
 accel *kdtree_build(const triangle_set *set);
@@ -76,6 +78,12 @@ accel *kdtree_build_with(const triangle_set *set, const kdtree_options *options)
  *   C_traverse + (SA_below/SA) N_below C_isect + (SA_above/SA) N_above C_isect,
  * times empty_bonus when one side is empty. Against a leaf's N C_isect. */
 float kdtree_split_cost(const kdtree_options *o, aabb box, int axis, float split, int n_below, int n_above);
+
+/* A bound on |t - t*| for a hit at t on tri by `test` (t* the exact
+ * distance to the triangle's plane): the walk goes on past a hit into every
+ * cell that starts within it (kdtree_trace.c says why and derives it).
+ * Infinite when the ray lies in the plane to within rounding. */
+float kdtree_hit_t_error(triangle_test test, const triangle *tri, const ray *r, float t);
 
 /* 8 + 1.3 log2 N, rounded down, at most KD_MAX_DEPTH. */
 int kdtree_depth_limit(int triangle_count);

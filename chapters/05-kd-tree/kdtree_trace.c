@@ -34,19 +34,96 @@
  * visits every child the exact ray touches (and, rarely, one it misses by a
  * few ulps, which costs a node and nothing else). */
 static const float SPLIT_SLACK = 2.0f * (3.0f * 0x1.0p-24f) / (1.0f - 3.0f * 0x1.0p-24f);
-/* The triangle test's t is not exact, and the error grows as the ray grazes
- * the triangle: measured for Moller-Trumbore over random triangles, about 2.4 ulps / sin(angle)
- * relative (16 ulps at 10 degrees, 141 at 1 degree, 592 at 0.3 degree). A
- * triangle in the next cell, which the ray reaches only at or after the
- * hit found, can so report a t a little *below* it; brute force, which takes
- * the least t of all, would then answer that triangle. The walk therefore
- * goes on into cells that start within this margin beyond the closest hit:
- * 2^-16 = 256 ulps relative, enough for hits down to about half a degree
- * from grazing. It costs a cell only when a hit lies that close to a cell's
- * far side, which is common only for rays aimed exactly at vertices (split
- * planes go through vertices). */
-static const float HIT_MARGIN = 0x1.0p-16f;
+/* The triangle test's t is not exact either, and its error grows as
+ * 1/sin(angle) as the ray grazes the triangle's plane. After a hit at t the
+ * walk must therefore go on into every cell the exact ray enters no later
+ * than the exact hit t*, which lies anywhere in [t - e, t + e] for the
+ * hit's error bound e: a triangle there (a neighbour sharing the vertex the
+ * ray is aimed at, say) may report a t below the hit found, and brute
+ * force, which takes the least t of all, answers that one. A fixed relative
+ * margin covers hits down to some angle only (2^-16 reached about half a
+ * degree). The bound comes from the test's own numbers, recomputed after a
+ * hit (rare beside the tests that miss), in the way pbrt-v4 bounds its
+ * triangle t (Pharr, Jakob, Humphreys, section 6.8): each float operation
+ * is the exact one times (1 + d), |d| <= u = 2^-24, and a chain of n of
+ * them stays within gamma(n) = n u / (1 - n u).
+ *
+ * The watertight test's t = num / den, num = (P0 - O) . N and den = D . N,
+ * N = E1 x E2 (watertight_plane_t()). Each edge is rounded once, each
+ * component of N is a difference of two products of those: N_x is within
+ * gamma(4) a_x of the exact one, a_x = |E1_y E2_z| + |E1_z E2_y| (likewise
+ * y, z). P0 - O is rounded once; each dot product adds a product and two
+ * sums. So num is within E_num = gamma(8) sum_i |P0_i - O_i| a_i of the
+ * exact one, den within E_den = gamma(8) sum_i |D_i| a_i (D is exact: the
+ * ray is the one given). Then
+ *   |num / den - num* / den*| <= (E_num + |t| E_den) / (|den| - E_den),
+ * plus one rounding of the division. When |den| <= E_den the sign of den,
+ * and so t, is not known at all: the bound is infinite (the walk goes on to
+ * the end; such a ray lies in the plane to within rounding). Moller-
+ * Trumbore, t = ((O - P0) x E1) . E2 / ((D x E2) . E1), is bounded the
+ * same way with its own products (gamma(9) for its numerator, one rounding
+ * more). The constant taken is gamma(12): the bound is itself computed in
+ * float, and its dozen roundings make it smaller than the exact bound by a
+ * factor 1 - gamma(12) at worst, which gamma(12) / gamma(9) covers many
+ * times over. The division's own rounding (two for Moller-Trumbore) is the
+ * last term, within gamma(12) |t|. Checked against measured errors in
+ * tests/test_ch05.c (the worst at 0.11 of the bound). */
+static const float T_ERROR_GAMMA = 12.0f * 0x1.0p-24f / (1.0f - 12.0f * 0x1.0p-24f);
 
+float kdtree_hit_t_error(triangle_test test, const triangle *tri, const ray *r, float t)
+{
+    const float *p0 = &tri->p0.x, *p1 = &tri->p1.x, *p2 = &tri->p2.x;
+    const float o[3] = {r->origin.x, r->origin.y, r->origin.z};
+    const float d[3] = {r->direction.x, r->direction.y, r->direction.z};
+    float e1[3], e2[3], s[3];
+    for (int k = 0; k < 3; k++) {
+        e1[k] = p1[k] - p0[k];
+        e2[k] = p2[k] - p0[k];
+        s[k] = p0[k] - o[k];
+    }
+    float den = 0.0f, e_num = 0.0f, e_den = 0.0f;
+    for (int k = 0; k < 3; k++) {
+        int j = (k + 1) % 3, l = (k + 2) % 3;
+        if (test == TRIANGLE_TEST_WATERTIGHT) {
+            /* N_k = E1_j E2_l - E1_l E2_j, den = D . N in the test's order */
+            float n = e1[j] * e2[l] - e1[l] * e2[j], a = fabsf(e1[j] * e2[l]) + fabsf(e1[l] * e2[j]);
+            den += d[k] * n;
+            e_num += fabsf(s[k]) * a;
+            e_den += fabsf(d[k]) * a;
+        } else {
+            /* den = (D x E2) . E1; num = ((O - P0) x E1) . E2, whose
+             * k-th product is (s_j E1_l - s_l E1_j) E2_k up to sign */
+            float q = d[j] * e2[l] - d[l] * e2[j], b = fabsf(d[j] * e2[l]) + fabsf(d[l] * e2[j]);
+            float c = fabsf(s[j] * e1[l]) + fabsf(s[l] * e1[j]);
+            den += q * e1[k];
+            e_den += b * fabsf(e1[k]);
+            e_num += c * fabsf(e2[k]);
+        }
+    }
+    e_num *= T_ERROR_GAMMA;
+    e_den *= T_ERROR_GAMMA;
+    float margin = fabsf(den) - e_den;
+    if (!(margin > 0.0f))
+        return INFINITY;
+    return (e_num + fabsf(t) * e_den) / margin + fabsf(t) * T_ERROR_GAMMA;
+}
+
+/* Where the walk may stop after a hit at t on tri: the first cell that
+ * starts beyond this is entered by the exact ray after t + e >= t*. Every
+ * cell's t_enter is a t_split (or the root box's entry), within gamma(3)
+ * of its exact value; so one beyond (t + e)(1 + 2 gamma(3)), which is
+ * SPLIT_SLACK again (one gamma(3) for t_enter, the rest for rounding this
+ * sum and product), begins beyond t* exactly, and holds no triangle the
+ * exact ray meets before the hit. With fixed_margin > 0, the rule before:
+ * t (1 + fixed_margin), kept for the twin of the test that shows it fail
+ * (kd_tree.fixed_hit_margin). */
+static inline float kd_stop_after(triangle_test test, const triangle *tri, const ray *r, float t, float fixed_margin)
+{
+    if (fixed_margin > 0.0f)
+        return t + fabsf(t) * fixed_margin;
+    float upper = t + kdtree_hit_t_error(test, tri, r, t);
+    return upper + fabsf(upper) * SPLIT_SLACK;
+}
 
 /* Front to back at an interior node: the ray's interval [t_enter, t_exit]
  * in the node, cut by the split plane at t_split into [t_enter, t_split] in
@@ -100,6 +177,11 @@ static inline int kdtree_walk(const kd_tree *tree, ray *ray_io, bool any, triang
     uint64_t nodes_visited = 1, triangles_tested = 0;
     float t_enter, t_exit;
     int best = -1;
+    /* The walk goes on into cells that start no later than this: the
+     * ray's own t_max (exact) until a hit, then the hit's t plus its error
+     * bound (see kd_stop_after()). */
+    float t_stop = r->t_max + fabsf(r->t_max) * SPLIT_SLACK;
+    const float fixed_margin = tree->fixed_hit_margin;
     if (aabb_slab_test(&tree->bounds, &sr, r->t_min, r->t_max, &t_enter, &t_exit)) {
         const float origin[3] = {sr.origin.x, sr.origin.y, sr.origin.z};
         const float inverse[3] = {sr.inverse_direction.x, sr.inverse_direction.y, sr.inverse_direction.z};
@@ -183,6 +265,7 @@ static inline int kdtree_walk(const kd_tree *tree, ray *ray_io, bool any, triang
             uint32_t count = kd_node_triangle_count(node);
             const uint32_t *refs = tree->references + node->first_reference;
             triangles_tested += count;
+            int best_before = best;
             for (uint32_t i = 0; i < count; i++) {
                 float t, b1, b2;
                 if (triangle_intersect_with(test, &wr, &triangles[refs[i]], r, r->t_max, &t, &b1, &b2)) {
@@ -194,12 +277,14 @@ static inline int kdtree_walk(const kd_tree *tree, ray *ray_io, bool any, triang
                         goto done;
                 }
             }
+            if (best != best_before) /* a closer hit in this leaf */
+                t_stop = kd_stop_after(test, &triangles[best], r, r->t_max, fixed_margin);
 
             /* Next cell from the stack; stop when it starts beyond the
              * closest hit so far. That is the lecture's "stop at the first
              * cell holding a hit inside it (t <= the cell's t_exit)", made
              * at the next cell's entry t_split, which is where the current
-             * cell ends, and with HIT_MARGIN for the rounding of t (above).
+             * cell ends, and with the hit's error bound (kd_stop_after()).
              * Stack entries lie front to back, so the first one beyond ends
              * the walk; only a ray lying in a split plane pushes a sibling
              * that is not behind the current cell, and until that one has
@@ -208,7 +293,7 @@ static inline int kdtree_walk(const kd_tree *tree, ray *ray_io, bool any, triang
             while (top > 0) {
                 kd_stack_entry e = stack[--top];
                 in_plane_pending -= (int)e.in_plane;
-                if (e.t_enter > r->t_max + fabsf(r->t_max) * HIT_MARGIN) {
+                if (e.t_enter > t_stop) {
                     if (in_plane_pending == 0)
                         break;
                     continue;

@@ -113,7 +113,9 @@ def main():
         raise SystemExit(__doc__)
     program, grid, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
     flags = sys.argv[4:]
-    probe = subprocess.run([program, "--explain", "0,0", "--spp", "1"] + flags, capture_output=True, text=True,
+    # --explain writes no image, but the program checks where it would go.
+    run_flags = flags + ["--out", os.path.splitext(out)[0] + ".exr"]
+    probe = subprocess.run([program, "--explain", "0,0", "--spp", "1"] + run_flags, capture_output=True, text=True,
                            check=True).stdout
     size = re.search(r"how pixel \(0, 0\) of ([0-9]+)x([0-9]+)", probe)
     width, height = int(size.group(1)), int(size.group(2))
@@ -123,7 +125,7 @@ def main():
     for j in range(grid):
         for i in range(grid):
             x, y = (2 * i + 1) * width // (2 * grid), (2 * j + 1) * height // (2 * grid)
-            text = subprocess.run([program, "--explain", f"{x},{y}", "--spp", "1"] + flags, capture_output=True,
+            text = subprocess.run([program, "--explain", f"{x},{y}", "--spp", "1"] + run_flags, capture_output=True,
                                   text=True, check=True).stdout
             segments, lights, end = path_of(text, camera, scene_size)
             value = re.search(r"pixel \([0-9]+, [0-9]+\) = " + VEC, text)

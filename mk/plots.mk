@@ -4,7 +4,7 @@
 #
 # By default the experiments are quick: small images, few samples, short
 # references, chapter 02's ray counts and chapters 04-06's structure counts:
-# about 50 CPU-seconds in all), so that `make docs` builds the
+# about 50 CPU-seconds in all, so that `make docs` builds the
 # book in minutes; their curves are rough. `make plots FULL=1` runs them at
 # full size (each chapter's defaults: about an hour on two cores) and the
 # accelerator plots from `make bench`. Each run leaves its record,

@@ -124,6 +124,17 @@ static int program_explain(const cli_options *opts, const char *label, const ren
     printf("%s: how pixel (%d, %d) of %dx%d is computed, %d sample%s (seed %llu)\n", label, opts->explain_x,
            opts->explain_y, job->cam->width, job->cam->height, job->spp, job->spp > 1 ? "s" : "",
            (unsigned long long)job->seed);
+    /* The camera, so that a reader (docs/figures/explain_paths.py) can put
+     * the points below back on the image: a point p is at
+     * x = W/2 (1 + s_x / half_width), y = H/2 (1 - s_y / half_height), with
+     * s = ((p - eye).right, (p - eye).up) / (p - eye).forward. */
+    const camera *cam = job->cam;
+    printf("camera: eye (%.9g, %.9g, %.9g), forward (%.9g, %.9g, %.9g), right (%.9g, %.9g, %.9g), "
+           "up (%.9g, %.9g, %.9g), half width %.9g, half height %.9g\n",
+           (double)cam->eye.x, (double)cam->eye.y, (double)cam->eye.z, (double)cam->forward.x,
+           (double)cam->forward.y, (double)cam->forward.z, (double)cam->right.x, (double)cam->right.y,
+           (double)cam->right.z, (double)cam->up.x, (double)cam->up.y, (double)cam->up.z,
+           (double)cam->half_width, (double)cam->half_height);
     ray_counters counters;
     memset(&counters, 0, sizeof counters);
     explain_begin(stdout);

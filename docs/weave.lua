@@ -914,6 +914,44 @@ local function splice_tables(blocks)
   return out
 end
 
+-- A path explorer (chapter 09's picture, clickable): the README holds
+-- "<!-- path explorer NAME IMAGE -->" (invisible on a Git host); the page
+-- shows IMAGE (build/IMAGE, out/chNN.png) with an SVG over it, and the
+-- paths of build/data/NAME.json (docs/figures/explain_paths.py, from the
+-- program's --explain) inline, with the script that draws the path of the
+-- pixel clicked (docs/path_explorer.js, inline: nothing is fetched).
+local function path_explorers(blocks)
+  local out = {}
+  for _, b in ipairs(blocks) do
+    local text = b.t == "RawBlock" and b.text:gsub("%s+$", "") or ""
+    local name, rel = text:match("^<!%-%- path explorer ([%w_]+) ([%w_/.]+) %-%->$")
+    if name then
+      local json = read_file(M.build .. "/data/" .. name .. ".json")
+      local script = read_file("docs/path_explorer.js")
+      local image = rel:gsub("/", "_")
+      if not json then fail(where("<!-- path explorer " .. name), "no " .. M.build .. "/data/" .. name .. ".json (make docs makes it)") end
+      if not script then fail(where("<!-- path explorer " .. name), "no docs/path_explorer.js") end
+      if not copy_file(M.build .. "/" .. rel, M.docs .. "/img/" .. image) then
+        fail(where("<!-- path explorer " .. name), "the image " .. M.build .. "/" .. rel .. " has not been made")
+      end
+      shown_images[rel] = true
+      if json and script then
+        table.insert(out, pandoc.RawBlock("html", table.concat({
+          '<div class="path-explorer" id="path-explorer">',
+          '<div class="path-explorer-stage"><img src="img/' .. image .. '" alt="the picture: click a pixel">',
+          '<svg xmlns="http://www.w3.org/2000/svg" class="path-explorer-paths" preserveAspectRatio="none"></svg></div>',
+          '<p class="path-explorer-note">Click the picture: the path of the nearest pixel explained is drawn.</p>',
+          '<script type="application/json" id="path-explorer-data">' .. json:gsub("</", "<\\/") .. '</script>',
+          '<script>' .. script .. '</script>',
+          '</div>' }, "\n")))
+      end
+    else
+      table.insert(out, b)
+    end
+  end
+  return out
+end
+
 local function check_plots_shown(chapter)
   local number = chapter:sub(1, 2)
   for _, f in ipairs(split_words(M.plots or "")) do
@@ -953,7 +991,7 @@ function Pandoc(doc)
     end
   end
 
-  doc.blocks = splice_excerpts(splice_tables(doc.blocks))
+  doc.blocks = path_explorers(splice_excerpts(splice_tables(doc.blocks)))
   local blocks = {}
   local head_done = false
   if chapter then check_sections(doc, chapter) end

@@ -2,7 +2,8 @@
 # with pandoc and the Lua filter docs/weave.lua: code excerpts are read from
 # the sources now, images are the ones the programs and `make plots` make
 # (each shown with its command, from docs/figures.txt), formulas become
-# MathML, and there are no scripts. docs/coverage.md maps every concept of
+# MathML, and the one script is inline (chapter 09's clickable picture:
+# docs/path_explorer.js over build/data/ch09_paths.json). docs/coverage.md maps every concept of
 # lectures 13-16 to its file, function, test and figure; the filter fails
 # the build if any of them does not exist. `make test-docs` opens every page
 # in headless Chromium and checks images, links and math, that each chapter
@@ -27,7 +28,7 @@ DOC_FIGURES := $(patsubst %,$(BUILD)/%,$(shell sed -n 's|^\(out/[^ ]*\.png\).*|\
 # one stamp per mode: make docs FULL=1 after make docs redraws from full data
 DOC_PLOTS_STAMP := $(BUILD)/plots/.made-$(PLOT_MODE)
 DOC_SOURCES := $(wildcard common/*.[ch] chapters/*/*.[ch] tests/*.c)
-DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.txt $(DOC_SOURCES) $(wildcard docs/diagrams/*.svg)
+DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.txt docs/path_explorer.js $(DOC_SOURCES) $(wildcard docs/diagrams/*.svg)
 # The chapters whose slides draw their geometry: each page shows at least one
 # diagram of it (docs/diagrams/*.svg), or the weave stops.
 # A chapter page prints on at most this many pages of A4 (make test-docs).
@@ -88,6 +89,13 @@ figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
 	@docs/splice.sh docs/img README.md docs/*.md chapters/*/README.md
 	@du -ch docs/img/*.png | tail -1 | sed 's|$$| in docs/img/ (commit them)|'
 
+# Chapter 09's clickable picture: the paths of 16 x 16 of its pixels, one
+# sample each, from the program's --explain, as JSON (a few seconds).
+DOC_PATHS := $(BUILD)/data/ch09_paths.json
+$(DOC_PATHS): $(BUILD)/bin/09-path-tracing docs/figures/explain_paths.py
+	@mkdir -p $(dir $@)
+	python3 docs/figures/explain_paths.py $(BUILD)/bin/09-path-tracing 16 $@
+
 # Each figure by the command docs/figures.txt gives it (build/ there means $(BUILD)).
 $(DOC_FIGURES): $(BUILD)/%.png: docs/figures.txt $(PROGRAMS) $(DOC_PROGRAMS)
 	@mkdir -p $(dir $@)
@@ -102,7 +110,7 @@ $(DOCS)/book.css: docs/book.css | docs-deps
 	@mkdir -p $(DOCS)/img
 	cp $< $@
 
-$(DOCS)/%.html: chapters/%/README.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(wildcard $(BUILD)/plots/*.md) $(DOCS)/book.css
+$(DOCS)/%.html: chapters/%/README.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(wildcard $(BUILD)/plots/*.md) $(DOCS)/book.css $(DOC_PATHS)
 	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=chapter -M chapter=$* -M files="$(notdir $(wildcard chapters/$*/*.[ch]))" $< -o $@
 
 # The index shows each chapter's picture: it waits for them (with -j, it
@@ -134,9 +142,9 @@ test-docs: docs | docs-deps
 	  echo "ok: $$bad is refused: $$want"; \
 	done
 	@$(call docs_check,$(abspath tests/docs),bad_page.html) > $(DOCS_TEST)/bad_page.txt; \
-	grep -q '^RESULT: FAIL (1 pages, 3 problems)' $(DOCS_TEST)/bad_page.txt \
+	grep -q '^RESULT: FAIL (1 pages, 5 problems)' $(DOCS_TEST)/bad_page.txt \
 	  || { cat $(DOCS_TEST)/bad_page.txt; echo "FAIL: the browser check missed a fault of tests/docs/bad_page.html"; exit 1; }; \
-	echo "ok: the browser check finds the three faults of tests/docs/bad_page.html"
+	echo "ok: the browser check finds the five faults of tests/docs/bad_page.html (one: a clickable picture drawing too few segments)"
 	@! tests/check_images.sh tests/docs/bad_missing_image.md > $(DOCS_TEST)/bad_images.txt \
 	  || { echo "FAIL: tests/check_images.sh accepted tests/docs/bad_missing_image.md"; exit 1; }; \
 	grep -q 'no_such_figure.png does not exist' $(DOCS_TEST)/bad_images.txt || { cat $(DOCS_TEST)/bad_images.txt; exit 1; }; \
@@ -159,7 +167,9 @@ test-docs: docs | docs-deps
 	! grep -q '^FAIL' $(DOCS_TEST)/print.txt
 	@pages=$$(cd $(DOCS) && ls *.html | tr '\n' ',' | sed 's/,$$//'); \
 	$(call docs_check,$(abspath $(DOCS)),$$pages) > $(DOCS_TEST)/report.txt; \
-	cat $(DOCS_TEST)/report.txt; grep -q '^RESULT: PASS' $(DOCS_TEST)/report.txt
+	cat $(DOCS_TEST)/report.txt; grep -q '^RESULT: PASS' $(DOCS_TEST)/report.txt; \
+	grep -q '^09-path-tracing.html: path explorer: clicked pixel' $(DOCS_TEST)/report.txt \
+	  || { echo "FAIL: the browser check did not click chapter 09's picture"; exit 1; }
 	@$(CHROMIUM) --window-size=1100,1500 --screenshot=$(abspath $(DOCS))/index-screenshot.png \
 	  file://$(abspath $(DOCS))/index.html 2>> $(DOCS_TEST)/chromium.log
 	@echo "test-docs: every page checked; screenshot of the index: $(DOCS)/index-screenshot.png"

@@ -3,7 +3,8 @@
 # run with --data, plots/accel_*.gp from the benchmark.
 #
 # By default the experiments are quick: small images, few samples, short
-# references (about half a CPU-minute in all), so that `make docs` builds the
+# references, chapter 02's ray counts and chapters 04-06's structure counts:
+# about 50 CPU-seconds in all, so that `make docs` builds the
 # book in minutes; their curves are rough. `make plots FULL=1` runs them at
 # full size (each chapter's defaults: about an hour on two cores) and the
 # accelerator plots from `make bench`. Each run leaves its record,
@@ -79,7 +80,33 @@ ch02-data: $(BUILD)/bin/02-whitted
 	  "$(CH02_DEPTHS)" > $(BUILD)/data/ch02.run
 .PHONY: ch02-data
 
-plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data) $(if $(MPIRUN),mpi) ch02-data
+# Chapters 04, 05 and 06 quote their structures' own counts (cells, nodes,
+# depth, references, tests per ray), each from its program's report on one
+# render of the tori field or the stadium, one thread
+# (build/data/chNN_RUN.log), read by plots/ch04_density.table,
+# ch05_kdtree.table and ch06_split.table. Counts, not times: they do not move
+# with the machine's load. About ten CPU-seconds in all.
+CH04_RUNS := tori:1 tori:8 tori:27 tori:100 stadium:27 stadium:216
+CH05_RUNS := tori-10240:2 tori-102400:1 tori-102400:2 tori-102400:3 tori-102400:4 stadium:2
+CH06_RUNS := tori:median tori:sah stadium:median stadium:sah
+structure-data: $(BUILD)/bin/04-uniform-grid $(BUILD)/bin/05-kd-tree $(BUILD)/bin/06-bvh
+	@mkdir -p $(BUILD)/data
+	@for r in $(CH04_RUNS); do m=$${r%%:*}; c=$${r#*:}; \
+	  $(BUILD)/bin/04-uniform-grid --threads 1 --mesh $$m --density $$c --out $(BUILD)/data/ch04_$${m}_$$c.exr \
+	    > $(BUILD)/data/ch04_$${m}_$$c.log || exit 1; done
+	@printf 'full\tbuild/bin/04-uniform-grid --threads 1 --mesh M --density C, (M:C) = %s\n' "$(CH04_RUNS)" > $(BUILD)/data/ch04.run
+	@for r in $(CH05_RUNS); do m=$${r%%:*}; c=$${r#*:}; n=$${m#tori-}; \
+	  if [ $$m = stadium ]; then a="--mesh stadium"; else a="--triangles $$n"; fi; \
+	  $(BUILD)/bin/05-kd-tree --threads 1 $$a --traversal-cost $$c --out $(BUILD)/data/ch05_$${m}_$$c.exr \
+	    > $(BUILD)/data/ch05_$${m}_$$c.log || exit 1; done
+	@printf 'full\tbuild/bin/05-kd-tree --threads 1 --triangles N|--mesh stadium --traversal-cost C, (N:C) = %s\n' "$(CH05_RUNS)" > $(BUILD)/data/ch05.run
+	@for r in $(CH06_RUNS); do m=$${r%%:*}; s=$${r#*:}; \
+	  $(BUILD)/bin/06-bvh --threads 1 --mesh $$m --split $$s --out $(BUILD)/data/ch06_$${m}_$$s.exr \
+	    > $(BUILD)/data/ch06_$${m}_$$s.log || exit 1; done
+	@printf 'full\tbuild/bin/06-bvh --threads 1 --mesh M --split S, (M:S) = %s\n' "$(CH06_RUNS)" > $(BUILD)/data/ch06.run
+.PHONY: structure-data
+
+plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data) $(if $(MPIRUN),mpi) ch02-data structure-data
 	@mkdir -p $(BUILD)/data
 	@$(foreach c,$(DATA_CHAPTERS),$(call data_run,$(c),$(call chapter_number,$(c))) && ) true
 
@@ -97,7 +124,7 @@ plot-tables:
 	@mkdir -p $(BUILD)/plots
 	@for t in $(PLOT_TABLES); do \
 	  name=$$(basename $$t .table); rec=$(BUILD)/data/$${name%%_*}.run; \
-	  { awk -v data_dir='$(BUILD)/data' -f plots/tables.awk -f $$t && echo && \
+	  { awk -v data_dir='$(BUILD)/data' -f plots/tables.awk -f plots/structures.awk -f $$t && echo && \
 	    printf '*Measured by the run that drew the figure: `%s` (%s data%s).*\n' "$$(cut -f2 $$rec)" \
 	      "$$(cut -f1 $$rec)" "$$(grep -q ^quick $$rec && echo ': a smaller, rougher run; make plots FULL=1 for the full size')"; \
 	  } > $(BUILD)/plots/$$name.md.tmp && mv $(BUILD)/plots/$$name.md.tmp $(BUILD)/plots/$$name.md || exit 1; \

@@ -247,6 +247,18 @@ static void explain_light_sample(int depth, const pt_light_sample *x, const ligh
                  explain_vec3(cb, l_x->radiance));
 }
 
+/* --explain: a light sample that adds nothing, and why: it faces away (or
+ * lies below the surface, or f = 0), and no shadow ray is traced; or its
+ * shadow ray is blocked. */
+static void explain_light_sample_lost(int depth, const pt_light_sample *x, bool shadow_ray_traced)
+{
+    if (!explain_on())
+        return;
+    char xb[64];
+    explain_line(2 * depth + 2, "light sample at x' = %s: %s: adds 0", explain_vec3(xb, x->point),
+                 shadow_ray_traced ? "shadow ray blocked" : "faces away, lies below the surface or f = 0, no shadow ray");
+}
+
 static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth, vec3 throughput, pt_random *rng,
                   ray_counters *counters);
 
@@ -317,7 +329,7 @@ static vec3 shade(const path_tracer *pt, const hit_record *p, vec3 wo, int depth
             l_dir = vec3_add(l_dir, l_x.radiance);
             explain_light_sample(depth, &x, &l_x);
         } else {
-            explain_line(2 * depth + 2, "light sample: faces away, lies below the surface or is blocked: adds 0");
+            explain_light_sample_lost(depth, &x, l_x.adds);
         }
     }
     /* Contribution from other reflectors: Russian roulette with P_RR */

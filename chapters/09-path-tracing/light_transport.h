@@ -21,6 +21,7 @@
 
 #include <stdbool.h>
 
+#include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/scene_pt.h"
 
 /* What a light sample (or a point light) adds at p, if nothing blocks the
@@ -40,12 +41,39 @@ typedef struct {
     float cos_theta, cos_theta_light, distance2, pdf_light, weight;
 } light_contribution;
 
+/* The direction from p to a point on a light, and the geometry between
+ * them: wi, |x' - p|^2 and cos(theta) at p (against the shading normal). */
+static inline vec3 light_towards(const hit_record *p, vec3 target, light_contribution *out)
+{
+    vec3 to_light = vec3_sub(target, p->point);
+    out->distance2 = vec3_length_squared(to_light);
+    vec3 wi = vec3_scale(to_light, 1.0f / sqrtf(out->distance2));
+    out->cos_theta = vec3_dot(p->normal_shading, wi);
+    return wi;
+}
+
+/* A density per unit area at a point of a light, per steradian as seen
+ * from a point |x' - p|^2 away at the angle theta' to the light's normal. */
+static inline float pdf_area_to_solid_angle(float pdf_area, float distance2, float cos_theta_light)
+{
+    return distance2 * pdf_area / cos_theta_light;
+}
+
 /* The lecture's light sample, in the slide's area form: x' picked on the
  * lights with density x->pdf_light per unit area,
  *   L_dir = L_i f_r cos(theta) cos(theta') / |x' - p|^2 / pdf_light,
  * if the ray from p to x' is not blocked in the middle. It adds wherever
  * light and surface face each other (cos(theta) > 0, cos(theta') > 0). */
 light_contribution direct_light_area(const pt_material *m, const hit_record *p, vec3 wo, const pt_light_sample *x);
+
+/* The power heuristic (Veach 1997) with exponent 2: the MIS weight of a
+ * sample drawn with density a, when density b could have drawn it too.
+ * (With sample counts, a and b are each count x density.) */
+static inline float power_heuristic(float a, float b)
+{
+    float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
 
 /* The same light sample in the solid-angle form the later rungs use, so
  * that multiple importance sampling can weigh it against BSDF sampling:
@@ -55,28 +83,58 @@ light_contribution direct_light_area(const pt_material *m, const hit_record *p, 
  * light and bsdf_samples of the BSDF (Veach's counts; chapter 09 draws one
  * of each); bsdf_samples 0: no BSDF sample could find the light, weight 1.
  * It adds where light and surface face each other and f_r is not 0. */
-light_contribution direct_light_solid_angle(const pt_material *m, const hit_record *p, vec3 wo,
-                                            const pt_light_sample *x, int light_samples, int bsdf_samples);
+static inline light_contribution direct_light_solid_angle(const pt_material *m, const hit_record *p, vec3 wo,
+                                                          const pt_light_sample *x, int light_samples, int bsdf_samples)
+{
+    light_contribution l = {.radiance = vec3_splat(0.0f), .weight = 1.0f};
+    vec3 n = p->normal_shading;
+    vec3 wi = light_towards(p, x->point, &l);
+    l.cos_theta_light = -vec3_dot(x->normal, wi);
+    /* A light seen from behind (one-sided) or below the surface adds
+     * nothing: no shadow ray needed to know it. */
+    vec3 f = l.cos_theta_light > 0.0f && l.cos_theta > 0.0f ? bsdf_eval(m, n, wo, wi) : vec3_splat(0.0f);
+    l.adds = !vec3_is_black(f);
+    if (!l.adds)
+        return l;
+    l.pdf_light = pdf_area_to_solid_angle(x->pdf_light, l.distance2, l.cos_theta_light);
+    if (bsdf_samples > 0)
+        l.weight = power_heuristic((float)light_samples * l.pdf_light, (float)bsdf_samples * bsdf_pdf(m, n, wo, wi));
+    l.radiance = vec3_scale(vec3_mul(x->emission, f), l.cos_theta / l.pdf_light * l.weight);
+    l.shadow = ray_spawn_to(p->point, p->point_error, p->normal_geometric, x->point, x->point_error, x->normal);
+    return l;
+}
 
 /* A point light (a delta in position, so only light sampling finds it):
  *   L_dir = f_r I cos(theta) / r^2.
  * It adds where f_r cos(theta) is not 0. */
-light_contribution direct_light_point(const pt_material *m, const hit_record *p, vec3 wo, const pt_point_light *light);
+static inline light_contribution direct_light_point(const pt_material *m, const hit_record *p, vec3 wo, const pt_point_light *light)
+{
+    light_contribution l = {.radiance = vec3_splat(0.0f), .weight = 1.0f};
+    vec3 wi = light_towards(p, light->position, &l);
+    vec3 f = l.cos_theta > 0.0f ? bsdf_eval(m, p->normal_shading, wo, wi) : vec3_splat(0.0f);
+    l.adds = !vec3_is_black(f);
+    if (!l.adds)
+        return l;
+    l.radiance = vec3_scale(vec3_mul(f, light->intensity), l.cos_theta / l.distance2);
+    l.shadow = ray_spawn_to(p->point, p->point_error, p->normal_geometric, light->position, 0.0f, vec3_splat(0.0f));
+    return l;
+}
 
 /* The bounce's weight: f_r(wo, wi) cos(theta) / pdf, for a direction wi
  * drawn with density pdf (cos_theta = n . wi, the local z of the sample). */
-vec3 bounce_weight(const pt_material *m, vec3 n, vec3 wo, vec3 wi, float cos_theta, float pdf);
-
-/* The power heuristic (Veach 1997) with exponent 2: the MIS weight of a
- * sample drawn with density a, when density b could have drawn it too.
- * (With sample counts, a and b are each count x density.) */
-float power_heuristic(float a, float b);
+static inline vec3 bounce_weight(const pt_material *m, vec3 n, vec3 wo, vec3 wi, float cos_theta, float pdf)
+{
+    return vec3_scale(bsdf_eval(m, n, wo, wi), cos_theta / pdf);
+}
 
 /* The density per steradian with which a light sample from `from` picks
  * `point` on an emitter of normal `normal` and density pdf_area per unit
  * area, seen along wo (from `point` back to `from`): |point - from|^2
  * pdf_area / |cos(theta')|. What the MIS weight of emission that a BSDF
  * sample found weighs against. */
-float light_pdf_from(vec3 from, vec3 point, vec3 normal, vec3 wo, float pdf_area);
+static inline float light_pdf_from(vec3 from, vec3 point, vec3 normal, vec3 wo, float pdf_area)
+{
+    return pdf_area_to_solid_angle(pdf_area, vec3_length_squared(vec3_sub(point, from)), fabsf(vec3_dot(normal, wo)));
+}
 
 #endif

@@ -416,15 +416,21 @@ def keep_yours(root, rel, name, body):
     return newest
 
 
-def handout(root, chapter, only):
+def each_marked(root, chapter, only):
+    """Each exercise chosen, with its file, the file's lines, where its body
+    is, the body and the reference body."""
     exercises, marks = selected(root, chapter, only)
     for ex in exercises:
-        name = ex['name']
-        rel, _, _ = marks[name]
+        rel = marks[ex['name']][0]
         lines = read_lines(root, rel)
-        start, end = marker_lines(lines, name)
-        body = body_of(lines, start, end)
-        ref = reference_body(root, name, rel, lines, start, end)
+        start, end = marker_lines(lines, ex['name'])
+        ref = reference_body(root, ex['name'], rel, lines, start, end)
+        yield ex, rel, lines, start, end, body_of(lines, start, end), ref
+
+
+def handout(root, chapter, only):
+    for ex, rel, lines, start, end, body, ref in each_marked(root, chapter, only):
+        name = ex['name']
         if not os.path.exists(state_path(root, 'reference', rel, name)):
             save(state_path(root, 'reference', rel, name), ref)
         yours = state_path(root, 'yours', rel, name)
@@ -446,14 +452,8 @@ def handout(root, chapter, only):
 
 
 def solution(root, chapter, only):
-    exercises, marks = selected(root, chapter, only)
-    for ex in exercises:
+    for ex, rel, lines, start, end, body, ref in each_marked(root, chapter, only):
         name = ex['name']
-        rel, _, _ = marks[name]
-        lines = read_lines(root, rel)
-        start, end = marker_lines(lines, name)
-        body = body_of(lines, start, end)
-        ref = reference_body(root, name, rel, lines, start, end)
         if body == ref:
             print('%-22s %s: the reference already' % (name, rel))
             continue

@@ -51,6 +51,7 @@ $tool solution --ch 09 > out.txt 2>&1
 check "a second version is kept beside the first" \
   "grep -q 'second try' .exercises/yours/$file/shade.c && grep -q 'l_dir_mine' .exercises/yours/$file/shade.1.c"
 check "and the files are as committed again" "git diff --quiet -- chapters common"
+check "and no copy of a reference is left to go stale" "[ -z \"\$(find .exercises/reference -type f 2>/dev/null)\" ]"
 
 sed -i '/end of exercise shade/d' $file
 cp $file broken.c

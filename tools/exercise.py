@@ -456,6 +456,7 @@ def solution(root, chapter, only):
         name = ex['name']
         if body == ref:
             print('%-22s %s: the reference already' % (name, rel))
+            forget_reference(root, rel, name)
             continue
         if exact_stub(ex, lines, start, end, rel, ref):
             print('%-22s %s: the reference is back' % (name, rel))
@@ -465,6 +466,16 @@ def solution(root, chapter, only):
                   % (name, rel, os.path.relpath(kept, root)))
         lines = lines[:start + 1] + ref + lines[end:]
         write_atomically(root, rel, without_include_if_unused(lines))
+        forget_reference(root, rel, name)
+
+
+def forget_reference(root, rel, name):
+    """The saved reference lives only while the exercise is out: once the
+    reference is back in the source, the source (and git) hold it, and a
+    later change to it upstream must not meet an old copy."""
+    saved = state_path(root, 'reference', rel, name)
+    if os.path.exists(saved):
+        os.remove(saved)
 
 
 def status(root):

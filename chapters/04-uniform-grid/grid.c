@@ -279,9 +279,8 @@ static inline bool dda_step(dda_walk *w, double t_best)
 
 /* Walks r through the cells it pierces, in order, and tests the triangles
  * stored in them; returns the closest hit triangle (-1: none), with its t in
- * r->t_max and its barycentrics in b1, b2. The names are the paper's: along
- * axis x the ray is in cell x, crosses the next boundary at t_max_x, takes
- * t_delta_x to cross one cell, and has left the grid when x = just_out_x.
+ * r->t_max and its barycentrics in b1, b2. The walk's state is dda_walk's,
+ * in the paper's names (t_max[0] is its t_max_x), and dda_step() steps it.
  *
  * t is kept in double, and t_max_x grows by t_delta_x at each step, as in the
  * paper. In float that sum would gather up to half an ulp per step: after a

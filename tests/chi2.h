@@ -116,7 +116,11 @@ enum {
     CHI2_FINE_COLS = 512,   /* along t */
     CHI2_RINGS = 24,        /* bands of equal probability */
     CHI2_PER_RING = 24,     /* bins of equal probability per band */
-    CHI2_REFINE_DEPTH = 4,  /* a fine cell cut at most 4 times in four: 0.04 degrees */
+    /* A fine cell is cut in four at most this often where the pdf changes
+     * fast (0.04 degrees at the finest): what keeps a peaked GGX lobe's
+     * integral per bin exact enough that X^2 measures the sampler, not the
+     * quadrature, without refining the whole sphere. */
+    CHI2_REFINE_DEPTH = 4,
     CHI2_MAX_DIMENSIONS = 4,
     CHI2_NAME_SIZE = 96,
     CHI2_FAMILY_MAX = 128,

@@ -28,6 +28,16 @@
 #include "progressive.h"
 #include "render.h"
 
+/* The progressive render's stop: a budget, never the target error. A
+ * crafted checkpoint may claim an error so large that the target would
+ * take hours to meet (a real render of that error would too), so the
+ * target is one no render meets and the time stops it: half a millisecond
+ * after resuming a crafted file keeps the fuzzer's inputs per second up;
+ * 50 ms makes the fresh render behind the seeds long enough to leave
+ * checkpoints of several passes. */
+static const double RESUMED_BUDGET_SECONDS = 0.0005, FRESH_BUDGET_SECONDS = 0.05;
+static const double UNREACHABLE_TARGET_ERROR = 1e-12;
+
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -102,8 +112,9 @@ static void render(const char *kind, const checkpoint *c, const char *path)
          * passes (half a ms resumed: a crafted error as large as a float
          * allows halves pass after pass, and would keep a target waiting
          * for hours, as a real render of that error would). */
-        estimate_image e = progressive_render_resumable(flat_radiance, NULL, NULL, &cam, 1, 1, c != NULL ? 0.0005 : 0.05,
-                                                        1e-12, NULL, &cp);
+        double seconds = c != NULL ? RESUMED_BUDGET_SECONDS : FRESH_BUDGET_SECONDS;
+        estimate_image e = progressive_render_resumable(flat_radiance, NULL, NULL, &cam, 1, 1, seconds,
+                                                        UNREACHABLE_TARGET_ERROR, NULL, &cp);
         check_image(&e.mean);
         check_image(&e.standard_error);
         estimate_image_free(&e);

@@ -30,6 +30,11 @@ static ray ray_from(float ox, float oy, float oz, float dx, float dy, float dz)
  * y in [-1, 1]. The centre of pixel (0, 0), at (0.5, 0.5), is the point
  * (-1.5, 0.5, -1) of that plane; the image's centre, (2, 1), is straight
  * ahead. */
+/* A float direction normalized by vec3_normalize is within a few ulps of
+ * the exact one: 1e-6 holds that, and a ray through the wrong point of the
+ * pixel (its corner instead of its centre: more than 0.01 off) fails it. */
+static const double EYE_RAY_DIRECTION_TOLERANCE = 1e-6;
+
 static void test_eye_ray_goes_through_the_pixel_centre(void **state)
 {
     (void)state;
@@ -38,17 +43,17 @@ static void test_eye_ray_goes_through_the_pixel_centre(void **state)
     ray corner = camera_ray(&cam, 0.5f, 0.5f);
     float length = sqrtf(1.5f * 1.5f + 0.5f * 0.5f + 1.0f);
     assert_close(corner.origin.x, 0.0, 0.0);
-    assert_close(corner.direction.x, -1.5 / length, 1e-6);
-    assert_close(corner.direction.y, 0.5 / length, 1e-6);
-    assert_close(corner.direction.z, -1.0 / length, 1e-6);
+    assert_close(corner.direction.x, -1.5 / length, EYE_RAY_DIRECTION_TOLERANCE);
+    assert_close(corner.direction.y, 0.5 / length, EYE_RAY_DIRECTION_TOLERANCE);
+    assert_close(corner.direction.z, -1.0 / length, EYE_RAY_DIRECTION_TOLERANCE);
     ray centre = camera_ray(&cam, 2.0f, 1.0f);
-    assert_close(centre.direction.x, 0.0, 1e-6);
-    assert_close(centre.direction.y, 0.0, 1e-6);
-    assert_close(centre.direction.z, -1.0, 1e-6);
+    assert_close(centre.direction.x, 0.0, EYE_RAY_DIRECTION_TOLERANCE);
+    assert_close(centre.direction.y, 0.0, EYE_RAY_DIRECTION_TOLERANCE);
+    assert_close(centre.direction.z, -1.0, EYE_RAY_DIRECTION_TOLERANCE);
     /* The bottom-right pixel's centre, (3.5, 1.5): right and down. */
     ray bottom_right = camera_ray(&cam, 3.5f, 1.5f);
-    assert_close(bottom_right.direction.x, 1.5 / length, 1e-6);
-    assert_close(bottom_right.direction.y, -0.5 / length, 1e-6);
+    assert_close(bottom_right.direction.x, 1.5 / length, EYE_RAY_DIRECTION_TOLERANCE);
+    assert_close(bottom_right.direction.y, -0.5 / length, EYE_RAY_DIRECTION_TOLERANCE);
 }
 
 /* ---- ray-sphere ----------------------------------------------------------- */

@@ -12,7 +12,9 @@
  * a table (unknown keys, repeated keys, missing values and bad numbers are
  * errors here, with the token's column), then the statement's own function
  * checks what the keys mean together and appends to the description. Any
- * error frees everything, so a caller never sees half a scene.
+ * error frees everything, so a caller never sees half a scene. The
+ * description itself, once read (made empty, freed, its meshes loaded, its
+ * kinds named), is scene_desc.c.
  */
 #include "scene_file.h"
 
@@ -238,23 +240,6 @@ static bool require(const parse_context *pc, const key_value *values, const key_
 
 /* ---- the description ---------------------------------------------------------- */
 
-void scene_desc_init(scene_desc *d)
-{
-    memset(d, 0, sizeof *d);
-    d->up = vec3_make(0, 1, 0);
-    d->fov_degrees = 40.0f;
-    d->max_depth = -1;
-    d->effects_allowed = EFFECT_ALL;
-}
-
-void scene_desc_free(scene_desc *d)
-{
-    free(d->materials);
-    free(d->lights);
-    free(d->shapes);
-    scene_desc_init(d);
-}
-
 static int find_material(const scene_desc *d, const char *name)
 {
     for (int i = 0; i < d->material_count; i++)
@@ -440,20 +425,6 @@ static bool statement_material(const parse_context *pc, scene_desc *d, const tok
     return true;
 }
 
-/* Whether the parallelogram or triangle on corners p0, p1, p2 has area:
- * false when they are on a line (or the cross product underflows), the
- * same test for an area light and for an emitting triangle or quad. */
-static bool corners_have_area(const vec3 *p)
-{
-    vec3 normal = vec3_cross(vec3_sub(p[1], p[0]), vec3_sub(p[2], p[0]));
-    return vec3_length_squared(normal) > 0.0f;
-}
-
-static bool material_emits(const scene_material *m)
-{
-    return m->kind == SCENE_MATERIAL_EMISSIVE && vec3_max_component(m->emission) > 0.0f;
-}
-
 static bool statement_light(const parse_context *pc, scene_desc *d, const token *t, int n)
 {
     if (n < 2)
@@ -490,7 +461,7 @@ static bool statement_light(const parse_context *pc, scene_desc *d, const token 
         for (int k = 0; k < 4; k++)
             l.corners[k] = value_vec3(&v[k]);
         l.emission = value_vec3(&v[4]);
-        if (!corners_have_area(l.corners))
+        if (!scene_corners_have_area(l.corners))
             return fail(pc, t[1].column, "the area light has no area (p0, p1, p2 on a line)");
     } else {
         return fail(pc, t[1].column, "unknown light kind '%.*s' (point, area)", t[1].length > 40 ? 40 : t[1].length,
@@ -574,7 +545,7 @@ static bool statement_polygon(const parse_context *pc, scene_desc *d, const toke
     /* An emitting shape is a light: like an area light it must have area
      * (its power is L_e times its area; without, a scene lit by it renders
      * black). A shape that only reflects may be degenerate: it is never hit. */
-    if (material_emits(&d->materials[s.material]) && !corners_have_area(s.p))
+    if (scene_material_emits(&d->materials[s.material]) && !scene_corners_have_area(s.p))
         return fail(pc, t[0].column, "the %s emits light (material '%s') but has no area (p0, p1, p2 on a line)", name,
                     d->materials[s.material].name);
     return add_shape(pc, d, &s, t[0].column);
@@ -798,67 +769,4 @@ bool scene_desc_load(scene_desc *d, const char *path, char *err, size_t err_size
     bool ok = scene_desc_parse(d, text, length, path, base, err, err_size);
     free(text);
     return ok;
-}
-
-bool scene_desc_load_mesh(const scene_desc *d, int index, mesh *m, char *err, size_t err_size)
-{
-    const scene_shape *s = &d->shapes[index];
-    if (s->kind == SCENE_SHAPE_MESH_TORI) {
-        mesh_tori_field(m, s->triangles);
-        return true;
-    }
-    if (s->kind != SCENE_SHAPE_MESH_OBJ) {
-        snprintf(err, err_size, "%s:%d:%d: not a mesh", d->source, s->line, s->column);
-        return false;
-    }
-    char why[MESH_ERROR_SIZE];
-    int first_face = m->face_count, first_position = m->position_count, first_material = m->material_count;
-    int first_normal = m->normal_count, first_texcoord = m->texcoord_count;
-    if (!mesh_load_obj(m, s->path, why, sizeof why)) {
-        snprintf(err, err_size, "%s:%d:%d: mesh: %s", d->source, s->line, s->column, why);
-        return false;
-    }
-    /* A mesh given an emitting material is a light: like an emitting quad,
-     * it must have area somewhere (a triangle without area among others
-     * with area is harmless: it is never sampled). */
-    if (s->material >= 0 && material_emits(&d->materials[s->material])) {
-        bool has_area = false;
-        for (int i = first_face; i < m->face_count && !has_area; i++) {
-            vec3 p[3] = {mesh_vertex(m, i, 0), mesh_vertex(m, i, 1), mesh_vertex(m, i, 2)};
-            has_area = corners_have_area(p);
-        }
-        if (!has_area) {
-            snprintf(err, err_size, "%s:%d:%d: mesh: %s: emits light (material '%s') but no triangle of it has area",
-                     d->source, s->line, s->column, s->path, d->materials[s->material].name);
-            /* m as it was before the call, as on any other failure. */
-            m->face_count = first_face;
-            m->position_count = first_position;
-            m->material_count = first_material;
-            m->normal_count = first_normal;
-            m->texcoord_count = first_texcoord;
-            return false;
-        }
-    }
-    return true;
-}
-
-void scene_desc_where(const scene_desc *d, int line, int column, char *out, size_t out_size)
-{
-    snprintf(out, out_size, "%s:%d:%d", d->source, line, column);
-}
-
-const char *scene_material_kind_name(scene_material_kind k)
-{
-    static const char *const names[] = {
-#define SCENE_MATERIAL_NAME(id, keyword, effects) keyword,
-        SCENE_MATERIAL_KINDS(SCENE_MATERIAL_NAME)
-#undef SCENE_MATERIAL_NAME
-    };
-    return (unsigned)k < SCENE_MATERIAL_KIND_COUNT ? names[k] : "?";
-}
-
-const char *scene_shape_kind_name(scene_shape_kind k)
-{
-    static const char *const names[] = {"sphere", "plane", "triangle", "quad", "implicit torus", "mesh", "mesh"};
-    return (unsigned)k < 7 ? names[k] : "?";
 }

@@ -182,4 +182,19 @@ void scene_desc_where(const scene_desc *d, int line, int column, char *out, size
 const char *scene_material_kind_name(scene_material_kind k);
 const char *scene_shape_kind_name(scene_shape_kind k);
 
+/* Whether the parallelogram or triangle on corners p0, p1, p2 has area:
+ * false when they are on a line (or the cross product underflows), the
+ * same test for an area light and for an emitting triangle or quad. */
+static inline bool scene_corners_have_area(const vec3 *p)
+{
+    vec3 normal = vec3_cross(vec3_sub(p[1], p[0]), vec3_sub(p[2], p[0]));
+    return vec3_length_squared(normal) > 0.0f;
+}
+
+/* Does the material give light (an emissive kind with some emission)? */
+static inline bool scene_material_emits(const scene_material *m)
+{
+    return m->kind == SCENE_MATERIAL_EMISSIVE && vec3_max_component(m->emission) > 0.0f;
+}
+
 #endif

@@ -49,7 +49,7 @@ CHROMIUM = chromium --headless --no-sandbox --disable-gpu --hide-scrollbars \
 docs: $(DOC_PAGES)
 	@echo "The book is in $(DOCS)/: open $(DOCS)/index.html"
 
-DOC_MARKDOWN = README.md docs/*.md chapters/*/README.md
+DOC_MARKDOWN = README.md docs/*.md chapters/*/*.md
 excerpts:
 	@docs/excerpts.sh $(DOC_MARKDOWN)
 
@@ -64,9 +64,9 @@ excerpts:
 FIGURE_WIDTH ?= 320
 PLOT_WIDTH ?= 800
 COMMITTED_FIGURES := $(sort $(patsubst %,docs/img/%,$(notdir $(shell grep -ho 'img/[A-Za-z0-9_]*\.png' \
-  chapters/*/README.md docs/index.md README.md))))
+  chapters/*/*.md docs/index.md README.md))))
 COMMITTED_TABLES := $(sort $(shell sed -n 's/^<!-- table \([a-z0-9_]*\) -->$$/\1/p' \
-  chapters/*/README.md docs/*.md README.md))
+  chapters/*/*.md docs/*.md README.md))
 figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
 	@mkdir -p docs/img
 	@printf '# The committed copies of the figures (make figures): file, source, how its data was made.\n' \
@@ -86,7 +86,7 @@ figures: $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(BUILD)/bin/png_shrink
 	done
 	@mv docs/img/SOURCES.tmp docs/img/SOURCES
 	@for t in $(COMMITTED_TABLES); do cp $(BUILD)/plots/$$t.md docs/img/$$t.md || exit 1; done
-	@docs/splice.sh docs/img README.md docs/*.md chapters/*/README.md
+	@docs/splice.sh docs/img README.md docs/*.md chapters/*/*.md
 	@du -ch docs/img/*.png | tail -1 | sed 's|$$| in docs/img/ (commit them)|'
 
 # Chapter 09's clickable picture: the paths of 16 x 16 of its pixels, one
@@ -153,10 +153,10 @@ test-docs: docs | docs-deps
 	! docs/splice.sh --check docs/img $(DOCS_TEST)/hand_edited_table.md > $(DOCS_TEST)/hand_edited_table.txt \
 	  || { echo "FAIL: a table edited by hand (tests/docs/hand_edited_table.md) passed the check"; exit 1; }; \
 	echo "ok: tests/docs/hand_edited_table.md is refused: its table is not the one its run wrote"
-	@docs/splice.sh --check docs/img README.md docs/*.md chapters/*/README.md \
+	@docs/splice.sh --check docs/img README.md docs/*.md chapters/*/*.md \
 	  && echo "ok: every measured table a README quotes is the one the run that drew its figure wrote"
 	@tests/check_excerpts.sh $(BUILD)
-	@tests/check_images.sh README.md docs/*.md chapters/*/README.md \
+	@tests/check_images.sh README.md docs/*.md chapters/*/*.md \
 	  && echo "ok: every image the READMEs and pages show is a file of the repository"
 	@! CHROMIUM="$(CHROMIUM)" tests/docs_print_pages.sh $(DOC_MAX_PRINTED) tests/docs/bad_long_page.html \
 	  > $(DOCS_TEST)/bad_print.txt || { echo "FAIL: tests/docs/bad_long_page.html passed the print check"; exit 1; }; \

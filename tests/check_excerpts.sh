@@ -40,8 +40,8 @@ else
 fi
 
 # every README
-if docs/excerpts.sh --check README.md docs/*.md chapters/*/README.md; then
-    echo "ok: $(cat README.md docs/*.md chapters/*/README.md | grep -c '^<!-- excerpt ') excerpts in the READMEs are their sources' code"
+if docs/excerpts.sh --check README.md docs/*.md chapters/*/*.md; then
+    echo "ok: $(cat README.md docs/*.md chapters/*/*.md | grep -c '^<!-- excerpt ') excerpts in the READMEs are their sources' code"
 else
     fail "an excerpt differs from its source (above): make excerpts"
 fi

@@ -26,7 +26,9 @@ What it does to a page:
   * Measured tables. Between "<!-- table NAME -->" and "<!-- end of table
     NAME -->" the page shows build/plots/NAME.md, the table `make plots`
     wrote from the data of this build's plot (docs/splice.sh).
-  * Links. A link to another chapter's README.md goes to that chapter's page;
+  * Links. A link to another chapter's README.md goes to that chapter's page,
+    one to a chapter's companion page (chapters/NN-name/going-further.md)
+    to its woven page, NN-name.going-further.html;
     a link to a source file goes to the file in the repository; an #anchor
     must name a heading of the page.
   * The head of a chapter page: after the README's "Lecture topics", the
@@ -501,9 +503,13 @@ local function weave_link(link)
   local path, anchor = target:match("^([^#]*)(#?.*)$")
   local full = from_root(path)
   local chapter = full:match("^chapters/([^/]+)/README%.md$") or full:match("^chapters/([^/]+)/?$")
+  local companion_chapter, companion = full:match("^chapters/([^/]+)/([%w-]+)%.md$")
   if chapter then
     if not chapter_pages[chapter] then fail(where(target), "no chapter " .. chapter) end
     link.target = chapter .. ".html" .. anchor
+  elseif companion_chapter and file_exists(full) then
+    -- a chapter's companion page (going-further.md): woven beside it
+    link.target = companion_chapter .. "." .. companion .. ".html" .. anchor
   elseif full == "docs/coverage.md" then
     link.target = "coverage.html" .. anchor
   elseif full == "docs/index.md" or full == "README.md" then

@@ -22,8 +22,12 @@
 DOCS := $(BUILD)/docs
 DOCS_TEST := $(BUILD)/docs-test
 DOC_NOTES := scene-format hard-cases
+# A chapter's companion pages (its going-further.md, chapter 13's
+# what-did-not-pay.md): woven beside it as NN-name.going-further.html.
+DOC_COMPANIONS := $(filter-out %/README.md,$(wildcard chapters/*/*.md))
+companion_page = $(DOCS)/$(subst /,.,$(patsubst chapters/%.md,%,$(1))).html
 DOC_PAGES := $(patsubst %,$(DOCS)/%.html,$(CHAPTERS)) $(DOCS)/index.html $(DOCS)/coverage.html \
-  $(patsubst %,$(DOCS)/%.html,$(DOC_NOTES))
+  $(patsubst %,$(DOCS)/%.html,$(DOC_NOTES)) $(foreach f,$(DOC_COMPANIONS),$(call companion_page,$(f)))
 DOC_FIGURES := $(patsubst %,$(BUILD)/%,$(shell sed -n 's|^\(out/[^ ]*\.png\).*|\1|p' docs/figures.txt))
 # one stamp per mode: make docs FULL=1 after make docs redraws from full data
 DOC_PLOTS_STAMP := $(BUILD)/plots/.made-$(PLOT_MODE)
@@ -121,6 +125,13 @@ $(DOCS)/index.html: docs/index.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOCS)/book.css
 # The notes beside the chapters: the scene format and the hard-case catalog.
 $(patsubst %,$(DOCS)/%.html,$(DOC_NOTES)): $(DOCS)/%.html: docs/%.md $(DOC_INPUTS) $(DOCS)/book.css
 	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=note -M chapter= $< -o $@
+
+# The companion pages: their measured tables and figures too.
+define companion_rule
+$(call companion_page,$(1)): $(1) $$(DOC_INPUTS) $$(DOC_FIGURES) $$(DOC_PLOTS_STAMP) $$(wildcard $$(BUILD)/plots/*.md) $$(DOCS)/book.css
+	$$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=note -M chapter= $$< -o $$@
+endef
+$(foreach f,$(DOC_COMPANIONS),$(eval $(call companion_rule,$(f))))
 
 $(DOCS)/coverage.html: docs/coverage.md $(DOC_INPUTS) $(DOC_FIGURES) $(DOC_PLOTS_STAMP) $(DOCS)/book.css
 	$(DOC_PANDOC) -f gfm+tex_math_dollars -M page=coverage -M chapter= $< -o $@

@@ -106,7 +106,19 @@ structure-data: $(BUILD)/bin/04-uniform-grid $(BUILD)/bin/05-kd-tree $(BUILD)/bi
 	@printf 'full\tbuild/bin/06-bvh --threads 1 --mesh M --split S, (M:S) = %s\n' "$(CH06_RUNS)" > $(BUILD)/data/ch06.run
 .PHONY: structure-data
 
-plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data) $(if $(MPIRUN),mpi) ch02-data structure-data
+# Chapter 13 quotes one measured table (plots/ch13_steps.table): what each
+# step buys, from one run of its --bench (the steps side by side, 1 and 2
+# threads taking turns, best of five). Times: they move with the machine's
+# load, so the table says which run made them.
+CH13_BENCH := $(if $(FULL),--width 256 --spp 16,--width 128 --spp 4)
+ch13-data: $(BUILD)/bin/13-production
+	@mkdir -p $(BUILD)/data
+	@$(BUILD)/bin/13-production --bench $(CH13_BENCH) --bench-csv $(BUILD)/data/ch13_steps.csv > $(BUILD)/data/ch13_steps.log
+	@printf '%s\tbuild/bin/13-production --bench %s --bench-csv build/data/ch13_steps.csv\n' $(PLOT_MODE) \
+	  "$(CH13_BENCH)" > $(BUILD)/data/ch13.run
+.PHONY: ch13-data
+
+plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data) $(if $(MPIRUN),mpi) ch02-data structure-data ch13-data
 	@mkdir -p $(BUILD)/data
 	@$(foreach c,$(DATA_CHAPTERS),$(call data_run,$(c),$(call chapter_number,$(c))) && ) true
 

@@ -41,7 +41,7 @@ typedef struct {
  * eight paths at a time. */
 static const speed_case speed_cases[] = {
     {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, chapter 06 BVH", ON_LECTURE_BVH},
-    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, flat / 4-wide", ON_PRODUCTION},
+    {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, flat / wide BVH", ON_PRODUCTION},
     {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, + walls", ON_WALLS},
     {PT_LECTURE, RR_FIXED, 0, "lecture, P_RR 0.8, 8 paths at a time", EIGHT_PATHS},
     {PT_COSINE, RR_FIXED, 0, "cosine, P_RR 0.8", ON_WALLS},

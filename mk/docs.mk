@@ -8,7 +8,8 @@
 # the build if any of them does not exist. `make test-docs` opens every page
 # in headless Chromium and checks images, links and math, that each chapter
 # prints on at most DOC_MAX_PRINTED pages, and that every image a README
-# shows is a file of the repository; each check first refuses its bad
+# shows is a file of the repository, and that no chapter quotes a time
+# typed by hand (tests/check_measured_numbers.sh); each check first refuses its bad
 # input in tests/docs/.
 #
 # `make excerpts` writes the code of every excerpt in the READMEs again from
@@ -167,6 +168,7 @@ test-docs: docs | docs-deps
 	@docs/splice.sh --check docs/img README.md docs/*.md chapters/*/*.md \
 	  && echo "ok: every measured table a README quotes is the one the run that drew its figure wrote"
 	@tests/check_excerpts.sh $(BUILD)
+	@tests/check_measured_numbers.sh chapters/*/*.md
 	@tests/check_images.sh README.md docs/*.md chapters/*/*.md \
 	  && echo "ok: every image the READMEs and pages show is a file of the repository"
 	@! CHROMIUM="$(CHROMIUM)" tests/docs_print_pages.sh $(DOC_MAX_PRINTED) tests/docs/bad_long_page.html \

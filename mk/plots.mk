@@ -106,6 +106,16 @@ structure-data: $(BUILD)/bin/04-uniform-grid $(BUILD)/bin/05-kd-tree $(BUILD)/bi
 	@printf 'full\tbuild/bin/06-bvh --threads 1 --mesh M --split S, (M:S) = %s\n' "$(CH06_RUNS)" > $(BUILD)/data/ch06.run
 .PHONY: structure-data
 
+# Chapter 03 quotes one measured table (plots/ch03_boxes.table): its tests
+# per ray and time with and without the boxes, one render each.
+CH03_SIZE := --width 160 --height 120
+ch03-data: $(BUILD)/bin/03-aabb-slabs
+	@mkdir -p $(BUILD)/data
+	@$(BUILD)/bin/03-aabb-slabs --quiet --threads 1 $(CH03_SIZE) --no-boxes --out $(BUILD)/data/ch03_noboxes.exr
+	@$(BUILD)/bin/03-aabb-slabs --quiet --threads 1 $(CH03_SIZE) --out $(BUILD)/data/ch03_boxes.exr
+	@printf 'full\tbuild/bin/03-aabb-slabs --threads 1 %s [--no-boxes]\n' "$(CH03_SIZE)" > $(BUILD)/data/ch03.run
+.PHONY: ch03-data
+
 # Chapter 13 quotes one measured table (plots/ch13_steps.table): what each
 # step buys, from one run of its --bench (the steps side by side, 1 and 2
 # threads taking turns, best of five). Times: they move with the machine's
@@ -118,7 +128,7 @@ ch13-data: $(BUILD)/bin/13-production
 	  "$(CH13_BENCH)" > $(BUILD)/data/ch13.run
 .PHONY: ch13-data
 
-plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data) $(if $(MPIRUN),mpi) ch02-data structure-data ch13-data
+plot-data: $(foreach c,$(DATA_CHAPTERS),$(BUILD)/bin/$(c)) $(if $(wildcard plots/accel_*.gp),accel-data) $(if $(MPIRUN),mpi) ch02-data ch03-data structure-data ch13-data
 	@mkdir -p $(BUILD)/data
 	@$(foreach c,$(DATA_CHAPTERS),$(call data_run,$(c),$(call chapter_number,$(c))) && ) true
 

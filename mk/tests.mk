@@ -17,11 +17,12 @@
 # a signal and resumed from its checkpoint being the uninterrupted one
 # (tests/resume.sh, chapter 09's program), every excerpt a README shows being
 # its source's code, and a hand-edited one refused (tests/check_excerpts.sh),
+# no chapter quoting a time typed by hand (tests/check_measured_numbers.sh),
 # make exercise and make solution keeping every learner's body and giving
 # the files back byte for byte (tests/exercise_tool.sh; the check that every
 # exercise's stub fails its tests, which builds, is make check-exercises).
 TEST_SCRIPTS := tests/bad_input.sh $(wildcard tests/check_catalog.sh) tests/check_layering.sh tests/long_render.sh \
-                tests/resume.sh tests/check_excerpts.sh tests/exercise_tool.sh
+                tests/resume.sh tests/check_excerpts.sh tests/check_measured_numbers.sh tests/exercise_tool.sh
 SUITE_RUNS := $(patsubst $(BUILD)/tests/%,run-%,$(TESTS))
 SCRIPT_RUNS := $(patsubst tests/%.sh,run-%,$(TEST_SCRIPTS))
 .PHONY: $(SUITE_RUNS) $(SCRIPT_RUNS)

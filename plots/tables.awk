@@ -67,3 +67,13 @@ function superscript(n,    s, d, k) {
 }
 # A signed number with the minus sign typography uses (−0.50).
 function signed(x, format) { return x < 0 ? "−" sprintf(format, -x) : sprintf(format, x) }
+
+# The number a program's counters file (FILE.counters.json, one key a line)
+# holds under KEY; -1 if it has none.
+function json_count(json, key,    line, v) {
+    v = -1
+    while ((getline line < json) > 0)
+        if (line ~ "\"" key "\":") { v = line; sub(/^[^:]*:[ ]*/, "", v); sub(/,$/, "", v) }
+    close(json)
+    return v + 0
+}

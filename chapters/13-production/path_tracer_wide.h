@@ -112,6 +112,17 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
  * rendering. */
 void path_tracer_wide_use_avx(bool on);
 
+/* Which emitter a vertex's light sample takes (light_tree.h): by the light
+ * tree where the scene has at least LIGHT_TREE_MIN_EMITTERS emitting
+ * triangles (WIDE_LIGHTS_AUTO, the default), always (WIDE_LIGHTS_TREE), or
+ * never (WIDE_LIGHTS_POWER: in proportion to power, as chapter 09). The
+ * point on it, and all the physics, are chapter 09's either way. Not
+ * thread-safe: set it before rendering. */
+typedef enum { WIDE_LIGHTS_AUTO, WIDE_LIGHTS_POWER, WIDE_LIGHTS_TREE } wide_lights;
+void path_tracer_wide_lights(wide_lights how);
+/* Does a render of sc pick its lights by the tree (as set above)? */
+bool path_tracer_wide_uses_light_tree(const pt_scene *sc);
+
 /* For the tests' twins only: the renderer with one of the MIS rung's two
  * weights left off -- the emission a BSDF-sampled ray finds counted in
  * full, or the light sample counted in full -- which its comparison with

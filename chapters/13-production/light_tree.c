@@ -1,0 +1,424 @@
+/* light_tree.c -- the light tree (light_tree.h): its bounds, its build
+ * and its walk. */
+#include "13-production/light_tree.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "memory.h"
+
+/* ---- the importance of a node at a point -----------------------------------------
+ * An emitter of power Phi at distance d, seen at theta' from its normal,
+ * lighting a surface at theta_i from its normal, sends it about
+ *   Phi cos(theta') cos(theta_i) / d^2.
+ * For a node, each factor is bounded over what the node may hold: d from
+ * the box's centre (no less than half its diagonal, so that a point inside
+ * gets a finite bound); theta' no less than the angle from the cone's axis
+ * to p, less the cone's spread theta_o and the angle theta_b the box
+ * subtends from p; theta_i no less than the angle from n to the box's
+ * centre less theta_b. An angle that cannot go below 0 is taken as 0.
+ * The emitters send nothing past theta_e, and the surface receives nothing
+ * from below (the light sample adds nothing there), so those bounds give 0. */
+
+/* cos and sin of max(0, a - b), from the cosines and sines of a and b:
+ * no inverse trigonometry on the walk. */
+static void angle_less(float cos_a, float sin_a, float cos_b, float sin_b, float *cos_out, float *sin_out)
+{
+    if (cos_a >= cos_b) { /* a <= b */
+        *cos_out = 1.0f;
+        *sin_out = 0.0f;
+        return;
+    }
+    *cos_out = cos_a * cos_b + sin_a * sin_b;
+    *sin_out = sin_a * cos_b - cos_a * sin_b;
+}
+
+static float sin_of(float cos_a) { return sqrtf(fmaxf(0.0f, 1.0f - cos_a * cos_a)); }
+
+float light_bounds_importance(const light_bounds *b, vec3 p, vec3 n)
+{
+    vec3 centre = aabb_centroid(b->box);
+    float radius2 = 0.25f * vec3_length_squared(aabb_extent(b->box)); /* the bounding sphere's */
+    vec3 from_centre = vec3_sub(p, centre);
+    float d2 = vec3_length_squared(from_centre);
+    /* Inside the bounding sphere every direction is possible: only the
+     * distance bound is left. */
+    if (d2 <= radius2)
+        return b->power / fmaxf(radius2, FLT_MIN);
+    float inverse_d = 1.0f / sqrtf(d2);
+    vec3 towards_p = vec3_scale(from_centre, inverse_d);
+    float sin2_b = radius2 / d2;
+    float cos_b = sqrtf(fmaxf(0.0f, 1.0f - sin2_b)), sin_b = sqrtf(sin2_b);
+    /* theta' = theta_w - theta_o - theta_b, at the emitters */
+    float cos_w = vec3_dot(b->axis, towards_p), cos_x, sin_x, cos_light, sin_light;
+    angle_less(cos_w, sin_of(cos_w), b->cos_theta_o, sin_of(b->cos_theta_o), &cos_x, &sin_x);
+    angle_less(cos_x, sin_x, cos_b, sin_b, &cos_light, &sin_light);
+    if (cos_light <= b->cos_theta_e)
+        return 0.0f;
+    float importance = b->power * cos_light / d2;
+    /* theta_i' = theta_i - theta_b, at the surface (one-sided: the light
+     * sample adds only above it) */
+    if (n.x != 0.0f || n.y != 0.0f || n.z != 0.0f) {
+        float cos_i = -vec3_dot(n, towards_p), cos_surface, sin_surface;
+        angle_less(cos_i, sin_of(cos_i), cos_b, sin_b, &cos_surface, &sin_surface);
+        importance = cos_surface > 0.0f ? importance * cos_surface : 0.0f;
+    }
+    return importance;
+}
+
+/* ---- the walk ---------------------------------------------------------------------
+ * At an inner node the first child is taken with probability I_1 / (I_1 +
+ * I_2), the importances at p; the pick's number u is stretched back onto
+ * [0, 1) within the part it fell in, so one number serves every level. The
+ * sample and the pmf compute each choice by the same expression, so the
+ * pmf is the sample's product, bit for bit. */
+
+static float child_probability(float first, float second, bool take_first)
+{
+    return (take_first ? first : second) / (first + second);
+}
+
+int light_tree_sample(const light_tree *t, vec3 p, vec3 n, float u, float *pmf)
+{
+    *pmf = 0.0f;
+    if (t->node_count == 0)
+        return -1;
+    const light_tree_node *nodes = t->nodes;
+    if (nodes[0].light >= 0) { /* one emitter: take it wherever it can give anything */
+        if (!(light_bounds_importance(&nodes[0].bounds, p, n) > 0.0f))
+            return -1;
+        *pmf = 1.0f;
+        return nodes[0].light;
+    }
+    double v = u; /* the part of u not yet spent, in double: it is divided at each level */
+    float product = 1.0f;
+    int node = 0;
+    while (nodes[node].light < 0) {
+        int first = node + 1, second = nodes[node].second_child;
+        float i1 = light_bounds_importance(&nodes[first].bounds, p, n);
+        float i2 = light_bounds_importance(&nodes[second].bounds, p, n);
+        if (!(i1 + i2 > 0.0f))
+            return -1; /* neither half can light p */
+        double p1 = (double)i1 / ((double)i1 + (double)i2);
+        bool take_first = v < p1;
+        product *= child_probability(i1, i2, take_first);
+        v = take_first ? v / p1 : (v - p1) / (1.0 - p1);
+        v = fmin(fmax(v, 0.0), 0x1.fffffffffffffp-1);
+        node = take_first ? first : second;
+    }
+    if (!(product > 0.0f))
+        return -1; /* a choice of probability below float's range: the pmf says 0 too */
+    *pmf = product;
+    return nodes[node].light;
+}
+
+float light_tree_pmf(const light_tree *t, vec3 p, vec3 n, int slot)
+{
+    if (slot < 0 || slot >= t->light_count)
+        return 0.0f;
+    const light_tree_node *nodes = t->nodes;
+    if (t->node_count == 1)
+        return light_bounds_importance(&nodes[0].bounds, p, n) > 0.0f ? 1.0f : 0.0f;
+    /* the way from the root to the leaf, found from the leaf up */
+    int way[LIGHT_TREE_MAX_DEPTH + 1], depth = 0;
+    for (int node = t->leaf_of_light[slot]; node != 0; node = nodes[node].parent)
+        way[depth++] = node;
+    float product = 1.0f;
+    for (int level = depth - 1; level >= 0; level--) {
+        int child = way[level], parent = nodes[child].parent;
+        float i1 = light_bounds_importance(&nodes[parent + 1].bounds, p, n);
+        float i2 = light_bounds_importance(&nodes[nodes[parent].second_child].bounds, p, n);
+        if (!(i1 + i2 > 0.0f))
+            return 0.0f;
+        product *= child_probability(i1, i2, child == parent + 1);
+    }
+    return product > 0.0f ? product : 0.0f;
+}
+
+bool light_tree_sample_light(const light_tree *t, const pt_scene *sc, vec3 p, vec3 n, float u_pick, float u1, float u2,
+                             pt_light_sample *x)
+{
+    float pmf;
+    int slot = light_tree_sample(t, p, n, u_pick, &pmf);
+    if (slot < 0)
+        return false;
+    int material;
+    pt_scene_emitter_point(sc, slot, u1, u2, &x->point, &x->point_error, &x->normal, &material);
+    x->emission = sc->materials[material].emission;
+    x->pdf_light = pmf / t->area[slot];
+    return true;
+}
+
+float light_tree_pdf_area(const light_tree *t, vec3 p, vec3 n, int triangle)
+{
+    if (triangle < 0 || triangle >= t->triangle_count || t->light_of_triangle[triangle] < 0)
+        return 0.0f;
+    int slot = t->light_of_triangle[triangle];
+    return light_tree_pmf(t, p, n, slot) / t->area[slot];
+}
+
+/* ---- the bounds of a group of emitters ---------------------------------------------- */
+
+/* A cone's spread is widened by this much (radians) where two are merged:
+ * the merged axis comes from float rotations, and a normal left a rounding
+ * outside the cone would be judged unable to light a point it barely can.
+ * A thousandth of a degree costs nothing measurable in the importance. */
+static const double CONE_ROUNDING = 2e-5;
+
+/* The angle between two unit vectors, accurate near 0 and pi. */
+static double angle_between(vec3 a, vec3 b)
+{
+    vec3 c = vec3_cross(a, b);
+    return atan2((double)vec3_length(c), (double)vec3_dot(a, b));
+}
+
+/* The least cone holding two (after pbrt-v4's DirectionCone union): the
+ * one that holds the other, else the cone spanning both, its axis turned
+ * from a's towards b's; the whole sphere past pi. */
+static void cone_union(vec3 axis_a, float cos_a, vec3 axis_b, float cos_b, vec3 *axis, float *cos_out)
+{
+    double theta_a = acos(fmin(1.0, fmax(-1.0, (double)cos_a)));
+    double theta_b = acos(fmin(1.0, fmax(-1.0, (double)cos_b)));
+    double theta_d = angle_between(axis_a, axis_b);
+    if (fmin(theta_d + theta_b, PI) <= theta_a) {
+        *axis = axis_a, *cos_out = cos_a;
+        return;
+    }
+    if (fmin(theta_d + theta_a, PI) <= theta_b) {
+        *axis = axis_b, *cos_out = cos_b;
+        return;
+    }
+    double theta_o = 0.5 * (theta_a + theta_d + theta_b) + CONE_ROUNDING;
+    vec3 turn = vec3_cross(axis_a, axis_b);
+    if (theta_o >= PI || vec3_length_squared(turn) == 0.0f) {
+        *axis = axis_a, *cos_out = -1.0f;
+        return;
+    }
+    /* a's axis turned by theta_o - theta_a about a x b (Rodrigues; the
+     * turn axis is perpendicular to a) */
+    double theta_r = theta_o - theta_a;
+    vec3 k = vec3_normalize(turn);
+    *axis = vec3_normalize(vec3_add(vec3_scale(axis_a, (float)cos(theta_r)),
+                                    vec3_scale(vec3_cross(k, axis_a), (float)sin(theta_r))));
+    *cos_out = (float)cos(theta_o);
+}
+
+static light_bounds bounds_union(const light_bounds *a, const light_bounds *b)
+{
+    if (!(a->power > 0.0f))
+        return *b;
+    if (!(b->power > 0.0f))
+        return *a;
+    light_bounds u = {.box = aabb_union(a->box, b->box), .power = a->power + b->power,
+                      .cos_theta_e = fminf(a->cos_theta_e, b->cos_theta_e)};
+    cone_union(a->axis, a->cos_theta_o, b->axis, b->cos_theta_o, &u.axis, &u.cos_theta_o);
+    return u;
+}
+
+/* The bounds of one emitting triangle: its box, its power, its normal
+ * (spread 0), emitting over the hemisphere in front (theta_e = pi/2). */
+static light_bounds triangle_bounds(const pt_scene *sc, int slot, float *area)
+{
+    const triangle *t = &sc->triangles.triangles[sc->emitters[slot]];
+    vec3 le = sc->materials[sc->geometry.faces[sc->emitters[slot]].material].emission;
+    vec3 cross = vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0));
+    *area = 0.5f * vec3_length(cross);
+    light_bounds b = {.box = aabb_add_point(aabb_add_point(aabb_add_point(aabb_empty(), t->p0), t->p1), t->p2),
+                      .axis = sc->emitter_normals[slot], .cos_theta_o = 1.0f, .cos_theta_e = 0.0f};
+    b.power = *area * ((le.x + le.y + le.z) / 3.0f); /* chapter 09's power: area x mean(L_e) */
+    return b;
+}
+
+/* ---- the build ----------------------------------------------------------------------
+ * Top down, as chapter 06 builds its BVH, one emitter per leaf. A split is
+ * chosen among 12 buckets of the emitters' centres along each axis by the
+ * cost pbrt-v4 gives a group (its "surface area orientation heuristic"):
+ *   Phi x M_omega x A x K_r,
+ * its power, the solid angle its cone and theta_e may send light into, its
+ * box's area (how often a point is near it) and, against long thin boxes,
+ * the box's longest side over its side along the axis. A split of less
+ * total cost keeps bright, near, alike-facing emitters together, so that
+ * the importance tells the halves apart. */
+enum { LIGHT_TREE_BUCKETS = 12 };
+
+/* M_omega: the solid angle, weighted by cosine past theta_o, that a cone
+ * of spread theta_o emitting over theta_e lights. */
+static double orientation_measure(const light_bounds *b)
+{
+    double theta_o = acos(fmin(1.0, fmax(-1.0, (double)b->cos_theta_o)));
+    double theta_e = acos(fmin(1.0, fmax(-1.0, (double)b->cos_theta_e)));
+    double theta_w = fmin(theta_o + theta_e, PI), s = sin(theta_o), c = cos(theta_o);
+    return 2.0 * PI * (1.0 - c) + PI / 2.0 * (2.0 * theta_w * s - cos(theta_o - 2.0 * theta_w) - 2.0 * theta_o * s + c);
+}
+
+static double split_cost(const light_bounds *b, const aabb *parent_box, int axis)
+{
+    if (!(b->power > 0.0f))
+        return 0.0;
+    vec3 extent = aabb_extent(*parent_box);
+    float along = vec3_axis(extent, axis), longest = vec3_max_component(extent);
+    double k_r = along > 0.0f ? (double)longest / along : 1.0;
+    return (double)b->power * orientation_measure(b) * (double)aabb_surface_area(b->box) * k_r;
+}
+
+typedef struct {
+    light_tree *t;
+    const light_bounds *leaf; /* each emitter's bounds */
+    int *order;               /* the emitters, regrouped as the tree splits them */
+} build_state;
+
+static vec3 bounds_centre(const light_bounds *b) { return aabb_centroid(b->box); }
+
+static int bucket_of(float c, float lo, float hi)
+{
+    int k = hi > lo ? (int)((double)LIGHT_TREE_BUCKETS * (c - lo) / (hi - lo)) : 0;
+    return k < 0 ? 0 : k >= LIGHT_TREE_BUCKETS ? LIGHT_TREE_BUCKETS - 1 : k;
+}
+
+/* The cheapest bucket split of order[begin, end): its axis and the last
+ * bucket of the first half in *axis, *last; false if the centres all
+ * coincide (nothing to split by place). */
+static bool best_split(const build_state *s, int begin, int end, const aabb *box, int *axis, int *last)
+{
+    aabb centres = aabb_empty();
+    for (int i = begin; i < end; i++)
+        centres = aabb_add_point(centres, bounds_centre(&s->leaf[s->order[i]]));
+    double best = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        float lo = vec3_axis(centres.lo, a), hi = vec3_axis(centres.hi, a);
+        if (!(hi > lo))
+            continue;
+        light_bounds bucket[LIGHT_TREE_BUCKETS];
+        memset(bucket, 0, sizeof bucket);
+        for (int i = begin; i < end; i++) {
+            const light_bounds *b = &s->leaf[s->order[i]];
+            int k = bucket_of(vec3_axis(bounds_centre(b), a), lo, hi);
+            bucket[k] = bounds_union(&bucket[k], b);
+        }
+        light_bounds below[LIGHT_TREE_BUCKETS];
+        below[0] = bucket[0];
+        for (int k = 1; k < LIGHT_TREE_BUCKETS; k++)
+            below[k] = bounds_union(&below[k - 1], &bucket[k]);
+        light_bounds above = bucket[LIGHT_TREE_BUCKETS - 1];
+        for (int k = LIGHT_TREE_BUCKETS - 2; k >= 0; k--) {
+            double cost = split_cost(&below[k], box, a) + split_cost(&above, box, a);
+            if (below[k].power > 0.0f && above.power > 0.0f && cost < best)
+                best = cost, *axis = a, *last = k;
+            above = bounds_union(&above, &bucket[k]);
+        }
+    }
+    return best < INFINITY;
+}
+
+/* An emitter and its centre's coordinate along the axis a split sorts by. */
+typedef struct {
+    float key;
+    int light;
+} keyed_light;
+
+static int compare_keys(const void *a, const void *b)
+{
+    float ka = ((const keyed_light *)a)->key, kb = ((const keyed_light *)b)->key;
+    return (ka > kb) - (ka < kb);
+}
+
+/* order[begin, end) sorted by their centres along `axis`. */
+static void sort_along(build_state *s, int begin, int end, int axis)
+{
+    int n = end - begin;
+    keyed_light *keyed = memory_allocate((size_t)n, sizeof *keyed);
+    for (int i = 0; i < n; i++)
+        keyed[i] = (keyed_light){vec3_axis(bounds_centre(&s->leaf[s->order[begin + i]]), axis), s->order[begin + i]};
+    qsort(keyed, (size_t)n, sizeof *keyed, compare_keys);
+    for (int i = 0; i < n; i++)
+        s->order[begin + i] = keyed[i].light;
+    free(keyed);
+}
+
+/* Where order[begin, end) is cut in two: by the cheapest bucket split,
+ * or, deep down or where the centres coincide, in half by count along the
+ * box's longest axis. */
+static int split_point(build_state *s, int begin, int end, const aabb *box, int depth)
+{
+    int axis, last;
+    if (depth < LIGHT_TREE_BALANCED_DEPTH && best_split(s, begin, end, box, &axis, &last)) {
+        aabb centres = aabb_empty();
+        for (int i = begin; i < end; i++)
+            centres = aabb_add_point(centres, bounds_centre(&s->leaf[s->order[i]]));
+        float lo = vec3_axis(centres.lo, axis), hi = vec3_axis(centres.hi, axis);
+        int mid = begin;
+        for (int i = begin; i < end; i++)
+            if (bucket_of(vec3_axis(bounds_centre(&s->leaf[s->order[i]]), axis), lo, hi) <= last) {
+                int swap = s->order[i];
+                s->order[i] = s->order[mid];
+                s->order[mid++] = swap;
+            }
+        return mid;
+    }
+    sort_along(s, begin, end, aabb_longest_axis(*box));
+    return begin + (end - begin) / 2;
+}
+
+/* The subtree of order[begin, end) at node t->node_count: its index. */
+static int build_node(build_state *s, int begin, int end, int parent, int depth)
+{
+    light_tree *t = s->t;
+    int node = t->node_count++;
+    light_tree_node *out = &t->nodes[node];
+    out->parent = parent;
+    if (end - begin == 1) {
+        out->bounds = s->leaf[s->order[begin]];
+        out->light = s->order[begin];
+        out->second_child = -1;
+        t->leaf_of_light[out->light] = node;
+        return node;
+    }
+    light_bounds all = {0};
+    for (int i = begin; i < end; i++)
+        all = bounds_union(&all, &s->leaf[s->order[i]]);
+    int mid = split_point(s, begin, end, &all.box, depth);
+    build_node(s, begin, mid, node, depth + 1);
+    int second = build_node(s, mid, end, node, depth + 1);
+    out = &t->nodes[node]; /* (the array does not move: allocated whole) */
+    out->bounds = all;
+    out->light = -1;
+    out->second_child = second;
+    return node;
+}
+
+void light_tree_build(light_tree *t, const pt_scene *sc)
+{
+    int n = sc->emitter_count;
+    memset(t, 0, sizeof *t);
+    t->light_count = n;
+    t->triangle_count = sc->triangles.count;
+    t->light_of_triangle = memory_allocate((size_t)(t->triangle_count > 0 ? t->triangle_count : 1), sizeof(int));
+    for (int i = 0; i < t->triangle_count; i++)
+        t->light_of_triangle[i] = -1;
+    if (n == 0)
+        return;
+    t->nodes = memory_allocate((size_t)(2 * n - 1), sizeof *t->nodes);
+    t->leaf_of_light = memory_allocate((size_t)n, sizeof(int));
+    t->area = memory_allocate((size_t)n, sizeof(float));
+    light_bounds *leaf = memory_allocate((size_t)n, sizeof *leaf);
+    build_state s = {.t = t, .leaf = leaf, .order = memory_allocate((size_t)n, sizeof(int))};
+    for (int i = 0; i < n; i++) {
+        leaf[i] = triangle_bounds(sc, i, &t->area[i]);
+        t->light_of_triangle[sc->emitters[i]] = i;
+        s.order[i] = i;
+    }
+    build_node(&s, 0, n, -1, 0);
+    free(s.order);
+    free(leaf);
+}
+
+void light_tree_free(light_tree *t)
+{
+    free(t->nodes);
+    free(t->leaf_of_light);
+    free(t->light_of_triangle);
+    free(t->area);
+    memset(t, 0, sizeof *t);
+}

@@ -1,0 +1,107 @@
+/* light_tree.h -- picking one of many lights by what it can give a point.
+ *
+ * Chapter 09 picks an emitting triangle in proportion to its power, the
+ * same choice at every shading point. With thousands of emitters most of
+ * them are far, turned away or below the surface, and a sample spent on
+ * one of those adds nothing. The light tree (after pbrt-v4's BVH light
+ * sampler and Conty and Kulla's many-lights tree) groups the emitters in
+ * a binary tree; each node bounds its emitters' power, place (a box) and
+ * facing (a cone of normals). A pick walks from the root, choosing a child
+ * in proportion to an importance: the most its emitters could send to the
+ * point (power, over the squared distance, times the best cosines the
+ * bounds allow at the light and at the surface). The probability of the
+ * emitter reached is the product of the choices on its way; the point on
+ * it is uniform, as in chapter 09, so its density per unit area is that
+ * product over its area.
+ *
+ * The tree only changes which emitter is picked and with what
+ * probability: the light sample's physics stays chapter 09's
+ * (light_transport.h). Point lights are summed at every vertex, as
+ * chapter 09 does, and are not in the tree; neither are emitting spheres
+ * nor the environment, which only rays that meet them count.
+ *
+ * Usage (pbrt's triad: sample, and the probability of what was sampled):
+ *   light_tree t;
+ *   light_tree_build(&t, &scene);             after pt_scene_finish
+ *   pt_light_sample x;
+ *   if (light_tree_sample_light(&t, &scene, p, n, u_pick, u1, u2, &x)) ... x.pdf_light per unit area
+ *   float pdf = light_tree_pdf_area(&t, p, n, triangle);   the same, for a point a BSDF ray found
+ *   light_tree_free(&t);
+ */
+#ifndef LIGHT_TREE_H
+#define LIGHT_TREE_H
+
+#include <stdbool.h>
+
+#include "03-aabb-slabs/aabb.h"
+#include "09-path-tracing/scene_pt.h"
+
+/* What a node knows of its emitters: their total power (area x mean L_e,
+ * chapter 09's measure), a box around them, and a cone around their
+ * normals: every normal within theta_o of `axis`, each emitting within
+ * theta_e of its normal (pi/2 for one-sided emitters). */
+typedef struct {
+    aabb box;
+    vec3 axis;
+    float cos_theta_o, cos_theta_e;
+    float power;
+} light_bounds;
+
+typedef struct {
+    light_bounds bounds;
+    int second_child; /* an inner node's second child; the first is the next node */
+    int light;        /* a leaf's emitter (its slot in pt_scene's emitters); -1 for an inner node */
+    int parent;       /* -1 at the root */
+} light_tree_node;
+
+typedef struct {
+    light_tree_node *nodes; /* depth first: 2 n - 1 for n emitters */
+    int node_count, light_count;
+    int *leaf_of_light;     /* an emitter slot's leaf */
+    int *light_of_triangle; /* a triangle's emitter slot, -1 if it does not emit */
+    float *area;            /* each emitter's area */
+    int triangle_count;
+} light_tree;
+
+/* Chapter 13's renderer picks by the tree from this many emitting
+ * triangles on (path_tracer_wide.h); below, by power, as chapter 09. */
+enum { LIGHT_TREE_MIN_EMITTERS = 16 };
+
+/* The deepest leaf: splits that balance power, place and facing may be
+ * lopsided; past LIGHT_TREE_BALANCED_DEPTH the build halves by count, so
+ * a leaf is at most that plus log2(2^31) deep. */
+enum { LIGHT_TREE_BALANCED_DEPTH = 40, LIGHT_TREE_MAX_DEPTH = LIGHT_TREE_BALANCED_DEPTH + 32 };
+
+/* The tree over the scene's emitting triangles (sc->emitters, after
+ * pt_scene_finish). Empty (node_count 0) if there are none. */
+void light_tree_build(light_tree *t, const pt_scene *sc);
+void light_tree_free(light_tree *t);
+
+/* The most a node's emitters could send to the point p of normal n (n = 0:
+ * a point in space, no surface): power / d^2 x cos(theta') x cos(theta_i'),
+ * where theta' is the least angle the cone allows between a normal and the
+ * direction to p, and theta_i' the least angle the box allows between n and
+ * a direction into it. 0 where no emitter can reach p's front. */
+float light_bounds_importance(const light_bounds *b, vec3 p, vec3 n);
+
+/* One emitter picked for the point p of normal n with the number u in
+ * [0, 1): its slot, and its probability in *pmf; -1 (pmf 0) where no
+ * emitter can light p. */
+int light_tree_sample(const light_tree *t, vec3 p, vec3 n, float u, float *pmf);
+
+/* The probability light_tree_sample() picks emitter `slot` for p and n:
+ * the same product, bit for bit. */
+float light_tree_pmf(const light_tree *t, vec3 p, vec3 n, int slot);
+
+/* pt_scene_sample_light() with the emitter picked by the tree: a uniform
+ * point on it, x->pdf_light = pmf / area. False where no emitter can
+ * light p. */
+bool light_tree_sample_light(const light_tree *t, const pt_scene *sc, vec3 p, vec3 n, float u_pick, float u1, float u2,
+                             pt_light_sample *x);
+
+/* The density per unit area with which light_tree_sample_light() picks a
+ * point of triangle `triangle` for p and n: its pmf over its area (0 if
+ * the triangle is not an emitter). What MIS weighs emission against. */
+float light_tree_pdf_area(const light_tree *t, vec3 p, vec3 n, int triangle);
+
+#endif

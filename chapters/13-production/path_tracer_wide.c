@@ -289,6 +289,8 @@ static bool pick_light(row_job *job, lane *l, vertex_lanes *L, int k)
         vec3 p = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]), n = vec3_make(L->n[0][k], L->n[1][k], L->n[2][k]);
         if (!light_tree_sample_light(job->lights, sc, p, n, u_pick, u1, u2, &x))
             return false;
+        if (twin_wrong == WIDE_TWIN_TREE_PDF_OF_POWER) /* the tests' wrong renderer: chapter 09's density */
+            x.pdf_light = (x.emission.x + x.emission.y + x.emission.z) / 3.0f / (float)sc->emitter_power;
     } else {
         int light_material;
         if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x.point, &x.point_error, &x.normal, &light_material))
@@ -405,9 +407,9 @@ NOT_INLINED static void emission_found(row_job *job, const vertex_lanes *L, int 
             return;
         vec3 p = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]), ng = vec3_make(L->ng[0][k], L->ng[1][k], L->ng[2][k]);
         vec3 wo = vec3_make(L->wo[0][k], L->wo[1][k], L->wo[2][k]);
-        float pdf_area = job->lights != NULL
-                             ? light_tree_pdf_area(job->lights, l->previous_point, l->previous_normal, L->triangle[k])
-                             : job->pdf_area[material];
+        float pdf_area = job->pdf_area[material];
+        if (job->lights != NULL) /* the pmf of the vertex that sampled: its point and normal */
+            pdf_area = light_tree_pdf_area(job->lights, l->previous_point, l->previous_normal, L->triangle[k]);
         float pdf_light = light_pdf_from(l->previous_point, p, ng, wo, pdf_area); /* per steradian */
         if (twin_wrong != WIDE_TWIN_EMISSION_UNWEIGHTED)
             weight = power_heuristic(l->previous_pdf, pdf_light);

@@ -125,9 +125,16 @@ bool path_tracer_wide_uses_light_tree(const pt_scene *sc);
 
 /* For the tests' twins only: the renderer with one of the MIS rung's two
  * weights left off -- the emission a BSDF-sampled ray finds counted in
- * full, or the light sample counted in full -- which its comparison with
- * chapter 09 must catch. Not thread-safe: set it before rendering. */
-typedef enum { WIDE_TWIN_NONE, WIDE_TWIN_EMISSION_UNWEIGHTED, WIDE_TWIN_LIGHT_UNWEIGHTED } wide_twin;
+ * full, or the light sample counted in full -- or, with the light tree,
+ * the light picked by the tree but divided by the density of the pick by
+ * power, which its comparison with chapter 09 must catch. Not
+ * thread-safe: set it before rendering. */
+typedef enum {
+    WIDE_TWIN_NONE,
+    WIDE_TWIN_EMISSION_UNWEIGHTED,
+    WIDE_TWIN_LIGHT_UNWEIGHTED,
+    WIDE_TWIN_TREE_PDF_OF_POWER
+} wide_twin;
 void path_tracer_wide_twin(wide_twin twin);
 
 /* For the tests of the AVX kernels against chapter 09's scalar pieces

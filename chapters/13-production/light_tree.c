@@ -179,6 +179,11 @@ static double angle_between(vec3 a, vec3 b)
  * from a's towards b's; the whole sphere past pi. */
 static void cone_union(vec3 axis_a, float cos_a, vec3 axis_b, float cos_b, vec3 *axis, float *cos_out)
 {
+    if (axis_a.x == axis_b.x && axis_a.y == axis_b.y && axis_a.z == axis_b.z) {
+        /* one facing (the lamps of one wall): no trigonometry */
+        *axis = axis_a, *cos_out = fminf(cos_a, cos_b);
+        return;
+    }
     double theta_a = acos(fmin(1.0, fmax(-1.0, (double)cos_a)));
     double theta_b = acos(fmin(1.0, fmax(-1.0, (double)cos_b)));
     double theta_d = angle_between(axis_a, axis_b);

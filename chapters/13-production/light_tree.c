@@ -3,6 +3,7 @@
 #include "13-production/light_tree.h"
 
 #include <float.h>
+#include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -37,27 +38,36 @@ static void angle_less(float cos_a, float sin_a, float cos_b, float sin_b, float
 
 static float sin_of(float cos_a) { return sqrtf(fmaxf(0.0f, 1.0f - cos_a * cos_a)); }
 
-float light_bounds_importance(const light_bounds *b, vec3 p, vec3 n)
+/* How far past grazing (as a cosine) an emitter's bound may look and
+ * still count: the cone's axis is stored to 3e-5 radians and the cosines
+ * below round, and an emitter the bound called unable to light a point it
+ * barely lights would never be picked there (a bias on the rungs without
+ * MIS). 1e-3 radians covers both many times; the emitters it lets in
+ * send next to nothing, and get an importance to match. */
+static const float LIGHT_TREE_GRAZING = 1e-3f;
+
+static const float SNORM16 = 1.0f / 32767.0f;
+
+float light_node_importance(const light_tree_node *node, vec3 p, vec3 n)
 {
-    vec3 centre = aabb_centroid(b->box);
-    float radius2 = 0.25f * vec3_length_squared(aabb_extent(b->box)); /* the bounding sphere's */
-    vec3 from_centre = vec3_sub(p, centre);
-    float d2 = vec3_length_squared(from_centre);
+    vec3 from_centre = vec3_make(p.x - node->centre[0], p.y - node->centre[1], p.z - node->centre[2]);
+    float d2 = vec3_length_squared(from_centre), radius2 = node->radius * node->radius;
     /* Inside the bounding sphere every direction is possible: only the
      * distance bound is left. */
     if (d2 <= radius2)
-        return b->power / fmaxf(radius2, FLT_MIN);
+        return node->power / fmaxf(radius2, FLT_MIN);
     float inverse_d = 1.0f / sqrtf(d2);
     vec3 towards_p = vec3_scale(from_centre, inverse_d);
-    float sin2_b = radius2 / d2;
-    float cos_b = sqrtf(fmaxf(0.0f, 1.0f - sin2_b)), sin_b = sqrtf(sin2_b);
+    float sin_b = node->radius * inverse_d, cos_b = sqrtf(fmaxf(0.0f, 1.0f - sin_b * sin_b));
     /* theta' = theta_w - theta_o - theta_b, at the emitters */
-    float cos_w = vec3_dot(b->axis, towards_p), cos_x, sin_x, cos_light, sin_light;
-    angle_less(cos_w, sin_of(cos_w), b->cos_theta_o, sin_of(b->cos_theta_o), &cos_x, &sin_x);
+    vec3 axis = vec3_scale(vec3_make(node->axis[0], node->axis[1], node->axis[2]), SNORM16);
+    float cos_o = (float)node->cos_theta_o * SNORM16;
+    float cos_w = vec3_dot(axis, towards_p), cos_x, sin_x, cos_light, sin_light;
+    angle_less(cos_w, sin_of(cos_w), cos_o, sin_of(cos_o), &cos_x, &sin_x);
     angle_less(cos_x, sin_x, cos_b, sin_b, &cos_light, &sin_light);
-    if (cos_light <= b->cos_theta_e)
+    if (cos_light < -LIGHT_TREE_GRAZING) /* past theta_e = pi/2 */
         return 0.0f;
-    float importance = b->power * cos_light / d2;
+    float importance = node->power * fmaxf(cos_light, LIGHT_TREE_GRAZING) / d2;
     /* theta_i' = theta_i - theta_b, at the surface (one-sided: the light
      * sample adds only above it) */
     if (n.x != 0.0f || n.y != 0.0f || n.z != 0.0f) {
@@ -83,22 +93,21 @@ static float child_probability(float first, float second, bool take_first)
 int light_tree_sample(const light_tree *t, vec3 p, vec3 n, float u, float *pmf)
 {
     *pmf = 0.0f;
-    if (t->node_count == 0)
+    if (t->light_count == 0)
         return -1;
     const light_tree_node *nodes = t->nodes;
-    if (nodes[0].light >= 0) { /* one emitter: take it wherever it can give anything */
-        if (!(light_bounds_importance(&nodes[0].bounds, p, n) > 0.0f))
+    int node = LIGHT_TREE_ROOT;
+    if (nodes[node].index < 0) { /* one emitter: take it wherever it can give anything */
+        if (!(light_node_importance(&nodes[node], p, n) > 0.0f))
             return -1;
         *pmf = 1.0f;
-        return nodes[0].light;
+        return -1 - nodes[node].index;
     }
     double v = u; /* the part of u not yet spent, in double: it is divided at each level */
     float product = 1.0f;
-    int node = 0;
-    while (nodes[node].light < 0) {
-        int first = node + 1, second = nodes[node].second_child;
-        float i1 = light_bounds_importance(&nodes[first].bounds, p, n);
-        float i2 = light_bounds_importance(&nodes[second].bounds, p, n);
+    while (nodes[node].index >= 0) {
+        int first = nodes[node].index;
+        float i1 = light_node_importance(&nodes[first], p, n), i2 = light_node_importance(&nodes[first + 1], p, n);
         if (!(i1 + i2 > 0.0f))
             return -1; /* neither half can light p */
         double p1 = (double)i1 / ((double)i1 + (double)i2);
@@ -106,12 +115,12 @@ int light_tree_sample(const light_tree *t, vec3 p, vec3 n, float u, float *pmf)
         product *= child_probability(i1, i2, take_first);
         v = take_first ? v / p1 : (v - p1) / (1.0 - p1);
         v = fmin(fmax(v, 0.0), 0x1.fffffffffffffp-1);
-        node = take_first ? first : second;
+        node = take_first ? first : first + 1;
     }
     if (!(product > 0.0f))
         return -1; /* a choice of probability below float's range: the pmf says 0 too */
     *pmf = product;
-    return nodes[node].light;
+    return -1 - nodes[node].index;
 }
 
 float light_tree_pmf(const light_tree *t, vec3 p, vec3 n, int slot)
@@ -119,20 +128,19 @@ float light_tree_pmf(const light_tree *t, vec3 p, vec3 n, int slot)
     if (slot < 0 || slot >= t->light_count)
         return 0.0f;
     const light_tree_node *nodes = t->nodes;
-    if (t->node_count == 1)
-        return light_bounds_importance(&nodes[0].bounds, p, n) > 0.0f ? 1.0f : 0.0f;
+    if (t->light_count == 1)
+        return light_node_importance(&nodes[LIGHT_TREE_ROOT], p, n) > 0.0f ? 1.0f : 0.0f;
     /* the way from the root to the leaf, found from the leaf up */
     int way[LIGHT_TREE_MAX_DEPTH + 1], depth = 0;
-    for (int node = t->leaf_of_light[slot]; node != 0; node = nodes[node].parent)
+    for (int node = t->leaf_of_light[slot]; node != LIGHT_TREE_ROOT; node = t->parent[node])
         way[depth++] = node;
     float product = 1.0f;
     for (int level = depth - 1; level >= 0; level--) {
-        int child = way[level], parent = nodes[child].parent;
-        float i1 = light_bounds_importance(&nodes[parent + 1].bounds, p, n);
-        float i2 = light_bounds_importance(&nodes[nodes[parent].second_child].bounds, p, n);
+        int child = way[level], first = nodes[t->parent[child]].index;
+        float i1 = light_node_importance(&nodes[first], p, n), i2 = light_node_importance(&nodes[first + 1], p, n);
         if (!(i1 + i2 > 0.0f))
             return 0.0f;
-        product *= child_probability(i1, i2, child == parent + 1);
+        product *= child_probability(i1, i2, child == first);
     }
     return product > 0.0f ? product : 0.0f;
 }
@@ -216,8 +224,7 @@ static light_bounds bounds_union(const light_bounds *a, const light_bounds *b)
         return *b;
     if (!(b->power > 0.0f))
         return *a;
-    light_bounds u = {.box = aabb_union(a->box, b->box), .power = a->power + b->power,
-                      .cos_theta_e = fminf(a->cos_theta_e, b->cos_theta_e)};
+    light_bounds u = {.box = aabb_union(a->box, b->box), .power = a->power + b->power};
     cone_union(a->axis, a->cos_theta_o, b->axis, b->cos_theta_o, &u.axis, &u.cos_theta_o);
     return u;
 }
@@ -231,7 +238,7 @@ static light_bounds triangle_bounds(const pt_scene *sc, int slot, float *area)
     vec3 cross = vec3_cross(vec3_sub(t->p1, t->p0), vec3_sub(t->p2, t->p0));
     *area = 0.5f * vec3_length(cross);
     light_bounds b = {.box = aabb_add_point(aabb_add_point(aabb_add_point(aabb_empty(), t->p0), t->p1), t->p2),
-                      .axis = sc->emitter_normals[slot], .cos_theta_o = 1.0f, .cos_theta_e = 0.0f};
+                      .axis = sc->emitter_normals[slot], .cos_theta_o = 1.0f};
     b.power = *area * ((le.x + le.y + le.z) / 3.0f); /* chapter 09's power: area x mean(L_e) */
     return b;
 }
@@ -253,7 +260,7 @@ enum { LIGHT_TREE_BUCKETS = 12 };
 static double orientation_measure(const light_bounds *b)
 {
     double theta_o = acos(fmin(1.0, fmax(-1.0, (double)b->cos_theta_o)));
-    double theta_e = acos(fmin(1.0, fmax(-1.0, (double)b->cos_theta_e)));
+    double theta_e = PI / 2.0; /* one-sided emitters */
     double theta_w = fmin(theta_o + theta_e, PI), s = sin(theta_o), c = cos(theta_o);
     return 2.0 * PI * (1.0 - c) + PI / 2.0 * (2.0 * theta_w * s - cos(theta_o - 2.0 * theta_w) - 2.0 * theta_o * s + c);
 }
@@ -366,31 +373,48 @@ static int split_point(build_state *s, int begin, int end, const aabb *box, int 
     return begin + (end - begin) / 2;
 }
 
-/* The subtree of order[begin, end) at node t->node_count: its index. */
-static int build_node(build_state *s, int begin, int end, int parent, int depth)
+/* A 16-bit fraction of 32767: the nearest, or the one at or below. */
+static int16_t snorm16(float x, bool down)
+{
+    float scaled = fminf(1.0f, fmaxf(-1.0f, x)) * 32767.0f;
+    return (int16_t)(down ? floorf(scaled) : lrintf(scaled));
+}
+
+/* The node the walk reads, from the bounds: the box's bounding sphere
+ * (its radius a part in a million over, for the rounding of centre and
+ * length), the cone packed (light_tree_node). */
+static light_tree_node node_from(const light_bounds *b, int32_t index)
+{
+    vec3 centre = aabb_centroid(b->box);
+    light_tree_node node = {.centre = {centre.x, centre.y, centre.z},
+                            .radius = 0.5f * vec3_length(aabb_extent(b->box)) * (1.0f + 1e-6f),
+                            .power = b->power, .cos_theta_o = snorm16(b->cos_theta_o, true), .index = index};
+    node.axis[0] = snorm16(b->axis.x, false);
+    node.axis[1] = snorm16(b->axis.y, false);
+    node.axis[2] = snorm16(b->axis.z, false);
+    return node;
+}
+
+/* The subtree of order[begin, end) into node `node`: a leaf, or its two
+ * children side by side at the next free pair. */
+static void build_node(build_state *s, int begin, int end, int node, int depth)
 {
     light_tree *t = s->t;
-    int node = t->node_count++;
-    light_tree_node *out = &t->nodes[node];
-    out->parent = parent;
     if (end - begin == 1) {
-        out->bounds = s->leaf[s->order[begin]];
-        out->light = s->order[begin];
-        out->second_child = -1;
-        t->leaf_of_light[out->light] = node;
-        return node;
+        t->nodes[node] = node_from(&s->leaf[s->order[begin]], -1 - s->order[begin]);
+        t->leaf_of_light[s->order[begin]] = node;
+        return;
     }
     light_bounds all = {0};
     for (int i = begin; i < end; i++)
         all = bounds_union(&all, &s->leaf[s->order[i]]);
     int mid = split_point(s, begin, end, &all.box, depth);
-    build_node(s, begin, mid, node, depth + 1);
-    int second = build_node(s, mid, end, node, depth + 1);
-    out = &t->nodes[node]; /* (the array does not move: allocated whole) */
-    out->bounds = all;
-    out->light = -1;
-    out->second_child = second;
-    return node;
+    int first = t->node_count;
+    t->node_count += 2;
+    t->nodes[node] = node_from(&all, first);
+    t->parent[first] = t->parent[first + 1] = node;
+    build_node(s, begin, mid, first, depth + 1);
+    build_node(s, mid, end, first + 1, depth + 1);
 }
 
 void light_tree_build(light_tree *t, const pt_scene *sc)
@@ -404,7 +428,15 @@ void light_tree_build(light_tree *t, const pt_scene *sc)
         t->light_of_triangle[i] = -1;
     if (n == 0)
         return;
-    t->nodes = memory_allocate((size_t)(2 * n - 1), sizeof *t->nodes);
+    /* 2 n nodes (nodes[0] unused), on 64-byte lines: a pair of children per line */
+    size_t bytes = ((size_t)(2 * n) * sizeof *t->nodes + 63) / 64 * 64;
+    t->nodes = aligned_alloc(64, bytes);
+    if (t->nodes == NULL) {
+        fprintf(stderr, "out of memory (%zu bytes for the light tree)\n", bytes);
+        exit(1);
+    }
+    memset(t->nodes, 0, bytes);
+    t->parent = memory_allocate((size_t)(2 * n), sizeof(int));
     t->leaf_of_light = memory_allocate((size_t)n, sizeof(int));
     t->area = memory_allocate((size_t)n, sizeof(float));
     light_bounds *leaf = memory_allocate((size_t)n, sizeof *leaf);
@@ -414,7 +446,8 @@ void light_tree_build(light_tree *t, const pt_scene *sc)
         t->light_of_triangle[sc->emitters[i]] = i;
         s.order[i] = i;
     }
-    build_node(&s, 0, n, -1, 0);
+    t->node_count = LIGHT_TREE_ROOT + 1;
+    build_node(&s, 0, n, LIGHT_TREE_ROOT, 0);
     free(s.order);
     free(leaf);
 }
@@ -422,6 +455,7 @@ void light_tree_build(light_tree *t, const pt_scene *sc)
 void light_tree_free(light_tree *t)
 {
     free(t->nodes);
+    free(t->parent);
     free(t->leaf_of_light);
     free(t->light_of_triangle);
     free(t->area);

@@ -2887,14 +2887,27 @@ static int light_test_points(const pt_scene *sc, light_test_point out[4])
 /* A pmf for the twins: what light_tree_pmf() computes, with one mistake. */
 typedef float (*light_pmf_fn)(const light_tree *t, vec3 p, vec3 n, int slot);
 
+/* The sum of a group's importances at p, each by `importance`. */
+static float group_sum(const light_tree *t, int first, vec3 p, vec3 n,
+                       float (*importance)(const light_tree_node *, vec3, vec3))
+{
+    float sum = 0.0f;
+    for (int k = 0; k < LIGHT_TREE_WIDTH; k++) {
+        light_tree_node node = light_tree_node_at(t, first + k);
+        sum += importance(&node, p, n);
+    }
+    return sum;
+}
+
 /* The twin that forgets to renormalize: each choice I_child / I_parent
- * instead of I_child / (I_first + I_second). */
+ * instead of I_child over the sum of its group's (at the top, the sum). */
 static float pmf_not_renormalized(const light_tree *t, vec3 p, vec3 n, int slot)
 {
     float product = 1.0f;
-    for (int node = t->leaf_of_light[slot]; node != LIGHT_TREE_ROOT; node = t->parent[node]) {
-        float parent = light_node_importance(&t->nodes[t->parent[node]], p, n);
-        product *= parent > 0.0f ? light_node_importance(&t->nodes[node], p, n) / parent : 0.0f;
+    for (int node = t->leaf_of_light[slot]; node >= 0; node = t->parent[node]) {
+        light_tree_node here = light_tree_node_at(t, node), parent = light_tree_node_at(t, t->parent[node] >= 0 ? t->parent[node] : 0);
+        float below = t->parent[node] >= 0 ? light_node_importance(&parent, p, n) : group_sum(t, 0, p, n, light_node_importance);
+        product *= below > 0.0f ? light_node_importance(&here, p, n) / below : 0.0f;
     }
     return product;
 }
@@ -2911,11 +2924,10 @@ static float importance_without_orientation(const light_tree_node *node, vec3 p,
 static float pmf_without_orientation(const light_tree *t, vec3 p, vec3 n, int slot)
 {
     float product = 1.0f;
-    for (int node = t->leaf_of_light[slot]; node != LIGHT_TREE_ROOT; node = t->parent[node]) {
-        int first = t->nodes[t->parent[node]].index;
-        float i1 = importance_without_orientation(&t->nodes[first], p, n);
-        float i2 = importance_without_orientation(&t->nodes[first + 1], p, n);
-        product *= i1 + i2 > 0.0f ? (node == first ? i1 : i2) / (i1 + i2) : 0.0f;
+    for (int node = t->leaf_of_light[slot]; node >= 0; node = t->parent[node]) {
+        float sum = group_sum(t, node - node % LIGHT_TREE_WIDTH, p, n, importance_without_orientation);
+        light_tree_node here = light_tree_node_at(t, node);
+        product *= sum > 0.0f ? importance_without_orientation(&here, p, n) / sum : 0.0f;
     }
     return product;
 }
@@ -2985,8 +2997,7 @@ static void test_light_tree_picks_with_its_pmf(void **state)
     light_tree t, tm;
     light_tree_build(&t, &sc);
     light_tree_build(&tm, &many);
-    assert_int_equal(t.node_count, 2 * sc.emitter_count); /* nodes[0] unused */
-    assert_int_equal(tm.node_count, 2 * many.emitter_count);
+    assert_true(t.node_count <= LIGHT_TREE_WIDTH * (sc.emitter_count + 1));
     assert_true(many.emitter_count >= 10000);
     light_test_point points[4];
     int count = light_test_points(&sc, points);
@@ -3024,6 +3035,40 @@ static void test_light_tree_picks_with_its_pmf(void **state)
     light_tree_free(&t);
     light_tree_free(&tm);
     pt_scene_free(&sc);
+    pt_scene_free(&many);
+}
+
+/* The walk's four importances at once (SSE) are light_node_importance()
+ * of each node, bit for bit, for every group of the many-lights tree at
+ * random points in and around the box with random normals (and none):
+ * the readable function is the one the walk computes. */
+static void test_light_tree_group_is_its_nodes_importance(void **state)
+{
+    (void)state;
+    pt_scene many;
+    assert_true(bench_scene_build(&many, "many-lights"));
+    light_tree t;
+    light_tree_build(&t, &many);
+    pcg32 rng = pcg32_for_pixel(test_seed(461), 0);
+    long compared = 0, differ = 0;
+    for (int trial = 0; trial < 64; trial++) {
+        vec3 p = vec3_make(800.0f * pcg32_float(&rng) - 100.0f, 800.0f * pcg32_float(&rng) - 100.0f,
+                           800.0f * pcg32_float(&rng) - 100.0f);
+        vec3 n = trial % 8 == 0 ? vec3_splat(0.0f) : random_direction(&rng);
+        for (int first = 0; first < t.node_count; first += LIGHT_TREE_WIDTH) {
+            float group[LIGHT_TREE_WIDTH];
+            light_tree_group_importances(&t, first, p, n, group);
+            for (int k = 0; k < LIGHT_TREE_WIDTH; k++) {
+                light_tree_node node = light_tree_node_at(&t, first + k);
+                float one = light_node_importance(&node, p, n);
+                differ += memcmp(&one, &group[k], sizeof one) != 0;
+                compared++;
+            }
+        }
+    }
+    print_message("light tree: %ld importances four at a time, %ld differ from one at a time\n", compared, differ);
+    assert_int_equal(differ, 0);
+    light_tree_free(&t);
     pt_scene_free(&many);
 }
 
@@ -3112,6 +3157,7 @@ int main(void)
         cmocka_unit_test(test_sobol_pixel_draws_chapter_09s_numbers),
         cmocka_unit_test(test_the_benchmark_scenes_are_what_they_say),
         cmocka_unit_test(test_light_tree_picks_with_its_pmf),
+        cmocka_unit_test(test_light_tree_group_is_its_nodes_importance),
         cmocka_unit_test(test_light_tree_image_agrees_with_power_picking),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

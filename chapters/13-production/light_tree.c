@@ -7,6 +7,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "memory.h"
 
@@ -79,15 +82,139 @@ float light_node_importance(const light_tree_node *node, vec3 p, vec3 n)
 }
 
 /* ---- the walk ---------------------------------------------------------------------
- * At an inner node the first child is taken with probability I_1 / (I_1 +
- * I_2), the importances at p; the pick's number u is stretched back onto
- * [0, 1) within the part it fell in, so one number serves every level. The
- * sample and the pmf compute each choice by the same expression, so the
- * pmf is the sample's product, bit for bit. */
+ * The nodes come in groups of LIGHT_TREE_WIDTH, the children of one node
+ * (an empty place has power 0, so importance 0); the first group is the
+ * root's. At each level the walk takes child k of its group with
+ * probability I_k / (I_0 + I_1 + I_2 + I_3), the importances at p, and
+ * stretches the pick's number u back onto [0, 1) within the part it fell
+ * in, so one number serves every level. Four children a level, not two:
+ * a level's importances are independent of one another and overlap in the
+ * processor, while the levels wait on each other, so half as many levels
+ * take about half the time. The sample and the pmf compute each choice by
+ * the same expressions, so the pmf is the sample's product, bit for bit. */
 
-static float child_probability(float first, float second, bool take_first)
+#if defined(__SSE2__)
+/* light_node_importance() for the four nodes of a group at once, one per
+ * SSE lane: the same operations in the same order (sqrtps and divps round
+ * as sqrtf and / do; max of two numbers, never NaN here, as fmaxf), so
+ * the same bits (test_light_tree_group_is_its_nodes_importance); both
+ * branches of each choice computed and one kept per lane. A group's four
+ * importances cost about one node's. */
+static __m128 select_ps(__m128 mask, __m128 a, __m128 b) { return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b)); }
+
+/* angle_less() in four lanes: cos and sin of max(0, a - b). */
+static void angle_less4(__m128 cos_a, __m128 sin_a, __m128 cos_b, __m128 sin_b, __m128 *cos_out, __m128 *sin_out)
 {
-    return (take_first ? first : second) / (first + second);
+    __m128 a_within_b = _mm_cmpge_ps(cos_a, cos_b);
+    __m128 c = _mm_add_ps(_mm_mul_ps(cos_a, cos_b), _mm_mul_ps(sin_a, sin_b));
+    __m128 s = _mm_sub_ps(_mm_mul_ps(sin_a, cos_b), _mm_mul_ps(cos_a, sin_b));
+    *cos_out = select_ps(a_within_b, _mm_set1_ps(1.0f), c);
+    *sin_out = select_ps(a_within_b, _mm_setzero_ps(), s);
+}
+
+static __m128 sin_of4(__m128 cos_a)
+{
+    return _mm_sqrt_ps(_mm_max_ps(_mm_setzero_ps(), _mm_sub_ps(_mm_set1_ps(1.0f), _mm_mul_ps(cos_a, cos_a))));
+}
+
+static __m128 dot4(__m128 ax, __m128 ay, __m128 az, __m128 bx, __m128 by, __m128 bz)
+{
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(ax, bx), _mm_mul_ps(ay, by)), _mm_mul_ps(az, bz));
+}
+
+/* Four 16-bit fractions as floats (sign-extended by a shift). */
+static __m128 snorm4(const int16_t *v)
+{
+    __m128i x = _mm_loadl_epi64((const __m128i *)(const void *)v);
+    return _mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(x, x), 16));
+}
+
+static float group_importances(const light_tree_group *group, vec3 p, vec3 n, float importance[LIGHT_TREE_WIDTH])
+{
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), snorm = _mm_set1_ps(SNORM16);
+    __m128 fx = _mm_sub_ps(_mm_set1_ps(p.x), _mm_load_ps(group->centre[0]));
+    __m128 fy = _mm_sub_ps(_mm_set1_ps(p.y), _mm_load_ps(group->centre[1]));
+    __m128 fz = _mm_sub_ps(_mm_set1_ps(p.z), _mm_load_ps(group->centre[2]));
+    __m128 radius = _mm_load_ps(group->radius), power = _mm_load_ps(group->power);
+    __m128 d2 = dot4(fx, fy, fz, fx, fy, fz), radius2 = _mm_mul_ps(radius, radius);
+    __m128 inside = _mm_cmple_ps(d2, radius2);
+    __m128 inside_value = _mm_div_ps(power, _mm_max_ps(radius2, _mm_set1_ps(FLT_MIN)));
+    __m128 inverse_d = _mm_div_ps(one, _mm_sqrt_ps(d2));
+    __m128 tx = _mm_mul_ps(fx, inverse_d), ty = _mm_mul_ps(fy, inverse_d), tz = _mm_mul_ps(fz, inverse_d);
+    __m128 sin_b = _mm_mul_ps(radius, inverse_d);
+    __m128 cos_b = _mm_sqrt_ps(_mm_max_ps(zero, _mm_sub_ps(one, _mm_mul_ps(sin_b, sin_b))));
+    __m128 ax = _mm_mul_ps(snorm4(group->axis[0]), snorm), ay = _mm_mul_ps(snorm4(group->axis[1]), snorm);
+    __m128 az = _mm_mul_ps(snorm4(group->axis[2]), snorm), cos_o = _mm_mul_ps(snorm4(group->cos_theta_o), snorm);
+    __m128 cos_w = dot4(ax, ay, az, tx, ty, tz), cos_x, sin_x, cos_light, sin_light;
+    angle_less4(cos_w, sin_of4(cos_w), cos_o, sin_of4(cos_o), &cos_x, &sin_x);
+    angle_less4(cos_x, sin_x, cos_b, sin_b, &cos_light, &sin_light);
+    __m128 facing = _mm_cmpge_ps(cos_light, _mm_set1_ps(-LIGHT_TREE_GRAZING));
+    __m128 value = _mm_div_ps(_mm_mul_ps(power, _mm_max_ps(cos_light, _mm_set1_ps(LIGHT_TREE_GRAZING))), d2);
+    value = _mm_and_ps(facing, value);
+    if (n.x != 0.0f || n.y != 0.0f || n.z != 0.0f) {
+        __m128 cos_i = _mm_sub_ps(zero, dot4(_mm_set1_ps(n.x), _mm_set1_ps(n.y), _mm_set1_ps(n.z), tx, ty, tz));
+        __m128 cos_surface, sin_surface;
+        angle_less4(cos_i, sin_of4(cos_i), cos_b, sin_b, &cos_surface, &sin_surface);
+        value = _mm_and_ps(_mm_cmpgt_ps(cos_surface, zero), _mm_mul_ps(value, cos_surface));
+    }
+    _mm_storeu_ps(importance, select_ps(inside, inside_value, value));
+    return (importance[0] + importance[1]) + (importance[2] + importance[3]);
+}
+#else
+#endif
+
+/* Node k of a group, as one struct. */
+static light_tree_node group_node(const light_tree_group *g, int k)
+{
+    light_tree_node node = {.centre = {g->centre[0][k], g->centre[1][k], g->centre[2][k]}, .radius = g->radius[k],
+                            .power = g->power[k], .axis = {g->axis[0][k], g->axis[1][k], g->axis[2][k]},
+                            .cos_theta_o = g->cos_theta_o[k], .index = g->index[k]};
+    return node;
+}
+
+light_tree_node light_tree_node_at(const light_tree *t, int node)
+{
+    return group_node(&t->groups[node / LIGHT_TREE_WIDTH], node % LIGHT_TREE_WIDTH);
+}
+
+#if !defined(__SSE2__)
+/* The importances of a group at p, and their sum (in one order). */
+static float group_importances(const light_tree_group *group, vec3 p, vec3 n, float importance[LIGHT_TREE_WIDTH])
+{
+    for (int k = 0; k < LIGHT_TREE_WIDTH; k++) {
+        light_tree_node node = group_node(group, k);
+        importance[k] = light_node_importance(&node, p, n);
+    }
+    return (importance[0] + importance[1]) + (importance[2] + importance[3]);
+}
+#endif
+
+float light_tree_group_importances(const light_tree *t, int first, vec3 p, vec3 n, float importance[LIGHT_TREE_WIDTH])
+{
+    return group_importances(&t->groups[first / LIGHT_TREE_WIDTH], p, n, importance);
+}
+
+/* Child k of a group, by u (in [0, 1), in double: it is divided at each
+ * level), stretched in place; -1 if no child has any importance. */
+static int choose_child(const float importance[LIGHT_TREE_WIDTH], float sum, double *u)
+{
+    if (!(sum > 0.0f))
+        return -1;
+    double below = 0.0, target = *u * (double)sum;
+    int k = 0, last = 0;
+    for (; k < LIGHT_TREE_WIDTH; k++) {
+        if (importance[k] > 0.0f)
+            last = k;
+        if (target < below + (double)importance[k])
+            break;
+        below += (double)importance[k];
+    }
+    if (k == LIGHT_TREE_WIDTH) { /* u rounded past the last: the last child that can be picked */
+        k = last;
+        below -= (double)importance[k];
+    }
+    *u = fmin(fmax((target - below) / (double)importance[k], 0.0), 0x1.fffffffffffffp-1);
+    return k;
 }
 
 int light_tree_sample(const light_tree *t, vec3 p, vec3 n, float u, float *pmf)
@@ -95,52 +222,42 @@ int light_tree_sample(const light_tree *t, vec3 p, vec3 n, float u, float *pmf)
     *pmf = 0.0f;
     if (t->light_count == 0)
         return -1;
-    const light_tree_node *nodes = t->nodes;
-    int node = LIGHT_TREE_ROOT;
-    if (nodes[node].index < 0) { /* one emitter: take it wherever it can give anything */
-        if (!(light_node_importance(&nodes[node], p, n) > 0.0f))
-            return -1;
-        *pmf = 1.0f;
-        return -1 - nodes[node].index;
-    }
-    double v = u; /* the part of u not yet spent, in double: it is divided at each level */
-    float product = 1.0f;
-    while (nodes[node].index >= 0) {
-        int first = nodes[node].index;
-        float i1 = light_node_importance(&nodes[first], p, n), i2 = light_node_importance(&nodes[first + 1], p, n);
-        if (!(i1 + i2 > 0.0f))
-            return -1; /* neither half can light p */
-        double p1 = (double)i1 / ((double)i1 + (double)i2);
-        bool take_first = v < p1;
-        product *= child_probability(i1, i2, take_first);
-        v = take_first ? v / p1 : (v - p1) / (1.0 - p1);
-        v = fmin(fmax(v, 0.0), 0x1.fffffffffffffp-1);
-        node = take_first ? first : first + 1;
+    double v = u;
+    float product = 1.0f, importance[LIGHT_TREE_WIDTH];
+    int first = 0, node;
+    for (;;) {
+        const light_tree_group *group = &t->groups[first / LIGHT_TREE_WIDTH];
+        float sum = group_importances(group, p, n, importance);
+        int k = choose_child(importance, sum, &v);
+        if (k < 0)
+            return -1; /* no child can light p */
+        product *= importance[k] / sum;
+        node = first + k;
+        if (group->index[k] < 0)
+            break;
+        first = group->index[k];
     }
     if (!(product > 0.0f))
         return -1; /* a choice of probability below float's range: the pmf says 0 too */
     *pmf = product;
-    return -1 - nodes[node].index;
+    return -1 - t->groups[node / LIGHT_TREE_WIDTH].index[node % LIGHT_TREE_WIDTH];
 }
 
 float light_tree_pmf(const light_tree *t, vec3 p, vec3 n, int slot)
 {
     if (slot < 0 || slot >= t->light_count)
         return 0.0f;
-    const light_tree_node *nodes = t->nodes;
-    if (t->light_count == 1)
-        return light_node_importance(&nodes[LIGHT_TREE_ROOT], p, n) > 0.0f ? 1.0f : 0.0f;
-    /* the way from the root to the leaf, found from the leaf up */
+    /* the way from the top to the leaf, found from the leaf up */
     int way[LIGHT_TREE_MAX_DEPTH + 1], depth = 0;
-    for (int node = t->leaf_of_light[slot]; node != LIGHT_TREE_ROOT; node = t->parent[node])
+    for (int node = t->leaf_of_light[slot]; node >= 0; node = t->parent[node])
         way[depth++] = node;
-    float product = 1.0f;
+    float product = 1.0f, importance[LIGHT_TREE_WIDTH];
     for (int level = depth - 1; level >= 0; level--) {
-        int child = way[level], first = nodes[t->parent[child]].index;
-        float i1 = light_node_importance(&nodes[first], p, n), i2 = light_node_importance(&nodes[first + 1], p, n);
-        if (!(i1 + i2 > 0.0f))
+        int node = way[level], first = node - node % LIGHT_TREE_WIDTH;
+        float sum = group_importances(&t->groups[first / LIGHT_TREE_WIDTH], p, n, importance);
+        if (!(sum > 0.0f))
             return 0.0f;
-        product *= child_probability(i1, i2, child == first);
+        product *= importance[node - first] / sum;
     }
     return product > 0.0f ? product : 0.0f;
 }
@@ -395,26 +512,76 @@ static light_tree_node node_from(const light_bounds *b, int32_t index)
     return node;
 }
 
-/* The subtree of order[begin, end) into node `node`: a leaf, or its two
- * children side by side at the next free pair. */
-static void build_node(build_state *s, int begin, int end, int node, int depth)
+/* The emitters order[begin, end) cut into at most LIGHT_TREE_WIDTH groups
+ * (two cuts of the binary build, then each half cut again): their ends
+ * into end_of[], the count returned. */
+static int split_four(build_state *s, int begin, int end, const aabb *box, int depth, int end_of[LIGHT_TREE_WIDTH])
+{
+    int mid = split_point(s, begin, end, box, depth), count = 0;
+    int range[2][2] = {{begin, mid}, {mid, end}};
+    for (int h = 0; h < 2; h++) {
+        int b = range[h][0], e = range[h][1];
+        if (e - b == 1) {
+            end_of[count++] = e;
+            continue;
+        }
+        light_bounds half = {0};
+        for (int i = b; i < e; i++)
+            half = bounds_union(&half, &s->leaf[s->order[i]]);
+        end_of[count++] = split_point(s, b, e, &half.box, depth + 1);
+        end_of[count++] = e;
+    }
+    return count;
+}
+
+/* Node number `node` of the tree set to `value`. */
+static void node_set(light_tree *t, int node, light_tree_node value)
+{
+    light_tree_group *g = &t->groups[node / LIGHT_TREE_WIDTH];
+    int k = node % LIGHT_TREE_WIDTH;
+    for (int c = 0; c < 3; c++) {
+        g->centre[c][k] = value.centre[c];
+        g->axis[c][k] = value.axis[c];
+    }
+    g->radius[k] = value.radius;
+    g->power[k] = value.power;
+    g->cos_theta_o[k] = value.cos_theta_o;
+    g->index[k] = value.index;
+}
+
+/* The group at `first` holds the emitters order[begin, end): one child
+ * each if they are few enough, else up to LIGHT_TREE_WIDTH subtrees, each
+ * an inner node whose own group is the next free one. */
+static void build_group(build_state *s, int begin, int end, int first, int parent, int depth)
 {
     light_tree *t = s->t;
-    if (end - begin == 1) {
-        t->nodes[node] = node_from(&s->leaf[s->order[begin]], -1 - s->order[begin]);
-        t->leaf_of_light[s->order[begin]] = node;
-        return;
+    int end_of[LIGHT_TREE_WIDTH], count;
+    if (end - begin <= LIGHT_TREE_WIDTH) {
+        count = end - begin;
+        for (int k = 0; k < count; k++)
+            end_of[k] = begin + k + 1;
+    } else {
+        light_bounds all = {0};
+        for (int i = begin; i < end; i++)
+            all = bounds_union(&all, &s->leaf[s->order[i]]);
+        count = split_four(s, begin, end, &all.box, depth, end_of);
     }
-    light_bounds all = {0};
-    for (int i = begin; i < end; i++)
-        all = bounds_union(&all, &s->leaf[s->order[i]]);
-    int mid = split_point(s, begin, end, &all.box, depth);
-    int first = t->node_count;
-    t->node_count += 2;
-    t->nodes[node] = node_from(&all, first);
-    t->parent[first] = t->parent[first + 1] = node;
-    build_node(s, begin, mid, first, depth + 1);
-    build_node(s, mid, end, first + 1, depth + 1);
+    for (int k = 0, b = begin; k < count; b = end_of[k++]) {
+        int node = first + k, e = end_of[k];
+        t->parent[node] = parent;
+        if (e - b == 1) {
+            node_set(t, node, node_from(&s->leaf[s->order[b]], -1 - s->order[b]));
+            t->leaf_of_light[s->order[b]] = node;
+            continue;
+        }
+        light_bounds group = {0};
+        for (int i = b; i < e; i++)
+            group = bounds_union(&group, &s->leaf[s->order[i]]);
+        int child_group = t->node_count;
+        t->node_count += LIGHT_TREE_WIDTH;
+        node_set(t, node, node_from(&group, child_group));
+        build_group(s, b, e, child_group, node, depth + 2);
+    }
 }
 
 void light_tree_build(light_tree *t, const pt_scene *sc)
@@ -428,15 +595,17 @@ void light_tree_build(light_tree *t, const pt_scene *sc)
         t->light_of_triangle[i] = -1;
     if (n == 0)
         return;
-    /* 2 n nodes (nodes[0] unused), on 64-byte lines: a pair of children per line */
-    size_t bytes = ((size_t)(2 * n) * sizeof *t->nodes + 63) / 64 * 64;
-    t->nodes = aligned_alloc(64, bytes);
-    if (t->nodes == NULL) {
+    /* a group per inner node and one for the root's children: fewer than
+     * n groups, each on two 64-byte lines of its own */
+    size_t slots = (size_t)LIGHT_TREE_WIDTH * (size_t)(n + 1);
+    size_t bytes = (size_t)(n + 1) * sizeof *t->groups;
+    t->groups = aligned_alloc(64, bytes);
+    if (t->groups == NULL) {
         fprintf(stderr, "out of memory (%zu bytes for the light tree)\n", bytes);
         exit(1);
     }
-    memset(t->nodes, 0, bytes);
-    t->parent = memory_allocate((size_t)(2 * n), sizeof(int));
+    memset(t->groups, 0, bytes);
+    t->parent = memory_allocate(slots, sizeof(int));
     t->leaf_of_light = memory_allocate((size_t)n, sizeof(int));
     t->area = memory_allocate((size_t)n, sizeof(float));
     light_bounds *leaf = memory_allocate((size_t)n, sizeof *leaf);
@@ -446,15 +615,15 @@ void light_tree_build(light_tree *t, const pt_scene *sc)
         t->light_of_triangle[sc->emitters[i]] = i;
         s.order[i] = i;
     }
-    t->node_count = LIGHT_TREE_ROOT + 1;
-    build_node(&s, 0, n, LIGHT_TREE_ROOT, 0);
+    t->node_count = LIGHT_TREE_WIDTH;
+    build_group(&s, 0, n, 0, -1, 0);
     free(s.order);
     free(leaf);
 }
 
 void light_tree_free(light_tree *t)
 {
-    free(t->nodes);
+    free(t->groups);
     free(t->parent);
     free(t->leaf_of_light);
     free(t->light_of_triangle);

@@ -49,35 +49,42 @@ typedef struct {
     float power;
 } light_bounds;
 
-/* A node as the walk reads it: 32 bytes, so that the two children of a
- * node, side by side from an even index of an array aligned to 64 bytes,
- * are one cache line: a pick of one of 10,000 emitters reads 14 lines
- * instead of 28 of a tree too big for the nearest cache. The box is its
- * bounding sphere; the cone's axis and cosine are 16-bit fractions of
- * 32767, the cosine rounded down (the cone only widens), the axis to the
- * nearest (off by at most 3e-5 radians, within the importance's
- * LIGHT_TREE_GRAZING). */
+/* A node: its box as its bounding sphere; the cone's axis and cosine as
+ * 16-bit fractions of 32767, the cosine rounded down (the cone only
+ * widens), the axis to the nearest (off by at most 3e-5 radians, within
+ * the importance's LIGHT_TREE_GRAZING). An empty place has power 0. */
 typedef struct {
     float centre[3], radius;
     float power;
     int16_t axis[3], cos_theta_o;
-    int32_t index; /* an inner node: its first child (the second is next); a leaf: -1 - its emitter */
+    int32_t index; /* an inner node: its children's first node; a leaf: -1 - its emitter */
 } light_tree_node;
-_Static_assert(sizeof(light_tree_node) == 32, "two children to a 64-byte line");
+
+/* Children per node. */
+enum { LIGHT_TREE_WIDTH = 4 };
+
+/* The children of one node as the walk reads them: each field of the four
+ * side by side (one SSE load), 128 bytes, two cache lines. Node k of
+ * group g is node number LIGHT_TREE_WIDTH g + k. */
+typedef struct {
+    float centre[3][LIGHT_TREE_WIDTH], radius[LIGHT_TREE_WIDTH], power[LIGHT_TREE_WIDTH];
+    int16_t axis[3][LIGHT_TREE_WIDTH], cos_theta_o[LIGHT_TREE_WIDTH];
+    int32_t index[LIGHT_TREE_WIDTH];
+} light_tree_group;
+_Static_assert(sizeof(light_tree_group) == 128, "a group is two 64-byte lines");
 
 typedef struct {
-    light_tree_node *nodes; /* nodes[LIGHT_TREE_ROOT] the root; 2 n for n emitters (nodes[0] unused) */
-    int *parent;            /* each node's (0 at the root) */
-    int node_count, light_count;
+    light_tree_group *groups; /* groups[0]: the root's children */
+    int *parent;            /* each node's parent (-1 in the first group) */
+    int node_count, light_count; /* node_count: places in groups, empty ones too */
     int *leaf_of_light;     /* an emitter slot's leaf */
     int *light_of_triangle; /* a triangle's emitter slot, -1 if it does not emit */
     float *area;            /* each emitter's area */
     int triangle_count;
 } light_tree;
 
-/* The root's index: 1, so that every pair of children starts at an even
- * index, on a cache line of its own. */
-enum { LIGHT_TREE_ROOT = 1 };
+/* Node number `node` of the tree, as one struct. */
+light_tree_node light_tree_node_at(const light_tree *t, int node);
 
 /* Chapter 13's renderer picks by the tree from this many emitting
  * triangles on (path_tracer_wide.h); below, by power, as chapter 09. */
@@ -100,6 +107,11 @@ void light_tree_free(light_tree *t);
  * between n and a direction into it. 0 only where no emitter can reach
  * p's front. */
 float light_node_importance(const light_tree_node *node, vec3 p, vec3 n);
+
+/* The importances of the group of nodes from `first` at p (four at once,
+ * in SSE where the processor has it: the same bits as
+ * light_node_importance() of each), and their sum: what the walk reads. */
+float light_tree_group_importances(const light_tree *t, int first, vec3 p, vec3 n, float importance[LIGHT_TREE_WIDTH]);
 
 /* One emitter picked for the point p of normal n with the number u in
  * [0, 1): its slot, and its probability in *pmf; -1 (pmf 0) where no

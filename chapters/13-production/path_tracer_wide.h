@@ -28,7 +28,10 @@
  * comes from a polynomial (fast_sincos.h). One exception, on the lecture
  * rung: a path whose f cos / pdf is
  * exactly black ends here, where the recursion goes on and draws numbers
- * for nothing; the image's distribution is the same.
+ * for nothing; the image's distribution is the same. And in a scene of
+ * many emitters (path_tracer_wide_lights below) the light sample's
+ * emitter is picked by the light tree, from the same number, instead of
+ * by power: other light samples, the same expectation.
  *
  * Every scene chapter 09 renders: triangles in any structure (the
  * production one, walls.h, or any of chapter 03's interface), spheres, all

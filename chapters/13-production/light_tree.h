@@ -5,8 +5,9 @@
  * them are far, turned away or below the surface, and a sample spent on
  * one of those adds nothing. The light tree (after pbrt-v4's BVH light
  * sampler and Conty and Kulla's many-lights tree) groups the emitters in
- * a binary tree; each node bounds its emitters' power, place (a box) and
- * facing (a cone of normals). A pick walks from the root, choosing a child
+ * a tree of four children per node; each node bounds its emitters' power,
+ * place (a box) and facing (a cone of normals). A pick walks from the
+ * root, choosing a child
  * in proportion to an importance: the most its emitters could send to the
  * point (power, over the squared distance, times the best cosines the
  * bounds allow at the light and at the surface). The probability of the

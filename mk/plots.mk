@@ -146,9 +146,10 @@ plot-tables:
 	@mkdir -p $(BUILD)/plots
 	@for t in $(PLOT_TABLES); do \
 	  name=$$(basename $$t .table); rec=$(BUILD)/data/$${name%%_*}.run; \
-	  { awk -v data_dir='$(BUILD)/data' -f plots/tables.awk -f plots/structures.awk -f $$t && echo && \
+	  { awk -v data_dir='$(BUILD)/data' -f plots/tables.awk -f plots/structures.awk -f $$t && \
+	    if [ -f $$rec ]; then echo && \
 	    printf '*Measured by the run that drew the figure: `%s` (%s data%s).*\n' "$$(cut -f2 $$rec)" \
-	      "$$(cut -f1 $$rec)" "$$(grep -q ^quick $$rec && echo ': a smaller, rougher run; make plots FULL=1 for the full size')"; \
+	      "$$(cut -f1 $$rec)" "$$(grep -q ^quick $$rec && echo ': a smaller, rougher run; make plots FULL=1 for the full size')"; fi; \
 	  } > $(BUILD)/plots/$$name.md.tmp && mv $(BUILD)/plots/$$name.md.tmp $(BUILD)/plots/$$name.md || exit 1; \
 	  echo "awk -f $$t > build/plots/$$name.md"; \
 	done

@@ -12,6 +12,9 @@
 #      CPU, Mrays/s, 1 and 2 threads, cases taking turns, best of N
 #   4. Cycles at equal CPU time (tests/bench_cycles.py, bench_equal_time),
 #      where blender is installed: ours, Cycles, MIS at each spp in turn
+#   5. many lights: chapter 13 with its light tree against the same
+#      renderer picking lights by power (chapter 09's pick), at equal CPU
+#      time on the many-lights box (bench_equal_time, anchored on power)
 #
 # quick (the default): small images, few repeats, the 1M-triangle mesh in
 # the speed table only: a few minutes on 2 cores. full (make bench
@@ -40,16 +43,18 @@ if [ "$MODE" = full ]; then
     SPEED_ARGS="--width 256 --spp 16 --reps 5"
     CYCLES_SCENES="cornell cornell-10k cornell-100k cornell-1m glossy-glass open-100k"
     CYCLES_WIDTH=128 REFERENCE_SPP=8192 CYCLES_SPP="16 64 256" OURS_EXTRA_SPP="1024" SEEDS="1 2"
+    LIGHTS_WIDTH=128 LIGHTS_REFERENCE_SPP=8192 LIGHTS_SPP="64 256 1024"
 else
     ACCEL_SIZES="10240 102400" ACCEL_ARGS="--reps 1 --only wide-bvh-sah,wide-bvh-stream"
     TABLE_ARGS="--width 96 --spp 8" EMBREE_PT_ARGS="--width 64 --spp 8 --reps 3"
     SPEED_ARGS="--width 96 --spp 8 --reps 3"
     CYCLES_SCENES="cornell-10k glossy-glass open-100k"
     CYCLES_WIDTH=64 REFERENCE_SPP=1024 CYCLES_SPP="16 64" OURS_EXTRA_SPP="256" SEEDS="1"
+    LIGHTS_WIDTH=64 LIGHTS_REFERENCE_SPP=2048 LIGHTS_SPP="64 256"
 fi
 
 CYCLES_SCENES=${SCENES:-$CYCLES_SCENES}
-ALL_SCENES="cornell cornell-10k cornell-100k cornell-1m glossy-glass open-100k"
+ALL_SCENES="cornell cornell-10k cornell-100k cornell-1m glossy-glass open-100k many-lights"
 for s in $CYCLES_SCENES; do
     case " $ALL_SCENES " in
     *" $s "*) ;;
@@ -168,6 +173,38 @@ else
         done
     done
     "$BIN/bench_equal_time" --manifest "$MANIFEST" --references "$OUT/ref" --csv "$DATA/bench_equal_time.csv" || exit 1
+fi
+
+if [ "$PARTS" = all ]; then
+    echo
+    echo "== 5. many lights: chapter 13's light tree against its pick by power, equal CPU time ($LIGHTS_WIDTH x $LIGHTS_WIDTH, 2 threads; reference: chapter 09 mis, $LIGHTS_REFERENCE_SPP spp)"
+    # Its own reference directory: bench_equal_time reads REFDIR/SCENE.exr,
+    # and part 4 may render the same scene at another size.
+    mkdir -p "$OUT/ref-lights"
+    scene=$OUT/scenes/many-lights.scene
+    ref=$OUT/ref-lights/many-lights-$LIGHTS_WIDTH-$LIGHTS_REFERENCE_SPP.exr
+    [ -f "$ref" ] || "$BIN/bench_scenes" --reference "$scene" --spp "$LIGHTS_REFERENCE_SPP" --width "$LIGHTS_WIDTH" \
+        --threads 2 --out "$ref" || exit 1
+    ln -sf "$(basename "$ref")" "$OUT/ref-lights/many-lights.exr"
+    ln -sf "$(basename "$ref" .exr)-stderr.exr" "$OUT/ref-lights/many-lights-stderr.exr"
+    MANIFEST=$OUT/runs-lights-$MODE.csv
+    : > "$MANIFEST"
+    # Tree and power in turn at each spp and seed. From 64 spp: below, the
+    # tree's build (a few hundredths of a second) is much of a 64 x 64 render.
+    for spp in $LIGHTS_SPP; do
+        for seed in $SEEDS; do
+            for lights in tree power; do
+                "$BIN/bench_scenes" --render "$scene" --lights $lights --spp "$spp" --width "$LIGHTS_WIDTH" \
+                    --threads 2 --seed "$seed" --out "$OUT/runs/many-lights-$lights-$spp-$seed.exr" \
+                    --manifest "$MANIFEST" || exit 1
+            done
+        done
+    done
+    "$BIN/bench_equal_time" --manifest "$MANIFEST" --references "$OUT/ref-lights" --anchor ch13-power \
+        --csv "$DATA/bench_lights.csv" || exit 1
+    # its record, for the table plots/lights_equal_time.table makes of it
+    printf '%s\t%s\n' "$MODE" "make bench (part 5: bench_scenes --render many-lights.scene --lights tree|power --width $LIGHTS_WIDTH --threads 2, spp $LIGHTS_SPP, seeds $SEEDS; bench_equal_time --anchor ch13-power)" \
+        > "$DATA/lights.run"
 fi
 
 echo

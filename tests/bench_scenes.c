@@ -398,6 +398,7 @@ typedef struct {
     renderer_kind renderer;
     pt_sampler sampler;
     pt_integrator integrator;
+    wide_lights lights;
 } bench_options;
 
 static void usage(void)
@@ -422,7 +423,10 @@ static void usage(void)
            "  --sampler random|sobol  chapter 13's numbers (default sobol, its program's); random names its\n"
            "                   manifest rows NAME-random\n"
            "  --integrator lecture|cosine|mis  chapter 13's rung (default mis, its program's); another names\n"
-           "                   its manifest rows NAME-RUNG (ch13-lecture, ch13-lecture-random, ...)\n");
+           "                   its manifest rows NAME-RUNG (ch13-lecture, ch13-lecture-random, ...)\n"
+           "  --lights auto|power|tree  how chapter 13 picks a light (default auto, its program's: the light\n"
+           "                   tree from 16 emitting triangles on); power or tree names its manifest rows\n"
+           "                   NAME-power, NAME-tree\n");
 }
 
 static bool parse_renderer(const char *name, renderer_kind *out)
@@ -439,7 +443,7 @@ static bool parse_renderer(const char *name, renderer_kind *out)
 static int parse_options(int argc, char **argv, bench_options *o)
 {
     *o = (bench_options){MODE_NONE, NULL, NULL, NULL, NULL, NULL, NULL, 64, 16, 3, 2, 1, R_CH13,
-                         PRODUCTION_SAMPLER, production_path_tracer_defaults(NULL).integrator};
+                         PRODUCTION_SAMPLER, production_path_tracer_defaults(NULL).integrator, WIDE_LIGHTS_AUTO};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *value = i + 1 < argc ? argv[i + 1] : NULL;
         bool takes = true;
@@ -475,6 +479,9 @@ static int parse_options(int argc, char **argv, bench_options *o)
                 fprintf(stderr, "bench_scenes: --integrator %s: unknown (lecture, cosine, mis)\n", value);
                 return 2;
             }
+        } else if (strcmp(a, "--lights") == 0 && (strcmp(value, "auto") == 0 || strcmp(value, "power") == 0 ||
+                                                   strcmp(value, "tree") == 0)) {
+            o->lights = value[0] == 'a' ? WIDE_LIGHTS_AUTO : value[0] == 'p' ? WIDE_LIGHTS_POWER : WIDE_LIGHTS_TREE;
         } else if (strcmp(a, "--width") == 0 && atoi(value) > 0) {
             o->size = atoi(value);
         } else if (strcmp(a, "--spp") == 0 && atoi(value) > 0) {
@@ -563,8 +570,9 @@ static void row_name(const bench_options *o, char *out, size_t size)
     bool ch13 = o->renderer != R_MIS;
     bool other_rung = ch13 && o->integrator != production_path_tracer_defaults(NULL).integrator;
     bool other_sampler = ch13 && o->sampler != PRODUCTION_SAMPLER;
-    snprintf(out, size, "%s%s%s%s", RENDERER_NAMES[o->renderer], other_rung ? "-" : "",
-             other_rung ? pt_integrator_name(o->integrator) : "", other_sampler ? "-random" : "");
+    const char *lights = !ch13 ? "" : o->lights == WIDE_LIGHTS_POWER ? "-power" : o->lights == WIDE_LIGHTS_TREE ? "-tree" : "";
+    snprintf(out, size, "%s%s%s%s%s", RENDERER_NAMES[o->renderer], other_rung ? "-" : "",
+             other_rung ? pt_integrator_name(o->integrator) : "", other_sampler ? "-random" : "", lights);
 }
 
 /* One line appended to the manifest (a log the runs add to one by one;
@@ -628,6 +636,7 @@ int main(int argc, char **argv)
         return status < 0 ? 0 : status;
     bench_sampler = o.sampler;
     bench_integrator = o.integrator;
+    path_tracer_wide_lights(o.lights);
     char err[8192] = "";
     bool ok = true;
     atomic_file csv;

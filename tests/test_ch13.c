@@ -31,6 +31,7 @@
 #include "13-production/wide_bvh.h"
 #include "13-production/fast_sincos.h"
 #include "13-production/flat.h"
+#include "13-production/light_tree.h"
 #include "13-production/path_tracer_wide.h"
 #include "13-production/sobol_pixel.h"
 #include "13-production/spawn_avx.h"
@@ -42,6 +43,7 @@
 #include "scene_file.h"
 #include "stats.h"
 #include "accel_check.h"
+#include "chi2.h"
 #include "image_check.h"
 #include "pt_scene_check.h"
 #include "leak_check.h"
@@ -2839,6 +2841,284 @@ static void test_the_benchmark_scenes_are_what_they_say(void **state)
     rmdir(dir);
 }
 
+/* ==== the light tree (light_tree.c) ==== */
+
+/* A scene of LIGHT_TEST_EMITTERS emitting triangles strewn in [-1, 1]^3,
+ * each facing its own random way, of eight powers over a range of 2^7
+ * (one material per power): what the tree must choose among by place,
+ * facing and power at once. */
+enum { LIGHT_TEST_EMITTERS = 48, LIGHT_TEST_POWERS = 8 };
+
+static void build_strewn_lights(pt_scene *sc, uint64_t seed)
+{
+    pt_scene_init(sc);
+    int material[LIGHT_TEST_POWERS];
+    for (int k = 0; k < LIGHT_TEST_POWERS; k++)
+        material[k] = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_splat(exp2f((float)k))));
+    pcg32 rng = pcg32_for_pixel(test_seed(seed), 0);
+    for (int i = 0; i < LIGHT_TEST_EMITTERS; i++) {
+        vec3 c = vec3_make(2.0f * pcg32_float(&rng) - 1.0f, 2.0f * pcg32_float(&rng) - 1.0f, 2.0f * pcg32_float(&rng) - 1.0f);
+        vec3 a = vec3_scale(random_direction(&rng), 0.08f), b = vec3_scale(random_direction(&rng), 0.08f);
+        pt_scene_add_triangle(sc, c, vec3_add(c, a), vec3_add(c, b), material[pcg32_bounded(&rng, LIGHT_TEST_POWERS)]);
+    }
+    pt_scene_finish(sc);
+}
+
+/* A shading point and its normal, named. */
+typedef struct {
+    const char *name;
+    vec3 p, n;
+} light_test_point;
+
+/* The points the tree is tested at in the strewn scene: among the lights,
+ * on the back of one emitter (just behind it, facing away), far away (the
+ * whole scene one small cone), and a point in space (no surface). */
+static int light_test_points(const pt_scene *sc, light_test_point out[4])
+{
+    const triangle *t = &sc->triangles.triangles[sc->emitters[0]];
+    vec3 centre = vec3_scale(vec3_add(t->p0, vec3_add(t->p1, t->p2)), 1.0f / 3.0f), n0 = sc->emitter_normals[0];
+    out[0] = (light_test_point){"among the lights", vec3_make(0.1f, -0.2f, 0.05f), vec3_make(0.0f, 1.0f, 0.0f)};
+    out[1] = (light_test_point){"behind an emitter", vec3_sub(centre, vec3_scale(n0, 0.01f)), vec3_neg(n0)};
+    out[2] = (light_test_point){"far away", vec3_make(60.0f, 40.0f, -80.0f), vec3_normalize(vec3_make(-0.6f, -0.4f, 0.8f))};
+    out[3] = (light_test_point){"in space", vec3_make(1.5f, 0.0f, 0.0f), vec3_splat(0.0f)};
+    return 4;
+}
+
+/* A pmf for the twins: what light_tree_pmf() computes, with one mistake. */
+typedef float (*light_pmf_fn)(const light_tree *t, vec3 p, vec3 n, int slot);
+
+/* The sum of a group's importances at p, each by `importance`. */
+static float group_sum(const light_tree *t, int first, vec3 p, vec3 n,
+                       float (*importance)(const light_tree_node *, vec3, vec3))
+{
+    float sum = 0.0f;
+    for (int k = 0; k < LIGHT_TREE_WIDTH; k++) {
+        light_tree_node node = light_tree_node_at(t, first + k);
+        sum += importance(&node, p, n);
+    }
+    return sum;
+}
+
+/* The twin that forgets to renormalize: each choice I_child / I_parent
+ * instead of I_child over the sum of its group's (at the top, the sum). */
+static float pmf_not_renormalized(const light_tree *t, vec3 p, vec3 n, int slot)
+{
+    float product = 1.0f;
+    for (int node = t->leaf_of_light[slot]; node >= 0; node = t->parent[node]) {
+        light_tree_node here = light_tree_node_at(t, node), parent = light_tree_node_at(t, t->parent[node] >= 0 ? t->parent[node] : 0);
+        float below = t->parent[node] >= 0 ? light_node_importance(&parent, p, n) : group_sum(t, 0, p, n, light_node_importance);
+        product *= below > 0.0f ? light_node_importance(&here, p, n) / below : 0.0f;
+    }
+    return product;
+}
+
+/* The twin that drops the orientation term from the pmf (every cone the
+ * whole sphere) while the sampler keeps it. */
+static float importance_without_orientation(const light_tree_node *node, vec3 p, vec3 n)
+{
+    light_tree_node wide = *node;
+    wide.cos_theta_o = -32767;
+    return light_node_importance(&wide, p, n);
+}
+
+static float pmf_without_orientation(const light_tree *t, vec3 p, vec3 n, int slot)
+{
+    float product = 1.0f;
+    for (int node = t->leaf_of_light[slot]; node >= 0; node = t->parent[node]) {
+        float sum = group_sum(t, node - node % LIGHT_TREE_WIDTH, p, n, importance_without_orientation);
+        light_tree_node here = light_tree_node_at(t, node);
+        product *= sum > 0.0f ? importance_without_orientation(&here, p, n) / sum : 0.0f;
+    }
+    return product;
+}
+
+/* The tree's picks at (p, n), N of them from a fixed seed, counted per
+ * emitter (the last cell: no pick), against a pmf: Pearson's X^2 on
+ * chapter 09's chi-square machinery (tests/chi2.h), the emitters the
+ * cells. Each pick's own pmf must be light_tree_pmf()'s, bit for bit. */
+static chi2_result light_tree_chi2(const light_tree *t, vec3 p, vec3 n, light_pmf_fn pmf, long attempts, uint64_t seed)
+{
+    int cells = t->light_count + 1;
+    double *observed = calloc((size_t)cells, sizeof *observed), *probability = calloc((size_t)cells, sizeof *probability);
+    pcg32 rng = pcg32_for_pixel(test_seed(seed), 1);
+    long mismatched = 0;
+    for (long i = 0; i < attempts; i++) {
+        float picked_pmf;
+        int slot = light_tree_sample(t, p, n, pcg32_float(&rng), &picked_pmf);
+        observed[slot >= 0 ? slot : cells - 1] += 1.0;
+        mismatched += slot >= 0 && picked_pmf != light_tree_pmf(t, p, n, slot);
+    }
+    assert_int_equal(mismatched, 0);
+    double total = 0.0;
+    for (int k = 0; k < t->light_count; k++)
+        total += probability[k] = pmf(t, p, n, k);
+    probability[cells - 1] = fmax(0.0, 1.0 - total);
+    chi2_result r = chi2_verdict(observed, probability, cells, attempts);
+    r.samples = attempts - (long)observed[cells - 1];
+    r.refused = (long)observed[cells - 1];
+    r.total = total;
+    if (total > 1.0 + CHI2_TOTAL_ROUNDING)
+        r.p_value = 0.0;
+    free(observed);
+    free(probability);
+    return r;
+}
+
+/* The pmf of every emitter at a point sums to 1 (where every emitter may
+ * be picked: a choice between two halves that can both give nothing
+ * refuses, and then the sum is 1 less the refusals, at most 1). Float
+ * products along a way of ~16 choices: a few ulps each. */
+static const double LIGHT_PMF_SUM_TOLERANCE = 1e-5;
+
+static void assert_pmf_sums_to_one(const light_tree *t, vec3 p, vec3 n, const char *where)
+{
+    double sum = 0.0;
+    int zero = 0;
+    for (int k = 0; k < t->light_count; k++) {
+        float pmf = light_tree_pmf(t, p, n, k);
+        sum += pmf;
+        zero += pmf == 0.0f;
+    }
+    print_message("light tree, %s: pmf sums to %.8f over %d emitters (%d of pmf 0)\n", where, sum, t->light_count, zero);
+    if (zero == 0)
+        assert_true(fabs(sum - 1.0) <= LIGHT_PMF_SUM_TOLERANCE);
+    else
+        assert_true(sum <= 1.0 + LIGHT_PMF_SUM_TOLERANCE);
+}
+
+enum { LIGHT_CHI2_ATTEMPTS = 400000, LIGHT_CHI2_MANY_ATTEMPTS = 1000000 };
+
+static void test_light_tree_picks_with_its_pmf(void **state)
+{
+    (void)state;
+    pt_scene sc, many;
+    build_strewn_lights(&sc, 401);
+    assert_true(bench_scene_build(&many, "many-lights"));
+    light_tree t, tm;
+    light_tree_build(&t, &sc);
+    light_tree_build(&tm, &many);
+    assert_true(t.node_count <= LIGHT_TREE_WIDTH * (sc.emitter_count + 1));
+    assert_true(many.emitter_count >= 10000);
+    light_test_point points[4];
+    int count = light_test_points(&sc, points);
+    chi2_family family = {.count = 0};
+    char name[CHI2_NAME_SIZE];
+    for (int i = 0; i < count; i++) {
+        assert_pmf_sums_to_one(&t, points[i].p, points[i].n, points[i].name);
+        chi2_result r = light_tree_chi2(&t, points[i].p, points[i].n, light_tree_pmf, LIGHT_CHI2_ATTEMPTS, 411 + (uint64_t)i);
+        snprintf(name, sizeof name, "light tree, %d emitters, %s", t.light_count, points[i].name);
+        chi2_family_add(&family, name, &r);
+    }
+    /* the benchmark's room of 10,208 lamps, from the floor and from the
+     * back of a ceiling lamp */
+    const light_test_point in_room[] = {{"floor of the many-lights box", vec3_make(300.0f, 0.0f, 200.0f), vec3_make(0.0f, 1.0f, 0.0f)},
+                                        {"above a ceiling lamp", vec3_make(20.0f, 548.5f, 20.0f), vec3_make(0.0f, -1.0f, 0.0f)}};
+    for (int i = 0; i < 2; i++) {
+        assert_pmf_sums_to_one(&tm, in_room[i].p, in_room[i].n, in_room[i].name);
+        chi2_result r = light_tree_chi2(&tm, in_room[i].p, in_room[i].n, light_tree_pmf, LIGHT_CHI2_MANY_ATTEMPTS,
+                                        421 + (uint64_t)i);
+        snprintf(name, sizeof name, "light tree, %d emitters, %s", tm.light_count, in_room[i].name);
+        chi2_family_add(&family, name, &r);
+    }
+    assert_int_equal(chi2_family_holm(&family, CHI2_FAMILY_ALPHA), 0);
+    /* The twins, among the lights: each pmf wrong one way, the picks the
+     * tree's; each must fail. */
+    static const struct {
+        light_pmf_fn pmf;
+        const char *name;
+    } twins[] = {{pmf_not_renormalized, "a choice not renormalized"},
+                 {pmf_without_orientation, "the orientation term left out of the pmf"}};
+    for (int k = 0; k < 2; k++) {
+        chi2_result r = light_tree_chi2(&t, points[0].p, points[0].n, twins[k].pmf, LIGHT_CHI2_ATTEMPTS, 431 + (uint64_t)k);
+        chi2_assert_twin_fails(twins[k].name, &r, family.count);
+    }
+    light_tree_free(&t);
+    light_tree_free(&tm);
+    pt_scene_free(&sc);
+    pt_scene_free(&many);
+}
+
+/* The walk's four importances at once (SSE) are light_node_importance()
+ * of each node, bit for bit, for every group of the many-lights tree at
+ * random points in and around the box with random normals (and none):
+ * the readable function is the one the walk computes. */
+static void test_light_tree_group_is_its_nodes_importance(void **state)
+{
+    (void)state;
+    pt_scene many;
+    assert_true(bench_scene_build(&many, "many-lights"));
+    light_tree t;
+    light_tree_build(&t, &many);
+    pcg32 rng = pcg32_for_pixel(test_seed(461), 0);
+    long compared = 0, differ = 0;
+    for (int trial = 0; trial < 64; trial++) {
+        vec3 p = vec3_make(800.0f * pcg32_float(&rng) - 100.0f, 800.0f * pcg32_float(&rng) - 100.0f,
+                           800.0f * pcg32_float(&rng) - 100.0f);
+        vec3 n = trial % 8 == 0 ? vec3_splat(0.0f) : random_direction(&rng);
+        for (int first = 0; first < t.node_count; first += LIGHT_TREE_WIDTH) {
+            float group[LIGHT_TREE_WIDTH];
+            light_tree_group_importances(&t, first, p, n, group);
+            for (int k = 0; k < LIGHT_TREE_WIDTH; k++) {
+                light_tree_node node = light_tree_node_at(&t, first + k);
+                float one = light_node_importance(&node, p, n);
+                differ += memcmp(&one, &group[k], sizeof one) != 0;
+                compared++;
+            }
+        }
+    }
+    print_message("light tree: %ld importances four at a time, %ld differ from one at a time\n", compared, differ);
+    assert_int_equal(differ, 0);
+    light_tree_free(&t);
+    pt_scene_free(&many);
+}
+
+/* Chapter 13 with the light tree against chapter 09's pick by power, on
+ * the benchmark's many-lights box: the same image in distribution, by
+ * the image-level statistics of tests/image_check.h (as chapter 13 is
+ * held to chapter 09 above), on the production defaults (MIS, Sobol,
+ * roulette on throughput) and on the lecture rung (light samples alone,
+ * so a pmf the picks do not follow would show as bias). The twin, on the
+ * lecture rung, picks by the tree but divides by chapter 09's density of
+ * the pick by power. (A twin that weighs the emission a BSDF sample finds
+ * against the wrong pmf hides here: the lamps are small, and the light
+ * samples carry nearly all the light.) */
+enum { LIGHT_TREE_IMAGE_CHECKS = 2 };
+
+static image_check light_tree_against_power(pt_integrator rung, uint64_t seed)
+{
+    pt_scene wide_sc, lecture_sc;
+    assert_true(bench_scene_build(&wide_sc, "many-lights") && bench_scene_build(&lecture_sc, "many-lights"));
+    use_production(&wide_sc, true);
+    assert_true(path_tracer_wide_uses_light_tree(&wide_sc)); /* 10,210 emitters: the tree, by default */
+    path_tracer w = production_path_tracer_defaults(&wide_sc), l = production_path_tracer_defaults(&lecture_sc);
+    if (rung != PRODUCTION_INTEGRATOR) {
+        w = tracer(&wide_sc, rung, RR_FIXED);
+        l = tracer(&lecture_sc, rung, RR_FIXED);
+    }
+    image_check c = wide_against_chapter_09(&w, &l, seed);
+    pt_scene_free(&wide_sc);
+    pt_scene_free(&lecture_sc);
+    return c;
+}
+
+static void test_light_tree_image_agrees_with_power_picking(void **state)
+{
+    (void)state;
+    static const pt_integrator rungs[LIGHT_TREE_IMAGE_CHECKS] = {PRODUCTION_INTEGRATOR, PT_LECTURE};
+    for (int r = 0; r < LIGHT_TREE_IMAGE_CHECKS; r++) {
+        image_check c = light_tree_against_power(rungs[r], 441 + 2 * (uint64_t)r);
+        print_message("light tree against power picking, %s rung: p = %.3g (image mean z = %.2f, chi-square %.1f on %d)\n",
+                      pt_integrator_name(rungs[r]), c.p, c.z, c.chi2, c.dof);
+        assert_image_check(c, LIGHT_TREE_IMAGE_CHECKS, pt_integrator_name(rungs[r]));
+    }
+    path_tracer_wide_twin(WIDE_TWIN_TREE_PDF_OF_POWER);
+    image_check twin = light_tree_against_power(PT_LECTURE, 451);
+    path_tracer_wide_twin(WIDE_TWIN_NONE);
+    print_message("twin, the tree's pick divided by the pick by power's density: p = %.3g (image mean z = %.2f, chi-square %.1f on %d)\n",
+                  twin.p, twin.z, twin.chi2, twin.dof);
+    assert_true(twin.p < image_check_alpha(LIGHT_TREE_IMAGE_CHECKS));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -2876,6 +3156,9 @@ int main(void)
         cmocka_unit_test(test_moller_trumbore_leaks_through_every_entry_point),
         cmocka_unit_test(test_sobol_pixel_draws_chapter_09s_numbers),
         cmocka_unit_test(test_the_benchmark_scenes_are_what_they_say),
+        cmocka_unit_test(test_light_tree_picks_with_its_pmf),
+        cmocka_unit_test(test_light_tree_group_is_its_nodes_importance),
+        cmocka_unit_test(test_light_tree_image_agrees_with_power_picking),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -181,6 +181,26 @@ bool pt_scene_visible(const pt_scene *sc, const hit_record *from, const vec3 *ta
  * counters->shadow_rays. */
 bool pt_scene_segment_clear(const pt_scene *sc, ray shadow, ray_counters *counters);
 
+/* A uniform point on emitter `slot` (the triangle sc->emitters[slot]), with
+ * its error bound, front normal and material: the second half of a light
+ * sample, whichever way the emitter was picked (by power below; by chapter
+ * 13's light tree). */
+static inline void pt_scene_emitter_point(const pt_scene *sc, int slot, float u1, float u2, vec3 *point,
+                                          float *point_error, vec3 *normal, int *material)
+{
+    int index = sc->emitters[slot];
+    const triangle *t = &sc->triangles.triangles[index];
+    /* A uniform point on a triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1);
+     * the point as a hit's (triangle_fill_hit_normal), P0 + (b1 E1 + b2 E2). */
+    float s = sqrtf(u1);
+    float b1 = (1.0f - u2) * s, b2 = u2 * s;
+    vec3 e1 = vec3_sub(t->p1, t->p0), e2 = vec3_sub(t->p2, t->p0);
+    *point = vec3_add(t->p0, vec3_add(vec3_scale(e1, b1), vec3_scale(e2, b2)));
+    *normal = sc->emitter_normals[slot];
+    *point_error = ray_point_error(*point, *normal, triangle_edge_size(e1, e2));
+    *material = sc->geometry.faces[index].material;
+}
+
 /* A point on the emitting triangles, with its error bound (ray.h's
  * ray_point_error, as a hit there would have), the emitter's front normal
  * and material. Picked by power: the density per unit area at a point of an
@@ -207,17 +227,7 @@ static inline bool pt_scene_sample_emitter(const pt_scene *sc, float u_pick, flo
         lo += half & -(int)(sc->emitter_cdf[lo + half - 1] <= target);
         n -= half;
     }
-    int index = sc->emitters[lo];
-    const triangle *t = &sc->triangles.triangles[index];
-    /* A uniform point on a triangle: b0 = 1 - sqrt(u1), b1 = u2 sqrt(u1);
-     * the point as a hit's (triangle_fill_hit_normal), P0 + (b1 E1 + b2 E2). */
-    float s = sqrtf(u1);
-    float b1 = (1.0f - u2) * s, b2 = u2 * s;
-    vec3 e1 = vec3_sub(t->p1, t->p0), e2 = vec3_sub(t->p2, t->p0);
-    *point = vec3_add(t->p0, vec3_add(vec3_scale(e1, b1), vec3_scale(e2, b2)));
-    *normal = sc->emitter_normals[lo];
-    *point_error = ray_point_error(*point, *normal, triangle_edge_size(e1, e2));
-    *material = sc->geometry.faces[index].material;
+    pt_scene_emitter_point(sc, lo, u1, u2, point, point_error, normal, material);
     return true;
 }
 

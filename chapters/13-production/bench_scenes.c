@@ -6,9 +6,10 @@
 #include <string.h>
 
 #include "atomic_file.h"
+#include "rng.h"
 
 const char *const BENCH_SCENE_NAMES[] = {"cornell", "cornell-10k", "cornell-100k", "cornell-1m", "glossy-glass",
-                                        "open-100k", NULL};
+                                        "open-100k", "many-lights", NULL};
 const char *const BENCH_SCENE_NOTES[] = {
     "chapter 09's Cornell box, 32 triangles",
     "the box with a bumpy torus of 10,240 triangles",
@@ -16,6 +17,7 @@ const char *const BENCH_SCENE_NOTES[] = {
     "the box with a bumpy torus of 1,048,576 triangles",
     "a GGX copper block and a glass ball of 5,120 triangles",
     "sixteen gold tori of 102,400 triangles over a ground, under a sky: no room",
+    "the box lit by 5,104 small lamps of random power on its walls and ceiling: 10,208 emitting triangles",
     NULL};
 
 /* The torus's grid, U x V, for each mesh size: 2 U V triangles, the sizes
@@ -121,6 +123,72 @@ static void build_open(pt_scene *sc)
     pt_scene_finish(sc);
 }
 
+/* ---- many lights -------------------------------------------------------------------
+ * The Cornell box (its blocks and its ceiling light) with its ceiling and
+ * three walls studded with small square lamps, 6 mm across on a 36 x 36
+ * grid, 1 mm in front of the surface and facing into the room; none under
+ * the ceiling light. Each lamp's radiance is one of MANY_LIGHTS_LEVELS
+ * colours whose brightness doubles every two levels (a range of 2^7.5,
+ * about 180x), drawn at random with a fixed seed: varied power, from
+ * lamps far brighter than their neighbours to lamps barely lit, so that
+ * the pick by power spends its samples on bright lamps wherever they
+ * are, and the light tree can do better by looking at distance and
+ * facing too. The levels are materials, so that the scene's OBJ and MTL
+ * stay small. */
+enum { MANY_LIGHTS_GRID = 36, MANY_LIGHTS_LEVELS = 16 };
+static const float MANY_LIGHTS_HALF_SIZE = 3.0f, MANY_LIGHTS_GAP = 1.0f;
+
+/* A lamp: the square of centre c spanned by u and v (half sizes), facing
+ * u x v. */
+static void add_lamp(pt_scene *sc, vec3 c, vec3 u, vec3 v, int material)
+{
+    pt_scene_add_quad(sc, vec3_sub(vec3_sub(c, u), v), vec3_sub(vec3_add(c, u), v), vec3_add(vec3_add(c, u), v),
+                      vec3_add(vec3_sub(c, u), v), material);
+}
+
+/* One surface's grid of lamps: the plane through `origin` spanned by
+ * `across` and `up` (the whole wall), facing across x up (into the room:
+ * ceiling, back wall, green wall, red wall), each lamp of a level drawn
+ * from rng. */
+static void add_lamp_grid(pt_scene *sc, vec3 origin, vec3 across, vec3 up, const int level[], pcg32 *rng)
+{
+    vec3 u = vec3_scale(vec3_normalize(across), MANY_LIGHTS_HALF_SIZE);
+    vec3 v = vec3_scale(vec3_normalize(up), MANY_LIGHTS_HALF_SIZE);
+    vec3 out = vec3_scale(vec3_normalize(vec3_cross(across, up)), MANY_LIGHTS_GAP);
+    for (int i = 0; i < MANY_LIGHTS_GRID; i++)
+        for (int j = 0; j < MANY_LIGHTS_GRID; j++) {
+            float s = ((float)i + 0.5f) / MANY_LIGHTS_GRID, t = ((float)j + 0.5f) / MANY_LIGHTS_GRID;
+            vec3 c = vec3_add(vec3_add(origin, out), vec3_add(vec3_scale(across, s), vec3_scale(up, t)));
+            int material = level[pcg32_bounded(rng, MANY_LIGHTS_LEVELS)];
+            /* the ceiling light's rectangle (x 213..343, z 227..332) keeps its own */
+            if (out.y < 0.0f && c.x > 205.0f && c.x < 351.0f && c.z > 219.0f && c.z < 340.0f)
+                continue;
+            add_lamp(sc, c, u, v, material);
+        }
+}
+
+static void build_many_lights(pt_scene *sc)
+{
+    pt_scene box;
+    pt_scene_build_cornell_box(&box);
+    copy_triangles(sc, &box);
+    pt_scene_free(&box);
+    int level[MANY_LIGHTS_LEVELS];
+    for (int k = 0; k < MANY_LIGHTS_LEVELS; k++) {
+        /* warm and cool in turn, doubling every two levels */
+        vec3 colour = k % 2 == 0 ? vec3_make(1.0f, 0.75f, 0.45f) : vec3_make(0.55f, 0.7f, 1.0f);
+        level[k] = pt_scene_add_material(sc, pt_emitter(vec3_splat(0.0f), vec3_scale(colour, 0.4f * exp2f(0.5f * (float)k))));
+    }
+    pcg32 rng;
+    pcg32_seed(&rng, 0x11647, 7);
+    const float w = 548.0f, d = 559.2f, h = 548.8f;
+    add_lamp_grid(sc, vec3_make(0.0f, h, 0.0f), vec3_make(w, 0.0f, 0.0f), vec3_make(0.0f, 0.0f, d), level, &rng);
+    add_lamp_grid(sc, vec3_make(0.0f, 0.0f, d), vec3_make(0.0f, h, 0.0f), vec3_make(w, 0.0f, 0.0f), level, &rng);
+    add_lamp_grid(sc, vec3_make(0.0f, 0.0f, 0.0f), vec3_make(0.0f, h, 0.0f), vec3_make(0.0f, 0.0f, d), level, &rng);
+    add_lamp_grid(sc, vec3_make(w, 0.0f, 0.0f), vec3_make(0.0f, 0.0f, d), vec3_make(0.0f, h, 0.0f), level, &rng);
+    pt_scene_finish(sc);
+}
+
 bool bench_scene_build(pt_scene *sc, const char *name)
 {
     if (strcmp(name, "cornell") == 0)
@@ -135,6 +203,8 @@ bool bench_scene_build(pt_scene *sc, const char *name)
         build_glossy_glass(sc);
     else if (strcmp(name, "open-100k") == 0)
         build_open(sc);
+    else if (strcmp(name, "many-lights") == 0)
+        build_many_lights(sc);
     else
         return false;
     return true;

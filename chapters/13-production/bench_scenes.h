@@ -11,6 +11,9 @@
  *   open-100k      no room: the Embree harness's tori field (102,400
  *                  triangles) in GGX gold over a ground, under a sky, with
  *                  one small lamp (the scene file's `background`)
+ *   many-lights    the box with 5,104 small lamps of random power (10,208
+ *                  emitting triangles) on its ceiling and three walls:
+ *                  what chapter 13's light tree is for (light_tree.h)
  *
  * The torus is the same surface at every size (a grid of U x V quads, two
  * triangles each; the sizes of the Embree harness's tori field), so the

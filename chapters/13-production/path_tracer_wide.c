@@ -23,6 +23,26 @@
 static bool use_avx = true;
 void path_tracer_wide_use_avx(bool on) { use_avx = on; }
 
+/* path_tracer_wide_lights(): how the lanes pick a light */
+static wide_lights light_picking = WIDE_LIGHTS_AUTO;
+void path_tracer_wide_lights(wide_lights how) { light_picking = how; }
+
+bool path_tracer_wide_uses_light_tree(const pt_scene *sc)
+{
+    return sc->emitter_count > 0 && (light_picking == WIDE_LIGHTS_TREE ||
+                                     (light_picking == WIDE_LIGHTS_AUTO && sc->emitter_count >= LIGHT_TREE_MIN_EMITTERS));
+}
+
+/* The tree into *tree and a pointer to it, if the render picks by it;
+ * else NULL. Built inside the render's time: it is part of its cost. */
+static const light_tree *lights_for(const pt_scene *sc, light_tree *tree)
+{
+    if (!path_tracer_wide_uses_light_tree(sc))
+        return NULL;
+    light_tree_build(tree, sc);
+    return tree;
+}
+
 /* path_tracer_wide_twin(): the tests' wrong renderers */
 static wide_twin twin_wrong = WIDE_TWIN_NONE;
 void path_tracer_wide_twin(wide_twin twin) { twin_wrong = twin; }
@@ -256,19 +276,33 @@ static void end_sample(lane *l, row_job *job)
 }
 
 /* Lane k's random numbers for its light sample, and the point they pick:
- * false if there is no light to sample. */
-static bool pick_light(lane *l, const path_tracer *pt, const float *pdf_area, vertex_lanes *L, int k)
+ * false if there is no light to sample. The emitter is picked by power,
+ * as chapter 09 picks it, or by the light tree for the lane's point and
+ * normal; the point on it is uniform either way. */
+static bool pick_light(row_job *job, lane *l, vertex_lanes *L, int k)
 {
+    const path_tracer *pt = job->pt;
     const pt_scene *sc = pt->scene;
-    vec3 x_light, n_light;
-    int light_material;
     float u_pick = lane_float(l, pt), u1 = lane_float(l, pt), u2 = lane_float(l, pt);
-    if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x_light, &L->x_error[k], &n_light, &light_material))
-        return false;
-    lanes_set(L->x_light, k, x_light);
-    lanes_set(L->n_light, k, n_light);
-    lanes_set(L->le, k, sc->materials[light_material].emission);
-    L->pdf_area[k] = pdf_area[light_material];
+    pt_light_sample x;
+    if (job->lights != NULL) {
+        vec3 p = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]), n = vec3_make(L->n[0][k], L->n[1][k], L->n[2][k]);
+        if (!light_tree_sample_light(job->lights, sc, p, n, u_pick, u1, u2, &x))
+            return false;
+        if (twin_wrong == WIDE_TWIN_TREE_PDF_OF_POWER) /* the tests' wrong renderer: chapter 09's density */
+            x.pdf_light = (x.emission.x + x.emission.y + x.emission.z) / 3.0f / (float)sc->emitter_power;
+    } else {
+        int light_material;
+        if (!pt_scene_sample_emitter(sc, u_pick, u1, u2, &x.point, &x.point_error, &x.normal, &light_material))
+            return false;
+        x.emission = sc->materials[light_material].emission;
+        x.pdf_light = job->pdf_area[light_material];
+    }
+    lanes_set(L->x_light, k, x.point);
+    lanes_set(L->n_light, k, x.normal);
+    lanes_set(L->le, k, x.emission);
+    L->x_error[k] = x.point_error;
+    L->pdf_area[k] = x.pdf_light;
     return true;
 }
 
@@ -338,6 +372,8 @@ static int closest_hits(row_job *job, vertex_lanes *L, int active, int material[
             sphere_lanes |= (int)sphere_hit_lane(sc, &L->ray, k, t_max, &sphere_hits[k], job->counters) << k;
         }
     int triangle_lanes = hit_lanes & ~sphere_lanes;
+    for (int k = 0; k < LANES; k++)
+        L->triangle[k] = (triangle_lanes >> k) & 1 ? hits.index[k] : -1;
     *front = 0;
 #if WIDE_HAVE_AVX
     if (triangle_lanes != 0 && job->avx && !sc->triangles.vertex_normals)
@@ -371,7 +407,10 @@ NOT_INLINED static void emission_found(row_job *job, const vertex_lanes *L, int 
             return;
         vec3 p = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]), ng = vec3_make(L->ng[0][k], L->ng[1][k], L->ng[2][k]);
         vec3 wo = vec3_make(L->wo[0][k], L->wo[1][k], L->wo[2][k]);
-        float pdf_light = light_pdf_from(l->previous_point, p, ng, wo, job->pdf_area[material]); /* per steradian */
+        float pdf_area = job->pdf_area[material];
+        if (job->lights != NULL) /* the pmf of the vertex that sampled: its point and normal */
+            pdf_area = light_tree_pdf_area(job->lights, l->previous_point, l->previous_normal, L->triangle[k]);
+        float pdf_light = light_pdf_from(l->previous_point, p, ng, wo, pdf_area); /* per steradian */
         if (twin_wrong != WIDE_TWIN_EMISSION_UNWEIGHTED)
             weight = power_heuristic(l->previous_pdf, pdf_light);
     }
@@ -525,6 +564,7 @@ NOT_INLINED static int bounce_diffuse_iterative(row_job *job, vertex_lanes *L, i
         }
         lanes_set(L->throughput, k, throughput);
         l->previous_point = vec3_make(L->p[0][k], L->p[1][k], L->p[2][k]);
+        l->previous_normal = vec3_make(L->n[0][k], L->n[1][k], L->n[2][k]);
         l->previous_pdf = L->pdf[k];
     }
     return on;
@@ -570,7 +610,7 @@ static void render_row(row_job *job)
         int lit = 0, bounce = 0;
         for (int left = surface; left != 0; left &= left - 1) {
             int k = __builtin_ctz((unsigned)left);
-            if (lanes[k].depth + 1 <= pt->max_depth && pick_light(&lanes[k], pt, job->pdf_area, &L, k))
+            if (lanes[k].depth + 1 <= pt->max_depth && pick_light(job, &lanes[k], &L, k))
                 picked |= 1 << k;
             bsdf_kind kind = sc->materials[material[k]].kind;
             bounce |= lecture ? roll_bounce(&lanes[k], pt, &L, k, kind)
@@ -666,6 +706,8 @@ bool render_estimate_wide_traced(const path_tracer *pt, const wide_scene_tracers
     for (int k = 0; k < sc->material_count && sc->emitter_count > 0; k++)
         pdf_area[k] = pt_scene_emitter_pdf_area(sc, k);
     double start = timer_seconds();
+    light_tree tree;
+    const light_tree *lights = lights_for(sc, &tree);
     /* Each row is one job, its pixels' streams its own: the same image
      * for any number of threads and any order of rows. */
 #pragma omp parallel num_threads(threads)
@@ -676,7 +718,7 @@ bool render_estimate_wide_traced(const path_tracer *pt, const wide_scene_tracers
         for (int y = 0; y < cam->height; y++) {
             row_job job = {.pt = pt, .cam = cam, .spp = spp, .seed = seed, .mean = &e.mean,
                            .standard_error = &e.standard_error, .y = y, .counters = &mine, .queue = queue,
-                           .trace = trace, .avx = avx, .pdf_area = pdf_area};
+                           .trace = trace, .avx = avx, .pdf_area = pdf_area, .lights = lights};
             render_row(&job);
         }
         queue_free(&queue);
@@ -684,6 +726,8 @@ bool render_estimate_wide_traced(const path_tracer *pt, const wide_scene_tracers
         counters_add(&e.counters, &mine);
     }
     e.seconds = timer_seconds() - start;
+    if (lights != NULL)
+        light_tree_free(&tree);
     free(pdf_area);
     *out = e;
     return true;
@@ -711,6 +755,8 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
         pdf_area[k] = pt_scene_emitter_pdf_area(pt->scene, k);
     shadow_queue queue = queue_make(pt->scene);
     ray_counters ignored = {0};
+    light_tree tree;
+    const light_tree *lights = lights_for(pt->scene, &tree);
     long total = (long)cam->width * cam->height;
     int runs = pixels / LANES, done = 0;
     double start = timer_seconds();
@@ -724,12 +770,14 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
         row_job job = {.pt = pt, .cam = cam, .spp = spp, .seed = seed, .mean = &mean, .standard_error = &standard_error,
                        .y = y, .next_x = x, .x_end = x + LANES < cam->width ? x + LANES : cam->width,
                        .counters = &ignored, .queue = queue, .trace = &trace, .avx = wide_avx_runs(),
-                       .pdf_area = pdf_area};
+                       .pdf_area = pdf_area, .lights = lights};
         done += job.x_end - x;
         render_row(&job);
     }
     double seconds = timer_seconds() - start;
     queue_free(&queue);
+    if (lights != NULL)
+        light_tree_free(&tree);
     free(pdf_area);
     image_free(&mean);
     image_free(&standard_error);

@@ -28,7 +28,10 @@
  * comes from a polynomial (fast_sincos.h). One exception, on the lecture
  * rung: a path whose f cos / pdf is
  * exactly black ends here, where the recursion goes on and draws numbers
- * for nothing; the image's distribution is the same.
+ * for nothing; the image's distribution is the same. And in a scene of
+ * many emitters (path_tracer_wide_lights below) the light sample's
+ * emitter is picked by the light tree, from the same number, instead of
+ * by power: other light samples, the same expectation.
  *
  * Every scene chapter 09 renders: triangles in any structure (the
  * production one, walls.h, or any of chapter 03's interface), spheres, all
@@ -112,11 +115,29 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
  * rendering. */
 void path_tracer_wide_use_avx(bool on);
 
+/* Which emitter a vertex's light sample takes (light_tree.h): by the light
+ * tree where the scene has at least LIGHT_TREE_MIN_EMITTERS emitting
+ * triangles (WIDE_LIGHTS_AUTO, the default), always (WIDE_LIGHTS_TREE), or
+ * never (WIDE_LIGHTS_POWER: in proportion to power, as chapter 09). The
+ * point on it, and all the physics, are chapter 09's either way. Not
+ * thread-safe: set it before rendering. */
+typedef enum { WIDE_LIGHTS_AUTO, WIDE_LIGHTS_POWER, WIDE_LIGHTS_TREE } wide_lights;
+void path_tracer_wide_lights(wide_lights how);
+/* Does a render of sc pick its lights by the tree (as set above)? */
+bool path_tracer_wide_uses_light_tree(const pt_scene *sc);
+
 /* For the tests' twins only: the renderer with one of the MIS rung's two
  * weights left off -- the emission a BSDF-sampled ray finds counted in
- * full, or the light sample counted in full -- which its comparison with
- * chapter 09 must catch. Not thread-safe: set it before rendering. */
-typedef enum { WIDE_TWIN_NONE, WIDE_TWIN_EMISSION_UNWEIGHTED, WIDE_TWIN_LIGHT_UNWEIGHTED } wide_twin;
+ * full, or the light sample counted in full -- or, with the light tree,
+ * the light picked by the tree but divided by the density of the pick by
+ * power, which its comparison with chapter 09 must catch. Not
+ * thread-safe: set it before rendering. */
+typedef enum {
+    WIDE_TWIN_NONE,
+    WIDE_TWIN_EMISSION_UNWEIGHTED,
+    WIDE_TWIN_LIGHT_UNWEIGHTED,
+    WIDE_TWIN_TREE_PDF_OF_POWER
+} wide_twin;
 void path_tracer_wide_twin(wide_twin twin);
 
 /* For the tests of the AVX kernels against chapter 09's scalar pieces

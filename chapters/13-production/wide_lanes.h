@@ -21,6 +21,7 @@
 #include <stdbool.h>
 
 #include "09-path-tracing/bsdf.h"
+#include "13-production/light_tree.h"
 #include "13-production/path_tracer_wide.h"
 #include "13-production/rays8.h"
 #include "13-production/sobol_pixel.h"
@@ -75,6 +76,7 @@ typedef struct {
     _Alignas(32) float shadow_t_min[LANES], shadow_t_max[LANES];
     _Alignas(32) float u_x[LANES], u_y[LANES], u_lobe[LANES], rr_scale[LANES];
     _Alignas(32) float pdf[LANES]; /* the cosine and MIS rungs: the pdf the next direction was drawn with */
+    int triangle[LANES]; /* the triangle hit (-1: a sphere), whose light pmf the light tree gives */
 } vertex_lanes;
 
 /* One lane: a pixel, the path of its current sample, and what that path has
@@ -101,8 +103,9 @@ typedef struct {
     bool emission_counts;
     /* The cosine and MIS rungs: the vertex the next ray leaves, and the
      * pdf its direction was drawn with (trace_iterative's previous_point,
-     * previous_pdf), for the MIS weight of the emission it finds. */
-    vec3 previous_point;
+     * previous_pdf), for the MIS weight of the emission it finds; and its
+     * shading normal, with which the light tree picked that vertex's light. */
+    vec3 previous_point, previous_normal;
     float previous_pdf;
 } lane;
 
@@ -136,6 +139,9 @@ typedef struct {
     /* pt_scene_emitter_pdf_area() of each material, worked out once: a
      * division in double at every light sample was 5 % of the time */
     const float *pdf_area;
+    /* The light tree the lanes pick their lights with (light_tree.h), or
+     * NULL: chapter 09's pick by power (path_tracer_wide_light_tree) */
+    const light_tree *lights;
 } row_job;
 
 /* The lane's next number, from where chapter 09's path tracer takes it

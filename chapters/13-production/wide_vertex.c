@@ -218,6 +218,7 @@ bool bounce_iterative_lane(lane *l, const path_tracer *pt, const vertex_lanes *L
         counters->reflection_rays++;
     lane_bounce_set(out, L, k, s.wi, throughput);
     l->previous_point = AT(p);
+    l->previous_normal = n;
     l->previous_pdf = s.pdf;
     return true;
 }

@@ -194,8 +194,10 @@ static void kernel_p_values(float (*step)(float, pcg32 *), uint64_t seed, double
         double v = step(0.5f, &rng);
         up += v > 0.5;
         double size = fabs(v - 0.5), t = log((double)MLT_SMALL_STEP_MAX / size) / log_range;
-        int bin = (int)(t * KERNEL_BINS); /* rounding (6e-8 near 0.5) may put t a hair outside [0, 1) */
-        counts[bin < 0 ? 0 : bin >= KERNEL_BINS ? KERNEL_BINS - 1 : bin]++;
+        /* rounding (6e-8 near 0.5) may put t a hair outside [0, 1); a step
+         * of 0 (or NaN) makes it infinite: the last bin */
+        int bin = t >= 0.0 && t < 1.0 ? (int)(t * KERNEL_BINS) : t < 0.0 ? 0 : KERNEL_BINS - 1;
+        counts[bin]++;
     }
     double chi2 = 0.0, expected = (double)KERNEL_STEPS / KERNEL_BINS;
     for (int b = 0; b < KERNEL_BINS; b++)

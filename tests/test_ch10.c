@@ -131,6 +131,7 @@ static void test_equals_path_tracer_without_indirect_diffuse(void **state)
 static void test_aperture_zero_is_the_pinhole(void **state)
 {
     (void)state;
+    exercise_checks("thin_lens");
     motion_scene ms;
     motion_scene_build_showcase(&ms);
     camera cam = pt_scene_camera(&ms.base, 16, 16);
@@ -140,7 +141,15 @@ static void test_aperture_zero_is_the_pinhole(void **state)
     for (int i = 0; i < 50; i++) {
         ray pinhole = camera_ray(&cam, 0.3f * (float)i, 16.0f - 0.25f * (float)i);
         ray r = thin_lens_ray(&lens, pinhole, vec2_make(0.02f * (float)i, 0.9f - 0.017f * (float)i));
-        assert_memory_equal(&r, &pinhole, sizeof r);
+        if (memcmp(&r, &pinhole, sizeof r) != 0) {
+            print_error("aperture 0: thin_lens_ray gave the ray from (%g, %g, %g) along (%g, %g, %g), expected the "
+                        "pinhole ray itself, from (%g, %g, %g) along (%g, %g, %g)\n", (double)r.origin.x,
+                        (double)r.origin.y, (double)r.origin.z, (double)r.direction.x, (double)r.direction.y,
+                        (double)r.direction.z, (double)pinhole.origin.x, (double)pinhole.origin.y,
+                        (double)pinhole.origin.z, (double)pinhole.direction.x, (double)pinhole.direction.y,
+                        (double)pinhole.direction.z);
+            fail();
+        }
     }
     distribution_tracer a = distribution_tracer_defaults(&ms, &cam), b = a;
     a.lens.aperture_radius = b.lens.aperture_radius = 0.0f;
@@ -248,6 +257,7 @@ static void lens_cameras(motion_scene *ms, camera cams[2], float apertures[2], f
 static void test_chi2_thin_lens_samples_its_disk(void **state)
 {
     (void)state;
+    exercise_checks("thin_lens");
     motion_scene ms;
     camera cams[2];
     float apertures[2], focus[2];
@@ -265,10 +275,20 @@ static void test_chi2_thin_lens_samples_its_disk(void **state)
                 snprintf(name, sizeof name, "lens of aperture %g, %s pixel, %s", (double)apertures[k],
                          pixel == 0 ? "centre" : "corner", points.name);
                 chi2_family_add(&family, name, &r);
-                assert_true(l.worst_focus_miss <= LENS_FOCUS_TOLERANCE * focus[k]);
+                if (!(l.worst_focus_miss <= LENS_FOCUS_TOLERANCE * focus[k])) {
+                    print_error("%s: a ray passes %.3g from its point of the plane of focus, expected at most %.3g "
+                                "(every ray from the lens goes through the point its pinhole ray meets there)\n",
+                                name, l.worst_focus_miss, LENS_FOCUS_TOLERANCE * focus[k]);
+                    fail();
+                }
             }
     assert_int_equal(family.count, LENS_FAMILY);
-    assert_int_equal(chi2_family_holm(&family, CHI2_FAMILY_ALPHA), 0);
+    int rejected = chi2_family_holm(&family, CHI2_FAMILY_ALPHA);
+    if (rejected != 0) {
+        print_error("%d of %d sets of ray origins are not uniform on the aperture, a disk of radius a about the eye "
+                    "spanned by right and up (density 1 / (pi a^2)), expected none\n", rejected, LENS_FAMILY);
+        fail();
+    }
     motion_scene_free(&ms);
 }
 
@@ -356,6 +376,7 @@ static double render_point_spread2(float z, float radius, float aperture, float 
 static void test_thin_lens_focus_and_circle_of_confusion(void **state)
 {
     (void)state;
+    exercise_checks("thin_lens");
     thin_lens lens;
     double pixel, se;
     /* At the focus distance: sharp. */
@@ -364,8 +385,16 @@ static void test_thin_lens_focus_and_circle_of_confusion(void **state)
     /* A point's image discretised at pixel centres spreads at most over the
      * 2 x 2 pixels around it: sqrt(2)/2 pixel rms (at their common corner,
      * as here), widened by the sphere's own disk. */
-    double rho_sharp = 0.01 / 10.0 / pixel;
-    assert_true(sqrt(sharp) <= sqrt(0.5 + rho_sharp * rho_sharp / 2.0) + 0.01);
+    double rho_sharp = 0.01 / 10.0 / pixel, sharp_bound = sqrt(0.5 + rho_sharp * rho_sharp / 2.0) + 0.01;
+    if (!(sqrt(sharp) <= sharp_bound)) {
+        if (isnan(sharp))
+            print_error("a point on the plane of focus is not in the image at all (it is black), expected within %.3g "
+                        "pixels rms of its pinhole image (sharp)\n", sharp_bound);
+        else
+            print_error("a point on the plane of focus spreads over %.3g pixels rms, expected at most %.3g (sharp)\n",
+                        sqrt(sharp), sharp_bound);
+        fail();
+    }
     /* Half as far: the disk of confusion, 2 a (f - z) / z = 0.4 on the
      * plane of focus, 5.5 pixels in radius (the "point" is now a sphere
      * 2.2 pixels in radius: a smaller one is hit by too few samples for a

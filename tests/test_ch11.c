@@ -89,6 +89,7 @@ static image_check bdpt_check(const estimate_image *a, const estimate_image *b)
 static void test_converges_to_path_tracing_on_the_cornell_box(void **state)
 {
     (void)state;
+    exercise_checks("bdpt_connect");
     pt_scene sc;
     pt_scene_build_cornell_box(&sc);
     camera cam = pt_scene_camera(&sc, SIZE, SIZE);
@@ -323,6 +324,103 @@ static void test_weights_of_all_strategies_sum_to_one(void **state)
     pt_scene_free(&sc2);
 }
 
+/* ---- the join ----------------------------------------------------------------------
+ * bdpt_connect on vertices of the Cornell box built by hand, against the
+ * formula written out in double: a light vertex y_0 (beta = L_e / p_A, the
+ * light's factor 1 in front), a point of the back wall reached from it,
+ * a point of the floor seen from the eye; every surface is diffuse, so
+ * each BSDF is rho / pi:
+ *   y_0 -> floor:  beta(y_0) 1 G f_floor beta(z)
+ *   wall -> floor: beta(w) f_wall G f_floor beta(z)
+ *   y_0 -> a point behind the light: 0 (it emits from its front only)
+ * Float rounding of a dozen operations, each at most 6e-8 relative: 1e-5
+ * relative leaves room and still catches any missing factor. */
+static bdpt_vertex vertex_hit_by(const pt_scene *sc, ray r, vec3 beta)
+{
+    hit_record h;
+    ray_counters counters;
+    memset(&counters, 0, sizeof counters);
+    assert_true(pt_scene_intersect(sc, r, &h, &counters));
+    bdpt_vertex v = surface_vertex(&h);
+    v.beta = beta;
+    return v;
+}
+
+static double geometry_term(const bdpt_vertex *a, const bdpt_vertex *c)
+{
+    double d[3] = {(double)c->point.x - a->point.x, (double)c->point.y - a->point.y, (double)c->point.z - a->point.z};
+    double d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    double cos_a = fabs(d[0] * a->normal.x + d[1] * a->normal.y + d[2] * a->normal.z) / sqrt(d2);
+    double cos_c = fabs(d[0] * c->normal.x + d[1] * c->normal.y + d[2] * c->normal.z) / sqrt(d2);
+    return cos_a * cos_c / d2;
+}
+
+static void assert_join(const char *what, vec3 got, const double expected[3])
+{
+    double g[3] = {got.x, got.y, got.z};
+    for (int k = 0; k < 3; k++)
+        if (!(fabs(g[k] - expected[k]) <= 1e-5 * fabs(expected[k]) + 1e-30)) {
+            print_error("%s: bdpt_connect gave (%.6g, %.6g, %.6g), expected beta f G f beta = (%.6g, %.6g, %.6g)\n",
+                        what, g[0], g[1], g[2], expected[0], expected[1], expected[2]);
+            fail();
+        }
+}
+
+static void test_connection_is_beta_f_g_f_beta(void **state)
+{
+    (void)state;
+    exercise_checks("bdpt_connect");
+    pt_scene sc;
+    pt_scene_build_cornell_box(&sc);
+    camera cam = pt_scene_camera(&sc, SIZE, SIZE);
+    bdpt b = bdpt_defaults(&sc, &cam);
+    /* y_0 on the lamp */
+    bdpt_vertex y0;
+    memset(&y0, 0, sizeof y0);
+    y0.kind = BDPT_VERTEX_LIGHT;
+    assert_true(pt_scene_sample_emitter(&sc, 0.3f, 0.4f, 0.6f, &y0.point, &y0.point_error, &y0.normal, &y0.material));
+    y0.normal_geometric = y0.normal;
+    y0.front_face = true;
+    vec3 emission = sc.materials[y0.material].emission;
+    y0.beta = vec3_scale(emission, 1.0f / pt_scene_emitter_pdf_area(&sc, y0.material));
+    /* the eye, and the floor it sees at the bottom of the image */
+    bdpt_vertex eye;
+    memset(&eye, 0, sizeof eye);
+    eye.kind = BDPT_VERTEX_CAMERA;
+    eye.point = cam.eye;
+    eye.normal = eye.normal_geometric = cam.forward;
+    eye.beta = vec3_splat(1.0f);
+    bdpt_vertex floor = vertex_hit_by(&sc, camera_ray(&cam, 0.5f * SIZE, SIZE - 0.5f), vec3_make(0.25f, 0.5f, 0.75f));
+    assert_true(floor.normal.y > 0.99f);
+    /* the back wall, reached from y_0 */
+    vec3 towards_wall = vec3_normalize(vec3_sub(vec3_make(278.0f, 450.0f, 559.2f), y0.point));
+    bdpt_vertex wall = vertex_hit_by(&sc, ray_spawn(y0.point, y0.point_error, y0.normal_geometric, towards_wall),
+                                     vec3_make(0.9f, 0.6f, 0.3f));
+    assert_true(wall.normal.z < -0.99f);
+    vec3 rho_floor = sc.materials[floor.material].albedo, rho_wall = sc.materials[wall.material].albedo;
+    double expected[3];
+    /* y_0 -> floor */
+    double g = geometry_term(&y0, &floor);
+    expected[0] = (double)y0.beta.x * g * rho_floor.x / PI * floor.beta.x;
+    expected[1] = (double)y0.beta.y * g * rho_floor.y / PI * floor.beta.y;
+    expected[2] = (double)y0.beta.z * g * rho_floor.z / PI * floor.beta.z;
+    assert_join("the light's point joined to the floor (s = 1)", bdpt_connect(&b, &y0, NULL, &floor, &eye), expected);
+    /* wall -> floor */
+    g = geometry_term(&wall, &floor);
+    expected[0] = (double)wall.beta.x * rho_wall.x / PI * g * rho_floor.x / PI * floor.beta.x;
+    expected[1] = (double)wall.beta.y * rho_wall.y / PI * g * rho_floor.y / PI * floor.beta.y;
+    expected[2] = (double)wall.beta.z * rho_wall.z / PI * g * rho_floor.z / PI * floor.beta.z;
+    assert_join("the back wall joined to the floor (s = 2)", bdpt_connect(&b, &wall, &y0, &floor, &eye), expected);
+    /* behind the light: above it, facing it, reached from the floor */
+    bdpt_vertex above = floor;
+    above.point = vec3_add(y0.point, vec3_make(10.0f, 5.0f, -10.0f));
+    above.normal = above.normal_geometric = vec3_make(0.0f, -1.0f, 0.0f);
+    expected[0] = expected[1] = expected[2] = 0.0;
+    assert_join("the light's point joined to a point behind the light", bdpt_connect(&b, &y0, NULL, &above, &floor),
+                expected);
+    pt_scene_free(&sc);
+}
+
 /* ---- threads, NaN, refusals ------------------------------------------------------ */
 
 static void test_same_image_for_one_and_two_threads(void **state)
@@ -429,6 +527,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_scene_file_is_the_built_in_scene),
         cmocka_unit_test(test_weights_of_all_strategies_sum_to_one),
+        cmocka_unit_test(test_connection_is_beta_f_g_f_beta),
         cmocka_unit_test(test_camera_projection_and_density),
         cmocka_unit_test(test_converges_to_path_tracing_on_the_cornell_box),
         cmocka_unit_test(test_light_tracing_alone_and_camera_paths_alone),

@@ -129,8 +129,15 @@ static double toy_p_value(mlt_acceptance_fn acceptance, uint64_t seed)
 static void test_chain_samples_f_over_b(void **state)
 {
     (void)state;
+    exercise_checks("mlt_acceptance");
+    exercise_checks("mlt_small_step");
     /* two tests: Sidak's share of the budget */
-    assert_true(toy_p_value(mlt_acceptance, test_seed(1201)) > stats_sidak_alpha(FALSE_ALARM, 2));
+    double p = toy_p_value(mlt_acceptance, test_seed(1201)), alpha = stats_sidak_alpha(FALSE_ALARM, 2);
+    if (!(p > alpha)) {
+        print_error("the toy chain's final states do not follow f / b: p = %.3g, expected above %.3g (a chain "
+                    "that moves by min(1, f(y) / f(x)) with a symmetric step passes)\n", p, alpha);
+        fail();
+    }
 }
 
 /* Twin: accepting every proposal ignores f: the chain stays uniform. */
@@ -144,16 +151,79 @@ static void test_twin_chain_without_acceptance_ratio_fails(void **state)
 static void test_small_step_wraps(void **state)
 {
     (void)state;
+    exercise_checks("mlt_small_step");
     pcg32 rng = pcg32_for_pixel(test_seed(1202), 0);
     float extremes[] = {0.0f, 1e-9f, 0.5f, 0.99999994f};
     for (int k = 0; k < 4; k++)
         for (int i = 0; i < 10000; i++) {
             float v = mlt_small_step(extremes[k], &rng);
-            assert_true(v >= 0.0f && v < 1.0f);
             float distance = fabsf(v - extremes[k]);
             distance = fminf(distance, 1.0f - distance);
-            assert_true(distance <= MLT_SMALL_STEP_MAX * 1.0001f && distance >= MLT_SMALL_STEP_MIN * 0.999f);
+            if (!(v >= 0.0f && v < 1.0f) ||
+                !(distance <= MLT_SMALL_STEP_MAX * 1.0001f && distance >= MLT_SMALL_STEP_MIN * 0.999f)) {
+                print_error("mlt_small_step(%.9g) = %.9g: expected a value in [0, 1) at a distance around the "
+                            "circle between s1 = 1/1024 and s2 = 1/64 (it is %.3g)\n",
+                            (double)extremes[k], (double)v, (double)distance);
+                fail();
+            }
         }
+}
+
+/* Kelemen's kernel, in distribution: the step's size s is log-uniform on
+ * [s1, s2] (ln(s2 / s) / ln(s2 / s1) is uniform on [0, 1)), and its sign is
+ * + or - with probability 1/2 each. N steps from 0.5 (no wrap): Pearson's
+ * chi-square of the 20 bins of that fraction, and the z-score of the count
+ * of steps up, two checks sharing the false-alarm budget (Sidak). The
+ * twin, a size uniform on [s1, s2] (which is also symmetric, but not the
+ * kernel), is caught. */
+enum { KERNEL_STEPS = 200000, KERNEL_BINS = 20 };
+
+static float uniform_size_step(float value, pcg32 *rng)
+{
+    float size = MLT_SMALL_STEP_MIN + (MLT_SMALL_STEP_MAX - MLT_SMALL_STEP_MIN) * pcg32_float(rng);
+    return pcg32_float(rng) < 0.5f ? value - size : value + size;
+}
+
+/* The kernel's two p-values from N steps from 0.5: sizes, then signs. */
+static void kernel_p_values(float (*step)(float, pcg32 *), uint64_t seed, double *p_size, double *p_sign)
+{
+    pcg32 rng = pcg32_for_pixel(seed, 0);
+    long counts[KERNEL_BINS] = {0}, up = 0;
+    double log_range = log((double)MLT_SMALL_STEP_MAX / (double)MLT_SMALL_STEP_MIN);
+    for (int i = 0; i < KERNEL_STEPS; i++) {
+        double v = step(0.5f, &rng);
+        up += v > 0.5;
+        double size = fabs(v - 0.5), t = log((double)MLT_SMALL_STEP_MAX / size) / log_range;
+        /* rounding (6e-8 near 0.5) may put t a hair outside [0, 1); a step
+         * of 0 (or NaN) makes it infinite: the last bin */
+        int bin = t >= 0.0 && t < 1.0 ? (int)(t * KERNEL_BINS) : t < 0.0 ? 0 : KERNEL_BINS - 1;
+        counts[bin]++;
+    }
+    double chi2 = 0.0, expected = (double)KERNEL_STEPS / KERNEL_BINS;
+    for (int b = 0; b < KERNEL_BINS; b++)
+        chi2 += ((double)counts[b] - expected) * ((double)counts[b] - expected) / expected;
+    *p_size = stats_chi_square_p_value(chi2, KERNEL_BINS - 1);
+    double z = ((double)up - 0.5 * KERNEL_STEPS) / sqrt(0.25 * KERNEL_STEPS);
+    *p_sign = erfc(fabs(z) / sqrt(2.0));
+    print_message("small steps: sizes p = %.3g (chi-square %.1f on %d), %ld of %d up (z = %.2f, p = %.3g)\n",
+                  *p_size, chi2, KERNEL_BINS - 1, up, KERNEL_STEPS, z, *p_sign);
+}
+
+static void test_small_step_is_kelemens_kernel(void **state)
+{
+    (void)state;
+    exercise_checks("mlt_small_step");
+    double alpha = stats_sidak_alpha(FALSE_ALARM, 2), p_size, p_sign;
+    kernel_p_values(mlt_small_step, test_seed(1203), &p_size, &p_sign);
+    if (!(p_size > alpha) || !(p_sign > alpha)) {
+        print_error("the small steps are not Kelemen's kernel: p = %.3g for the sizes (expected log-uniform on "
+                    "[s1, s2]), p = %.3g for the signs (expected + and - equally often), each expected above "
+                    "%.3g\n", p_size, p_sign, alpha);
+        fail();
+    }
+    /* the twin */
+    kernel_p_values(uniform_size_step, test_seed(1203), &p_size, &p_sign);
+    assert_true(p_size < alpha);
 }
 
 /* ---- the image against chapter 09's ---------------------------------------------- */
@@ -302,8 +372,14 @@ static comparison compare_with_path_tracer(mlt_acceptance_fn acceptance, bool un
 static void test_converges_to_path_traced_image(void **state)
 {
     (void)state;
+    exercise_checks("mlt_acceptance");
+    exercise_checks("mlt_small_step");
     comparison c = compare_with_path_tracer(NULL, false);
-    assert_true(c.disagreements <= ALLOWED_DISAGREEMENTS);
+    if (!(c.disagreements <= ALLOWED_DISAGREEMENTS)) {
+        print_error("MLT's image is not chapter 09's: %d of %d pixels differ by more than %.0f standard errors, "
+                    "expected at most %d\n", c.disagreements, SIDE * SIDE, STANDARD_ERRORS, ALLOWED_DISAGREEMENTS);
+        fail();
+    }
     /* b estimates the image's mean luminance (the integral of f over the
      * film and all paths), as does the path tracer's image mean. */
     assert_true(fabs(c.b - c.image_mean) <
@@ -531,6 +607,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_scene_file_is_the_built_in_scene),
         cmocka_unit_test(test_small_step_wraps),
+        cmocka_unit_test(test_small_step_is_kelemens_kernel),
         cmocka_unit_test(test_chain_samples_f_over_b),
         cmocka_unit_test(test_twin_chain_without_acceptance_ratio_fails),
         cmocka_unit_test(test_converges_to_path_traced_image),

@@ -24,6 +24,7 @@ thin_lens thin_lens_make(const camera *cam, float aperture_radius, float focus_d
 
 ray thin_lens_ray(const thin_lens *lens, ray pinhole, vec2 u)
 {
+    /* exercise: thin_lens */
     if (!(lens->aperture_radius > 0.0f))
         return pinhole; /* a pinhole: every ray through the eye, as chapter 01 */
     float along = vec3_dot(pinhole.direction, lens->forward);
@@ -32,6 +33,7 @@ ray thin_lens_ray(const thin_lens *lens, ray pinhole, vec2 u)
     vec3 on_lens = vec3_add(pinhole.origin, vec3_add(vec3_scale(lens->right, disk.x * lens->aperture_radius),
                                                      vec3_scale(lens->up, disk.y * lens->aperture_radius)));
     return ray_make(on_lens, vec3_normalize(vec3_sub(focus_point, on_lens)));
+    /* end of exercise thin_lens */
 }
 
 float thin_lens_confusion_diameter(const thin_lens *lens, float distance)

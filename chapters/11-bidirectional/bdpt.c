@@ -381,6 +381,40 @@ static void connect_to_camera(const bdpt *b, const bdpt_vertex *light, int s, co
     splat_film_add(b->film, px, py, value, counters);
 }
 
+/* The join itself: the light subpath's last vertex y and the camera
+ * subpath's last vertex z, each with the scattering factor of its own
+ * BSDF towards the other, and the geometry term between them:
+ *   beta(y) f(y_before -> y -> z) G(y, z) f(y -> z -> z_before) beta(z),
+ *   G(y, z) = |cos theta_y| |cos theta_z| / |y - z|^2
+ * without G's visibility V, which the shadow ray decides (connect, below:
+ * a join that adds nothing costs no ray). */
+vec3 bdpt_connect(const bdpt *b, const bdpt_vertex *y, const bdpt_vertex *y_before, const bdpt_vertex *z,
+                  const bdpt_vertex *z_before)
+{
+    /* exercise: bdpt_connect */
+    vec3 f_y = end_factor(b, y, y_before, z->point);
+    vec3 f_z = end_factor(b, z, z_before, y->point);
+    if (vec3_is_black(f_y) || vec3_is_black(f_z))
+        return vec3_splat(0.0f);
+    vec3 d = vec3_sub(z->point, y->point);
+    float distance2 = vec3_length_squared(d), distance = sqrtf(distance2);
+    float cos_y = fabsf(vec3_dot(y->normal, d)) / distance, cos_z = fabsf(vec3_dot(z->normal, d)) / distance;
+    float g = cos_y * cos_z / distance2;
+    if (!(g > 0.0f))
+        return vec3_splat(0.0f);
+    return vec3_scale(vec3_mul(vec3_mul(y->beta, f_y), vec3_mul(f_z, z->beta)), g);
+    /* end of exercise bdpt_connect */
+}
+
+/* The twin BDPT_FAULT_NO_LIGHT_COSINE at a join on the light (s = 1): the
+ * join's value with cos theta_y divided out, as if it were 1. */
+static vec3 without_light_cosine(vec3 c, const bdpt_vertex *y, const bdpt_vertex *z)
+{
+    vec3 d = vec3_sub(z->point, y->point);
+    float cos_y = fabsf(vec3_dot(y->normal, d)) / sqrtf(vec3_length_squared(d));
+    return cos_y > 0.0f ? vec3_scale(c, 1.0f / cos_y) : c;
+}
+
 static vec3 connect(const bdpt *b, const bdpt_vertex *light, int s, const bdpt_vertex *camera, int t,
                     ray_counters *counters)
 {
@@ -394,19 +428,11 @@ static vec3 connect(const bdpt *b, const bdpt_vertex *light, int s, const bdpt_v
         c = vec3_mul(z->beta, m->emission);
     } else {
         const bdpt_vertex *y = &light[s - 1];
-        vec3 f_y = end_factor(b, y, s >= 2 ? &light[s - 2] : NULL, z->point);
-        vec3 f_z = end_factor(b, z, &camera[t - 2], y->point);
-        if (vec3_is_black(f_y) || vec3_is_black(f_z))
-            return vec3_splat(0.0f);
-        vec3 d = vec3_sub(z->point, y->point);
-        float distance2 = vec3_length_squared(d), distance = sqrtf(distance2);
-        float cos_y = fabsf(vec3_dot(y->normal, d)) / distance, cos_z = fabsf(vec3_dot(z->normal, d)) / distance;
+        c = bdpt_connect(b, y, s >= 2 ? &light[s - 2] : NULL, z, &camera[t - 2]);
         if (b->fault == BDPT_FAULT_NO_LIGHT_COSINE && s == 1)
-            cos_y = 1.0f;
-        float g = cos_y * cos_z / distance2;
-        if (!(g > 0.0f) || !visible(b, z, y, counters))
+            c = without_light_cosine(c, y, z);
+        if (vec3_is_black(c) || !visible(b, z, y, counters))
             return vec3_splat(0.0f);
-        c = vec3_scale(vec3_mul(vec3_mul(y->beta, f_y), vec3_mul(f_z, z->beta)), g);
     }
     if (b->unweighted)
         return c;

@@ -106,6 +106,13 @@ double bdpt_pilot_seconds(const bdpt *b, int spp, uint64_t seed);
  * eye draws through the image, a light on its hemisphere by cosine). */
 float bdpt_pdf_area(const bdpt *b, const bdpt_vertex *from, const bdpt_vertex *before, const bdpt_vertex *to);
 
+/* The unweighted value of the join of a light subpath's last vertex y
+ * (reached from y_before; NULL when y is on the light) and a camera
+ * subpath's last vertex z (reached from z_before): beta(y) f(y) G(y, z)
+ * f(z) beta(z), without the visibility. Black when either BSDF or G is 0. */
+vec3 bdpt_connect(const bdpt *b, const bdpt_vertex *y, const bdpt_vertex *y_before, const bdpt_vertex *z,
+                  const bdpt_vertex *z_before);
+
 /* The MIS weight of strategy (s, t) for the path light[0..s-1] + camera
  * [t-1..0], from the subpaths' pdfs and those the join changes. */
 float bdpt_mis_weight(const bdpt *b, const bdpt_vertex *light, int s, const bdpt_vertex *camera, int t);

@@ -50,6 +50,7 @@ void mlt_sampler_start_iteration(mlt_sampler *s, bool large_step)
 
 float mlt_small_step(float value, pcg32 *rng)
 {
+    /* exercise: mlt_small_step; a stub returns value */
     /* Kelemen's kernel: a size between s1 and s2, log-uniform, with a random
      * sign. It is symmetric -- moving from a to b is as likely as from b to
      * a -- which is what lets the acceptance be a plain ratio of f. */
@@ -62,6 +63,7 @@ float mlt_small_step(float value, pcg32 *rng)
         moved -= 1.0f;
     /* -tiny + 1 rounds to 1.0f in float: that is 0 on the circle. */
     return moved >= 1.0f ? 0.0f : moved;
+    /* end of exercise mlt_small_step */
 }
 
 float mlt_sampler_next(mlt_sampler *s)
@@ -114,12 +116,14 @@ void mlt_sampler_reject(mlt_sampler *s)
 
 double mlt_acceptance(double f_current, double f_proposed)
 {
+    /* exercise: mlt_acceptance */
     /* Metropolis-Hastings: a = min(1, f(y) T(y->x) / (f(x) T(x->y))); both
      * mutations are symmetric (T(y->x) = T(x->y)), so only f remains. A
      * current state of f = 0 (only before the first useful path) moves on. */
     if (!(f_current > 0.0))
         return 1.0;
     return fmin(1.0, f_proposed / f_current);
+    /* end of exercise mlt_acceptance */
 }
 
 /* ---- paths as functions of primary samples ------------------------------------- */

@@ -1,6 +1,7 @@
 /* scene_desc.c -- a scene description once read (scene_file.h): made
  * empty and freed, its meshes loaded, where a statement was, the names of
  * its kinds. The parser that fills it is scene_file.c. */
+#include "obj.h"
 #include "scene_file.h"
 
 #include <stdio.h>

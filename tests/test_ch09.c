@@ -28,6 +28,7 @@
 #include "08-monte-carlo/sampling.h"
 #include "effects.h"
 #include "explain.h"
+#include "obj.h"
 #include "render.h"
 #include "scene_file.h"
 #include "stats.h"

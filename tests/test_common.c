@@ -16,6 +16,7 @@
 #include "camera.h"
 #include "cli.h"
 #include "counters.h"
+#include "counters_file.h"
 #include "image.h"
 #include "program.h"
 #include "progressive.h"

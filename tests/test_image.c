@@ -20,6 +20,7 @@
 #include <cmocka.h>
 
 #include "image.h"
+#include "image_file.h"
 #include "rng.h"
 #include "test_support.h"
 #include "test_temp_dir.h"

@@ -16,6 +16,7 @@
 
 #include "cli.h"
 #include "input_file.h"
+#include "obj.h"
 #include "record_file.h"
 #include "mesh.h"
 #include "scene_file.h"

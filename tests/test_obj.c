@@ -18,6 +18,7 @@
 #include <cmocka.h>
 
 #include "mesh.h"
+#include "obj.h"
 #include "test_support.h"
 #include "test_temp_dir.h"
 

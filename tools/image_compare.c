@@ -14,6 +14,7 @@
 #include <stdio.h>
 
 #include "image.h"
+#include "image_file.h"
 
 static double mean_of(const image *img)
 {

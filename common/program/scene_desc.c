@@ -75,7 +75,7 @@ void scene_desc_where(const scene_desc *d, int line, int column, char *out, size
 const char *scene_material_kind_name(scene_material_kind k)
 {
     static const char *const names[] = {
-#define SCENE_MATERIAL_NAME(id, keyword, effects) keyword,
+#define SCENE_MATERIAL_NAME(id, keyword, ...) keyword,
         SCENE_MATERIAL_KINDS(SCENE_MATERIAL_NAME)
 #undef SCENE_MATERIAL_NAME
     };

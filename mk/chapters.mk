@@ -5,19 +5,22 @@
 
 .PHONY: all demo
 
-COMMON_SRC := $(sort $(wildcard common/*.c))
+COMMON_SRC := $(sort $(wildcard common/core/*.c common/program/*.c))
 CHAPTERS := $(sort $(notdir $(wildcard chapters/[0-9][0-9]-*)))
 chapter_number = $(firstword $(subst -, ,$(1)))
 
 obj = $(patsubst %.c,$(BUILD)/obj/%.o,$(1))
 COMMON_LIB := $(BUILD)/lib/libcommon.a
 
+# The core sees its own headers only (mk/config.mk).
+$(BUILD)/obj/common/core/%.o: COMMON_INCLUDES = -Icommon/core
+
 $(BUILD)/obj/%.o: %.c | deps
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(CPPFLAGS) -c $< -o $@
 
 # The project's version (git describe) as a C string, for the records every
-# program writes beside its image (common/program.c). The file is rewritten
+# program writes beside its image (common/program/program.c). The file is rewritten
 # only when the version changes, so a build after a commit relinks, and a
 # build without one compiles nothing. Outside a git checkout: "unknown".
 VERSION_SRC := $(BUILD)/gen/version.c

@@ -11,7 +11,13 @@ OPT ?= -O2
 CFLAGS ?= $(OPT) -g
 ALL_CFLAGS = -std=c11 -D_DEFAULT_SOURCE -Wall -Wextra -Wpedantic -ffp-contract=off -fopenmp \
              -MMD -MP $(SANITIZE_FLAGS) $(CFLAGS)
-CPPFLAGS += -Icommon -Ichapters $(PKG_CFLAGS)
+# common/ is two folders, core/ (the lecture's: vectors, rays, camera, image,
+# the render loop) and program/ (what a program around it needs: flags,
+# files, scene format, MPI, checkpoints); a common header is still "vec3.h".
+# The core is compiled seeing only its own headers (mk/chapters.mk), so an
+# include of the machinery from it fails to compile, not just the check.
+COMMON_INCLUDES = -Icommon/core -Icommon/program
+CPPFLAGS += $(COMMON_INCLUDES) -Ichapters $(PKG_CFLAGS)
 LDFLAGS += -fopenmp $(SANITIZE_FLAGS)
 LDLIBS += $(OPENEXR_LIBS) $(STB_LIBS) -lm
 TEST_LDLIBS = $(CMOCKA_LIBS)
@@ -36,7 +42,7 @@ OPENEXR_LIBS = $(or $(filter -L% -lOpenEXRCore%,$(call pkg_config,OPENEXR_PC_LIB
 STB_LIBS = $(call pkg_config,STB_LIBS,--libs stb)
 CMOCKA_LIBS = $(call pkg_config,CMOCKA_LIBS,--libs cmocka)
 
-# MPI=1 (make mpi, mk/mpi.mk): common/mpi_split.c built against OpenMPI,
+# MPI=1 (make mpi, mk/mpi.mk): common/program/mpi_split.c built against OpenMPI,
 # whose flags come from its pkg-config file, ompi-c (libopenmpi-dev).
 # Without it the same sources build the one-rank version: nothing of MPI
 # is needed by `make`, `make test` or any other target.

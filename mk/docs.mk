@@ -32,7 +32,7 @@ DOC_PAGES := $(patsubst %,$(DOCS)/%.html,$(CHAPTERS)) $(DOCS)/index.html $(DOCS)
 DOC_FIGURES := $(patsubst %,$(BUILD)/%,$(shell sed -n 's|^\(out/[^ ]*\.png\).*|\1|p' docs/figures.txt))
 # one stamp per mode: make docs FULL=1 after make docs redraws from full data
 DOC_PLOTS_STAMP := $(BUILD)/plots/.made-$(PLOT_MODE)
-DOC_SOURCES := $(wildcard common/*.[ch] chapters/*/*.[ch] tests/*.c)
+DOC_SOURCES := $(wildcard common/*/*.[ch] chapters/*/*.[ch] tests/*.c)
 DOC_INPUTS := docs/weave.lua docs/template.html docs/lectures.md docs/figures.txt docs/path_explorer.js $(DOC_SOURCES) $(wildcard docs/diagrams/*.svg)
 # The chapters whose slides draw their geometry: each page shows at least one
 # diagram of it (docs/diagrams/*.svg), or the weave stops.

@@ -1,4 +1,4 @@
-# make mpi: every chapter program built against OpenMPI (common/mpi_split.h)
+# make mpi: every chapter program built against OpenMPI (common/program/mpi_split.h)
 # in a build directory of its own, $(BUILD)/mpi/, so that the normal build
 # needs no MPI. Run one over N processes with
 #   mpirun -np 4 build/mpi/bin/09-path-tracing --spp 4096 --out build/out/ref.exr

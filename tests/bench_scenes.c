@@ -51,6 +51,7 @@
 #include "13-production/path_tracer_wide.h"
 #include "13-production/walls.h"
 #include "atomic_file.h"
+#include "image_file.h"
 #include "scene_file.h"
 #include "timer.h"
 #ifdef BENCH_EMBREE

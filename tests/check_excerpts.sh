@@ -19,7 +19,7 @@ twin=$dir/README.md
 failed=0
 fail() { echo "FAIL: $*"; failed=1; }
 
-printf '# A twin\n\n<!-- excerpt common/camera.c camera_ray -->\n<!-- end of excerpt -->\n\nafter\n' > "$twin"
+printf '# A twin\n\n<!-- excerpt common/core/camera.c camera_ray -->\n<!-- end of excerpt -->\n\nafter\n' > "$twin"
 docs/excerpts.sh "$twin" > /dev/null || fail "docs/excerpts.sh could not fill $twin in"
 grep -q '^ray camera_ray(' "$twin" || fail "the twin's excerpt does not hold camera_ray's code"
 docs/excerpts.sh --check "$twin" 2> "$dir/check.txt" || fail "the check refuses the excerpt it wrote: $(cat "$dir/check.txt")"
@@ -32,7 +32,7 @@ line=$(awk '/^<!-- end of excerpt -->$/ { print NR - 2; exit }' "$twin")
 sed "${line}s/\$/ \/\* edited by hand \*\//" "$twin" > "$dir/edited.md" && mv "$dir/edited.md" "$twin"
 if docs/excerpts.sh --check "$twin" 2> "$dir/check.txt"; then
     fail "a hand-edited excerpt ($twin:$line) passed the check"
-elif ! grep -q "^$twin:$line: camera_ray (from common/camera.c): the excerpt differs" "$dir/check.txt"; then
+elif ! grep -q "^$twin:$line: camera_ray (from common/core/camera.c): the excerpt differs" "$dir/check.txt"; then
     cat "$dir/check.txt"
     fail "the check did not name $twin:$line and camera_ray"
 else

@@ -1,6 +1,7 @@
 #!/bin/bash
 # check_layering.sh -- each chapter builds only on common/ and the chapters
-# before it, and its includes say so.
+# before it, the lecture's core in common/ on nothing of the program
+# machinery beside it, and the includes say so.
 #
 #   tests/check_layering.sh [BUILD_DIR]   this repository (run by `make test`; BUILD_DIR unused)
 #   tests/check_layering.sh --tree DIR    the tree at DIR only
@@ -11,11 +12,16 @@
 #   - common/ includes no chapter header, nor do the suites and fuzz targets
 #     of common/ (tests/test_*.c but test_chNN.c, tests/fuzz_*.c), which
 #     link common/ only;
+#   - common/core/ (the lecture's core) includes only headers of
+#     common/core/, never one of common/program/ (the machinery: flags,
+#     files, scene format, MPI, checkpoints), which may include both;
 #   - tests/test_chNN.c includes only chapters NN and before, also through
 #     the helpers in tests/ it includes (accel_check.h, ...);
 #   - one style: a chapter's header is always "NN-name/file.h", also within
 #     its own chapter (never a bare "file.h", never ../); a common header
-#     is "file.h"; a helper of tests/ is "file.h" from tests/.
+#     is "file.h", whichever folder of common/ holds it (the build has
+#     -Icommon/core -Icommon/program); a helper of tests/ is "file.h" from
+#     tests/.
 # tests/bench_*.c and docs/figures/*.c may use every chapter (they link
 # them all); their includes keep the style.
 #
@@ -36,7 +42,7 @@ check_tree() {
     files=0
     local file level
     for file in $(cd "$root" && ls -d chapters/[0-9][0-9]-*/*.[ch] chapters/[0-9][0-9]-*/*.inc \
-        common/*.[ch] tests/*.[ch] docs/figures/*.c 2>/dev/null); do
+        common/*/*.[ch] tests/*.[ch] docs/figures/*.c 2>/dev/null); do
         case $file in
         chapters/*) level=${file#chapters/}; level=$((10#${level%%-*})) ;;
         common/* | tests/fuzz_*.c) level=0 ;;
@@ -101,8 +107,11 @@ check_file() {
             fi
         elif [[ $file == chapters/* && -n "${exists[$dir/$name]:-}" ]]; then
             what="includes \"$name\": its own chapter's header is included as \"${dir#chapters/}/$name\""
-        elif [ -n "${exists[common/$name]:-}" ]; then
+        elif [ -n "${exists[common/core/$name]:-}" ]; then
             :
+        elif [ -n "${exists[common/program/$name]:-}" ]; then
+            [[ $file != common/core/* ]] ||
+                what="includes \"$name\", which is common/program/'s: the core includes no machinery header"
         elif [[ $file == tests/* && -n "${exists[tests/$name]:-}" ]]; then
             # A helper of tests/: the chapter headers it includes count for this suite.
             [ "$level" -ge 99 ] || check_file "$root" "tests/$name" "$level" "$file" "$line" "$name"
@@ -123,9 +132,12 @@ self_test() {
     t=$(mktemp -d "${TMPDIR:-/tmp}/check_layering.XXXXXX")
     self_test_dir=$t
     trap 'rm -rf "$self_test_dir"' EXIT
-    mkdir -p "$t/common" "$t/chapters/01-first" "$t/chapters/02-second" "$t/tests" "$t/docs/figures"
-    printf '%s\n' '#include <stdio.h>' '#include "vec.h"' > "$t/common/vec.h"
-    printf '%s\n' '#include "vec.h"' '#include "02-second/b.h" // BAD common/ includes no chapter' > "$t/common/util.c"
+    mkdir -p "$t/common/core" "$t/common/program" "$t/chapters/01-first" "$t/chapters/02-second" "$t/tests" "$t/docs/figures"
+    printf '%s\n' '#include <stdio.h>' '#include "vec.h"' > "$t/common/core/vec.h"
+    printf '%s\n' '#include "vec.h"' '#include "flags.h" // BAD the core includes no machinery' > "$t/common/core/vec.c"
+    printf '%s\n' '#include "vec.h"' > "$t/common/program/flags.h"
+    printf '%s\n' '#include "flags.h"' '#include "vec.h"' '#include "02-second/b.h" // BAD common/ includes no chapter' \
+        > "$t/common/program/util.c"
     printf '%s\n' '#include "vec.h"' > "$t/chapters/01-first/a.h"
     printf '%s\n' '#include "01-first/a.h"' '#include "a.h" // BAD its own chapter' \
         '#include "02-second/b.h" // BAD chapters up to 01' '#include "../02-second/b.h" // BAD no relative paths' \

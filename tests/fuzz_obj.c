@@ -20,6 +20,7 @@
 
 #include "fuzz_files.h"
 #include "mesh.h"
+#include "obj.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 

@@ -7,7 +7,7 @@
 #
 # Each program is asked for a 2048x2048 image at 1024 samples per pixel on
 # one thread: hours for any of them. The pilot (64 pixels at the full spp,
-# common/program.c) costs 1/65536 of that, so the warning must reach stderr
+# common/program/program.c) costs 1/65536 of that, so the warning must reach stderr
 # within seconds, before the render proper; the program is then stopped with
 # SIGTERM and must have written no image, preview or counters file.
 # Each entry is the program and the flags that pick its own render loop:

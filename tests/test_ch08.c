@@ -1,6 +1,6 @@
 /* test_ch08.c -- Monte Carlo integration.
  *
- *   1. the chi-square distribution (common/stats.c) against closed forms;
+ *   1. the chi-square distribution (common/core/stats.c) against closed forms;
  *   2. every sampling routine: invert(sample(u)) == u, its pdf integrates to
  *      1, and a Pearson chi-square test of its samples against its pdf, each
  *      with a twin that feeds a deliberately wrong sampler and must fail;

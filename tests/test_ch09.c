@@ -28,6 +28,7 @@
 #include "08-monte-carlo/sampling.h"
 #include "effects.h"
 #include "explain.h"
+#include "obj.h"
 #include "render.h"
 #include "scene_file.h"
 #include "stats.h"
@@ -1375,6 +1376,29 @@ static void check_delta_sample(const pt_material *m, vec3 n, vec3 wo, bool enter
     double eta_o = entering ? 1.0 : m->ior, eta_i = entering ? m->ior : 1.0;
     assert_true(cos_i < 0.0);
     assert_close(eta_o * sqrt(1.0 - cos_o * cos_o), eta_i * sqrt(1.0 - cos_i * cos_i), 4.0 * FLOAT_AGREEMENT);
+}
+
+/* Every kind of the scene format's list is rendered: Blinn-Phong and
+ * emissive as diffuse, every other kind as the BSDF it is, whose code
+ * (bsdf.c's table) is all there and makes a material of that kind. */
+static void test_every_material_kind_has_its_code(void **state)
+{
+    (void)state;
+    for (int k = 0; k < BSDF_KIND_COUNT; k++) {
+        assert_true(bsdf_kind_implemented((bsdf_kind)k));
+        bsdf_kind back;
+        assert_true(bsdf_kind_of_scene_kind(bsdf_kind_scene_kind((bsdf_kind)k), &back));
+        assert_int_equal(back, k);
+        scene_material sm = {.kind = bsdf_kind_scene_kind((bsdf_kind)k), .albedo = {0.5f, 0.5f, 0.5f},
+                             .ior = 1.5f, .roughness = 0.3f};
+        assert_int_equal(bsdf_material_from_scene((bsdf_kind)k, &sm).kind, k);
+    }
+    assert_false(bsdf_kind_implemented((bsdf_kind)BSDF_KIND_COUNT));
+    for (int k = 0; k < SCENE_MATERIAL_KIND_COUNT; k++) {
+        bsdf_kind b;
+        bool bsdf = bsdf_kind_of_scene_kind((scene_material_kind)k, &b);
+        assert_true(bsdf || k == SCENE_MATERIAL_BLINN_PHONG || k == SCENE_MATERIAL_EMISSIVE);
+    }
 }
 
 static void test_bsdf_samples_agree_with_eval_and_pdf(void **state)
@@ -3096,6 +3120,7 @@ int main(void)
         cmocka_unit_test(test_chi2_bsdf_twins_fail),
         cmocka_unit_test(test_bsdf_pdfs_integrate_to_their_acceptance),
         cmocka_unit_test(test_bsdf_samples_agree_with_eval_and_pdf),
+        cmocka_unit_test(test_every_material_kind_has_its_code),
         cmocka_unit_test(test_chi2_lights_sample_their_pdf),
         cmocka_unit_test(test_chi2_light_twins_fail),
         cmocka_unit_test(test_visible_is_the_shadow_ray_it_builds),

@@ -38,6 +38,7 @@
 #include "13-production/speed.h"
 #include "13-production/walls.h"
 #include "13-production/wide_trace.h"
+#include "obj.h"
 #include "render.h"
 #include "explain.h"
 #include "scene_file.h"

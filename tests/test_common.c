@@ -16,6 +16,7 @@
 #include "camera.h"
 #include "cli.h"
 #include "counters.h"
+#include "counters_file.h"
 #include "image.h"
 #include "program.h"
 #include "progressive.h"
@@ -291,7 +292,7 @@ static void test_render_counts_every_camera_ray(void **state)
     image_free(&img);
 }
 
-/* The pilot before a long render (common/program.c): 64 pixels at the
+/* The pilot before a long render (common/program/program.c): 64 pixels at the
  * full spp on an 8 x 8 grid over the whole image, none for small images. */
 static int pilot_calls;
 static float pilot_left, pilot_right, pilot_top, pilot_bottom;

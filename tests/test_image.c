@@ -1,4 +1,4 @@
-/* test_image.c -- tests for common/image.c.
+/* test_image.c -- tests for common/core/image.c and common/program/image_file.c.
  *
  * EXR: a bit-exact round trip, files that image_write_exr never makes (half
  * channels, extra or missing channels, an offset data window, every
@@ -10,8 +10,9 @@
  * Everything is written under a fresh mkdtemp directory in /tmp, removed at
  * the end.
  *
- * Build: gcc -std=c11 -D_DEFAULT_SOURCE -Icommon -I/usr/include/OpenEXR \
- *          tests/test_image.c common/image.c -lOpenEXRCore -lstb -lcmocka -lm
+ * Build: gcc -std=c11 -D_DEFAULT_SOURCE -Icommon/core -Icommon/program -I/usr/include/OpenEXR \
+ *          tests/test_image.c common/core/image.c common/program/image_file.c \
+ *          common/program/atomic_file.c -lOpenEXRCore -lstb -lcmocka -lm
  */
 #include <stdarg.h>
 #include <stddef.h>
@@ -20,6 +21,7 @@
 #include <cmocka.h>
 
 #include "image.h"
+#include "image_file.h"
 #include "rng.h"
 #include "test_support.h"
 #include "test_temp_dir.h"

@@ -1,4 +1,4 @@
-/* test_input_file.c -- tests for common/input_file.c: inputs are read whole
+/* test_input_file.c -- tests for common/program/input_file.c: inputs are read whole
  * only when they are regular files within their limit, and a run never reads
  * as input a file it is about to write (--out and its sidecars).
  *
@@ -16,6 +16,7 @@
 
 #include "cli.h"
 #include "input_file.h"
+#include "obj.h"
 #include "record_file.h"
 #include "mesh.h"
 #include "scene_file.h"

@@ -1,4 +1,4 @@
-/* test_obj.c -- tests for common/obj.c: the OBJ/MTL reader and the writer.
+/* test_obj.c -- tests for common/program/obj.c: the OBJ/MTL reader and the writer.
  *
  * Most tests parse strings with mesh_parse_obj. Material libraries, loading
  * from a path and writing use files in a fresh mkdtemp directory under
@@ -8,8 +8,8 @@
  * that the bad one left every count exactly where it was, besides the
  * "name:LINE:" prefix of the message.
  *
- * Build: gcc -std=c11 -D_DEFAULT_SOURCE -Icommon -Itests tests/test_obj.c \
- *          common/obj.c common/mesh.c common/memory.c -lcmocka -lm
+ * Build: gcc -std=c11 -D_DEFAULT_SOURCE -Icommon/core -Icommon/program -Itests tests/test_obj.c \
+ *          common/program/obj.c common/core/mesh.c common/core/memory.c -lcmocka -lm
  */
 #include <stdarg.h>
 #include <stddef.h>
@@ -18,6 +18,7 @@
 #include <cmocka.h>
 
 #include "mesh.h"
+#include "obj.h"
 #include "test_support.h"
 #include "test_temp_dir.h"
 

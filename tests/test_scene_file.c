@@ -17,6 +17,7 @@
 
 #include "cli.h"
 #include "counters.h"
+#include "counters_file.h"
 #include "effects.h"
 #include "scene_file.h"
 #include "test_support.h"

@@ -4,7 +4,7 @@
  *
  * Writes |yours - reference| per channel as DIFFERENCE.exr and its .png
  * preview (the preview scaled so the largest difference is white), and
- * prints one number, the relative MSE (common/image.h), with the mean
+ * prints one number, the relative MSE (common/core/image.h), with the mean
  * brightness of each picture: a path tracer that is wrong by a constant
  * factor shows it in the means, where noise alone does not. With a second
  * reference (the same render with another seed), it prints how far the two
@@ -14,6 +14,7 @@
 #include <stdio.h>
 
 #include "image.h"
+#include "image_file.h"
 
 static double mean_of(const image *img)
 {

@@ -211,6 +211,14 @@ static material material_from_desc(const scene_desc *d, const scene_material *sm
         program_warn(label, d, sm->line, sm->column, "emissive '%s': shaded by its albedo; its triangles and quads "
                      "light the scene as point lights (below), its spheres do not", sm->name);
         break;
+    default:
+        /* A kind of the scene format's list that came after these chapters
+         * (a BSDF of chapter 09's): shown by its albedo, and said, so that
+         * a new kind is one row in the list and its BSDF, not a case here. */
+        m = material_blinn_phong(sm->albedo, vec3_splat(0.0f), 1.0f);
+        program_warn(label, d, sm->line, sm->column, "%s '%s': shown as diffuse with its albedo (chapter 09 renders it)",
+                     scene_material_kind_name(sm->kind), sm->name);
+        break;
     }
     snprintf(m.name, sizeof m.name, "%s", sm->name);
     return m;

@@ -11,6 +11,7 @@
 #include "03-aabb-slabs/accel_program.h"
 #include "03-aabb-slabs/accel_view.h"
 #include "memory.h"
+#include "obj.h"
 #include "program.h"
 #include "timer.h"
 

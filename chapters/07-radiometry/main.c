@@ -17,6 +17,7 @@
 #include "07-radiometry/radiometry.h"
 #include "cli.h"
 #include "image.h"
+#include "image_file.h"
 #include "memory.h"
 #include "program.h"
 #include "scene_file.h"

@@ -48,7 +48,7 @@ static inline double dvec3_length(dvec3 a) { return sqrt(dvec3_dot(a, a)); }
 static inline dvec3 dvec3_normalize(dvec3 a) { return dvec3_scale(a, 1.0 / dvec3_length(a)); }
 
 /* An orthonormal basis (t, b, n) around unit n (Duff et al. 2017, as
- * vec3_basis in common/vec3.h, in double). */
+ * vec3_basis in common/core/vec3.h, in double). */
 static inline void dvec3_basis(dvec3 n, dvec3 *t, dvec3 *b)
 {
     double sign = copysign(1.0, n.z);

@@ -291,7 +291,7 @@ convergence_point estimator_run(const integrand *f, const estimator *e, int n, i
     return c;
 }
 
-/* SplitMix64's finaliser (as in common/rng.c), to spread small integers. */
+/* SplitMix64's finaliser (as in common/core/rng.c), to spread small integers. */
 static uint64_t mix64(uint64_t z)
 {
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;

@@ -15,6 +15,7 @@
 #include "08-monte-carlo/estimators.h"
 #include "atomic_file.h"
 #include "cli.h"
+#include "image_file.h"
 #include "program.h"
 #include "image.h"
 #include "memory.h"

@@ -1,4 +1,6 @@
-/* bsdf.c -- Lambertian, GGX microfacet, smooth glass, mirror. */
+/* bsdf.c -- Lambertian, GGX microfacet, smooth glass, mirror: each BSDF's
+ * f, pdf and sampling, and one table (bsdf_table, at the end) that the
+ * interface reads by kind. */
 #include "09-path-tracing/bsdf.h"
 
 #include "02-whitted/whitted.h"
@@ -22,8 +24,6 @@ scene_material_kind bsdf_kind_scene_kind(bsdf_kind k)
 }
 
 const char *bsdf_kind_name(bsdf_kind k) { return scene_material_kind_name(bsdf_kind_scene_kind(k)); }
-
-bool bsdf_is_delta(const pt_material *m) { return m->kind == BSDF_GLASS || m->kind == BSDF_MIRROR; }
 
 /* ---- GGX microfacets --------------------------------------------------------
  * f = D(h) G(wo, wi) F(wo . h) / (4 cos(theta_o) cos(theta_i)), h = unit(wo + wi):
@@ -103,109 +103,177 @@ static vec3 ggx_sample_visible_normal(vec3 wo, float alpha, vec2 u)
     return vec3_normalize(vec3_make(alpha * h.x, alpha * h.y, fmaxf(0.0f, h.z)));
 }
 
-/* ---- the interface ------------------------------------------------------------- */
+/* ---- Lambertian -------------------------------------------------------------- */
+
+/* rho / pi, on the side of wo only */
+static vec3 lambert_eval(const pt_material *m, vec3 n, vec3 wo, vec3 wi)
+{
+    if (vec3_dot(n, wi) <= 0.0f || vec3_dot(n, wo) <= 0.0f)
+        return vec3_splat(0.0f);
+    return vec3_scale(m->albedo, 1.0f / (float)PI);
+}
+
+static float lambert_pdf(const pt_material *m, vec3 n, vec3 wo, vec3 wi)
+{
+    (void)m;
+    float cos_i = vec3_dot(n, wi);
+    return cos_i > 0.0f && vec3_dot(n, wo) > 0.0f ? cosine_hemisphere_pdf(cos_i) : 0.0f;
+}
+
+/* cosine-weighted: f cos / pdf = (rho/pi) cos / (cos/pi) = rho */
+static bool lambert_sample(const pt_material *m, vec3 n, vec3 wo, vec2 u, float u_lobe, bool entering,
+                           bsdf_sample_result *out)
+{
+    (void)wo, (void)u_lobe, (void)entering;
+    vec3 local = sample_cosine_hemisphere(u);
+    if (local.z <= 0.0f)
+        return false;
+    out->wi = frame_to_world(n, local);
+    out->pdf = cosine_hemisphere_pdf(local.z);
+    out->weight = m->albedo;
+    return true;
+}
+
+static pt_material lambert_from_scene(const scene_material *sm) { return pt_diffuse(sm->albedo); }
+
+/* ---- GGX, sampled ---------------------------------------------------------------- */
+
+/* h among the normals wo sees (ggx_pdf above) */
+static bool ggx_sample(const pt_material *m, vec3 n, vec3 wo, vec2 u, float u_lobe, bool entering,
+                       bsdf_sample_result *out)
+{
+    (void)u_lobe, (void)entering;
+    vec3 t, b;
+    vec3_basis(n, &t, &b);
+    vec3 wo_local = vec3_make(vec3_dot(wo, t), vec3_dot(wo, b), vec3_dot(wo, n));
+    if (!(wo_local.z > 0.0f))
+        return false;
+    vec3 h = frame_to_world(n, ggx_sample_visible_normal(wo_local, m->roughness, u));
+    vec3 wi = vec3_reflect(vec3_neg(wo), h);
+    float pdf = ggx_pdf(m, n, wo, wi);
+    if (!(pdf > 0.0f))
+        return false;
+    out->wi = wi;
+    out->pdf = pdf;
+    out->weight = vec3_scale(ggx_eval(m, n, wo, wi), vec3_dot(n, wi) / pdf);
+    return true;
+}
+
+static pt_material ggx_from_scene(const scene_material *sm) { return pt_glossy(sm->albedo, sm->roughness); }
+
+/* ---- mirror and glass: delta lobes, no density to evaluate ------------------------ */
+
+static bool mirror_sample(const pt_material *m, vec3 n, vec3 wo, vec2 u, float u_lobe, bool entering,
+                          bsdf_sample_result *out)
+{
+    (void)u, (void)u_lobe, (void)entering;
+    out->wi = vec3_reflect(vec3_neg(wo), n);
+    out->pdf = 1.0f;
+    out->weight = m->albedo;
+    out->is_delta = true;
+    return true;
+}
+
+static pt_material mirror_from_scene(const scene_material *sm) { return pt_mirror(sm->albedo); }
+
+/* Reflect with probability R (exact Fresnel, chapter 02), else refract:
+ * f cos / pdf is then 1 either way, so glass neither gains nor loses energy.
+ * The refracted weight leaves out (eta_i / eta_t)^2, the factor by which
+ * radiance itself changes across the surface (pbrt applies it to paths that
+ * carry radiance, not to those that carry importance). What the project
+ * transports is basic radiance L / eta^2, which a refraction leaves
+ * unchanged and which equals radiance in air (eta = 1), where every camera
+ * and light of the book sits: a path from the eye to a light leaves each
+ * closed glass object as often as it enters it, and the factors it would
+ * carry cancel. A light or a camera inside glass, or an open glass surface,
+ * would need it. */
+static bool glass_sample(const pt_material *m, vec3 n, vec3 wo, vec2 u, float u_lobe, bool entering,
+                         bsdf_sample_result *out)
+{
+    (void)u;
+    float eta_i = entering ? 1.0f : m->ior, eta_t = entering ? m->ior : 1.0f;
+    float cos_o = vec3_dot(n, wo);
+    float reflectance = fresnel_dielectric(cos_o, eta_i, eta_t);
+    vec3 refracted;
+    bool can_refract = refract_direction(vec3_neg(wo), n, eta_i / eta_t, &refracted);
+    out->is_delta = true;
+    if (!can_refract || u_lobe < reflectance) {
+        out->wi = vec3_reflect(vec3_neg(wo), n);
+        out->pdf = can_refract ? reflectance : 1.0f;
+    } else {
+        out->wi = refracted;
+        out->pdf = 1.0f - reflectance;
+        out->is_transmission = true;
+    }
+    out->weight = m->albedo;
+    return true;
+}
+
+static pt_material glass_from_scene(const scene_material *sm)
+{
+    pt_material m = pt_glass(sm->ior);
+    m.albedo = sm->albedo;
+    return m;
+}
+
+/* ---- the table and the interface --------------------------------------------------
+ * Each kind's code, by kind (bsdf_kinds.h): the interface below reads the
+ * row of the material's kind, so a new BSDF is its functions and its row
+ * here, and no switch elsewhere learns of it. A delta lobe (mirror, glass)
+ * has no eval or pdf: f and pdf are 0 for any direction one could ask
+ * about, and its sample says is_delta. */
+typedef struct {
+    vec3 (*eval)(const pt_material *m, vec3 n, vec3 wo, vec3 wi);
+    float (*pdf)(const pt_material *m, vec3 n, vec3 wo, vec3 wi);
+    bool (*sample)(const pt_material *m, vec3 n, vec3 wo, vec2 u, float u_lobe, bool entering,
+                   bsdf_sample_result *out);
+    pt_material (*from_scene)(const scene_material *sm); /* a scene file's material of this kind */
+} bsdf_code;
+
+static const bsdf_code bsdf_table[BSDF_KIND_COUNT] = {
+    [BSDF_DIFFUSE] = {lambert_eval, lambert_pdf, lambert_sample, lambert_from_scene},
+    [BSDF_GLOSSY] = {ggx_eval, ggx_pdf, ggx_sample, ggx_from_scene},
+    [BSDF_GLASS] = {NULL, NULL, glass_sample, glass_from_scene},
+    [BSDF_MIRROR] = {NULL, NULL, mirror_sample, mirror_from_scene},
+};
+
+bool bsdf_kind_implemented(bsdf_kind k)
+{
+    if ((unsigned)k >= BSDF_KIND_COUNT)
+        return false;
+    const bsdf_code *c = &bsdf_table[k];
+    return c->sample != NULL && c->from_scene != NULL && (c->eval == NULL) == (c->pdf == NULL);
+}
+
+bool bsdf_is_delta(const pt_material *m) { return bsdf_table[m->kind].eval == NULL; }
 
 vec3 bsdf_eval(const pt_material *m, vec3 n, vec3 wo, vec3 wi)
 {
-    switch (m->kind) {
-    case BSDF_DIFFUSE:
-        /* Lambertian: rho / pi, on the side of wo only */
-        if (vec3_dot(n, wi) <= 0.0f || vec3_dot(n, wo) <= 0.0f)
-            return vec3_splat(0.0f);
-        return vec3_scale(m->albedo, 1.0f / (float)PI);
-    case BSDF_GLOSSY:
-        return ggx_eval(m, n, wo, wi);
-    case BSDF_GLASS:
-    case BSDF_MIRROR:
-        return vec3_splat(0.0f);
-    }
-    return vec3_splat(0.0f);
+    const bsdf_code *c = &bsdf_table[m->kind];
+    return c->eval != NULL ? c->eval(m, n, wo, wi) : vec3_splat(0.0f);
 }
 
 float bsdf_pdf(const pt_material *m, vec3 n, vec3 wo, vec3 wi)
 {
-    switch (m->kind) {
-    case BSDF_DIFFUSE: {
-        float cos_i = vec3_dot(n, wi);
-        return cos_i > 0.0f && vec3_dot(n, wo) > 0.0f ? cosine_hemisphere_pdf(cos_i) : 0.0f;
-    }
-    case BSDF_GLOSSY:
-        return ggx_pdf(m, n, wo, wi);
-    case BSDF_GLASS:
-    case BSDF_MIRROR:
-        return 0.0f;
-    }
-    return 0.0f;
+    const bsdf_code *c = &bsdf_table[m->kind];
+    return c->pdf != NULL ? c->pdf(m, n, wo, wi) : 0.0f;
 }
 
 bool bsdf_sample(const pt_material *m, vec3 n, vec3 wo, vec2 u, float u_lobe, bool entering, bsdf_sample_result *out)
 {
     out->is_delta = false;
     out->is_transmission = false;
-    switch (m->kind) {
-    case BSDF_DIFFUSE: {
-        /* cosine-weighted: f cos / pdf = (rho/pi) cos / (cos/pi) = rho */
-        vec3 local = sample_cosine_hemisphere(u);
-        if (local.z <= 0.0f)
-            return false;
-        out->wi = frame_to_world(n, local);
-        out->pdf = cosine_hemisphere_pdf(local.z);
-        out->weight = m->albedo;
-        return true;
-    }
-    case BSDF_GLOSSY: {
-        /* h among the normals wo sees (ggx_pdf above) */
-        vec3 t, b;
-        vec3_basis(n, &t, &b);
-        vec3 wo_local = vec3_make(vec3_dot(wo, t), vec3_dot(wo, b), vec3_dot(wo, n));
-        if (!(wo_local.z > 0.0f))
-            return false;
-        vec3 h = frame_to_world(n, ggx_sample_visible_normal(wo_local, m->roughness, u));
-        vec3 wi = vec3_reflect(vec3_neg(wo), h);
-        float pdf = ggx_pdf(m, n, wo, wi);
-        if (!(pdf > 0.0f))
-            return false;
-        out->wi = wi;
-        out->pdf = pdf;
-        out->weight = vec3_scale(ggx_eval(m, n, wo, wi), vec3_dot(n, wi) / pdf);
-        return true;
-    }
-    case BSDF_MIRROR:
-        out->wi = vec3_reflect(vec3_neg(wo), n);
-        out->pdf = 1.0f;
-        out->weight = m->albedo;
-        out->is_delta = true;
-        return true;
-    case BSDF_GLASS: {
-        /* Reflect with probability R (exact Fresnel, chapter 02), else
-         * refract: f cos / pdf is then 1 either way, so glass neither gains
-         * nor loses energy.
-         * The refracted weight leaves out (eta_i / eta_t)^2, the factor by
-         * which radiance itself changes across the surface (pbrt applies it
-         * to paths that carry radiance, not to those that carry importance).
-         * What the project transports is basic radiance L / eta^2, which a
-         * refraction leaves unchanged and which equals radiance in air
-         * (eta = 1), where every camera and light of the book sits: a path
-         * from the eye to a light leaves each closed glass object as often
-         * as it enters it, and the factors it would carry cancel. A light
-         * or a camera inside glass, or an open glass surface, would need it. */
-        float eta_i = entering ? 1.0f : m->ior, eta_t = entering ? m->ior : 1.0f;
-        float cos_o = vec3_dot(n, wo);
-        float reflectance = fresnel_dielectric(cos_o, eta_i, eta_t);
-        vec3 refracted;
-        bool can_refract = refract_direction(vec3_neg(wo), n, eta_i / eta_t, &refracted);
-        out->is_delta = true;
-        if (!can_refract || u_lobe < reflectance) {
-            out->wi = vec3_reflect(vec3_neg(wo), n);
-            out->pdf = can_refract ? reflectance : 1.0f;
-        } else {
-            out->wi = refracted;
-            out->pdf = 1.0f - reflectance;
-            out->is_transmission = true;
+    return bsdf_table[m->kind].sample(m, n, wo, u, u_lobe, entering, out);
+}
+
+bool bsdf_kind_of_scene_kind(scene_material_kind scene_kind, bsdf_kind *out)
+{
+    for (int k = 0; k < BSDF_KIND_COUNT; k++)
+        if (bsdf_kind_scene_kind((bsdf_kind)k) == scene_kind) {
+            *out = (bsdf_kind)k;
+            return true;
         }
-        out->weight = m->albedo;
-        return true;
-    }
-    }
     return false;
 }
+
+pt_material bsdf_material_from_scene(bsdf_kind k, const scene_material *sm) { return bsdf_table[k].from_scene(sm); }

@@ -36,6 +36,14 @@ bool bsdf_sample(const pt_material *m, vec3 n, vec3 wo, vec2 u, float u_lobe, bo
 /* Does this material scatter only into single directions? */
 bool bsdf_is_delta(const pt_material *m);
 
+/* Whether bsdf.c's table has the code of kind k (a test holds every kind to it). */
+bool bsdf_kind_implemented(bsdf_kind k);
+/* The BSDF that is the scene file's kind scene_kind, if one is (false for
+ * blinn_phong and emissive, which scene_pt_file.c renders as diffuse). */
+bool bsdf_kind_of_scene_kind(scene_material_kind scene_kind, bsdf_kind *out);
+/* A scene file's material of BSDF kind k, as the path tracer's. */
+pt_material bsdf_material_from_scene(bsdf_kind k, const scene_material *sm);
+
 /* GGX (Trowbridge-Reitz) normal distribution D(h) for cos(theta_h), and
  * Smith's masking G1 for a direction at cos(theta): exposed for the tests. */
 float ggx_distribution(float cos_theta_h, float alpha);

@@ -10,6 +10,7 @@
 
 #include "atomic_file.h"
 #include "checkpoint.h"
+#include "image_file.h"
 #include "mpi_split.h"
 #include "record_file.h"
 #include "run_record.h"

@@ -11,6 +11,7 @@
 #include "06-bvh/bvh.h"
 #include "09-path-tracing/bsdf.h"
 #include "memory.h"
+#include "obj.h"
 
 void pt_scene_init(pt_scene *sc)
 {

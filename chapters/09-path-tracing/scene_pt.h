@@ -22,32 +22,12 @@
 
 #include "01-ray-casting/shapes.h"
 #include "03-aabb-slabs/accel.h"
+#include "09-path-tracing/bsdf_kinds.h"
 #include "camera.h"
 #include "cli.h"
 #include "counters.h"
 #include "mesh.h"
 #include "scene_file.h"
-
-/* The BSDFs (bsdf.c): the rows of the scene format's one list of material
- * kinds (SCENE_MATERIAL_KINDS, scene_file.h) that are BSDFs, X(ID, the
- * scene file's kind), in the enum's order; a kind's name is the scene
- * file's. Blinn-Phong is rendered as diffuse and emissive as a diffuse
- * emitter (scene_pt_file.c). A new BSDF: a row here, its cases in bsdf.c
- * (the compiler names them), its constructor below. */
-#define BSDF_KINDS(X)                                                                                        \
-    X(DIFFUSE, SCENE_MATERIAL_DIFFUSE) /* Lambertian: f = albedo / pi */                                    \
-    X(GLOSSY, SCENE_MATERIAL_GLOSSY)   /* GGX microfacet reflection with Schlick's Fresnel (F0 = albedo) */ \
-    X(GLASS, SCENE_MATERIAL_GLASS)     /* a smooth dielectric: Fresnel-weighted reflection and refraction */ \
-    X(MIRROR, SCENE_MATERIAL_MIRROR)   /* perfect reflection of albedo */
-
-typedef enum {
-#define BSDF_KIND_ENUM(id, scene_kind) BSDF_##id,
-    BSDF_KINDS(BSDF_KIND_ENUM)
-#undef BSDF_KIND_ENUM
-} bsdf_kind;
-#define BSDF_KIND_ONE(id, scene_kind) +1
-enum { BSDF_KIND_COUNT = 0 BSDF_KINDS(BSDF_KIND_ONE) };
-#undef BSDF_KIND_ONE
 
 /* The scene file's kind of a BSDF, and its name ("diffuse", ...; "?" for
  * a value that is no kind). */

@@ -10,11 +10,57 @@
 #include "09-path-tracing/scene_pt.h"
 #include "atomic_file.h"
 
-/* A material as the MTL statements pt_material_from_mtl() reads back into
- * the same material (scene_pt.c): Ke makes an emitter, illum 7 glass with
- * index Ni, Ks larger than Kd a GGX metal whose alpha comes from Ns, and Kd
- * alone a diffuse surface. False, with why, for what MTL cannot say (a
- * perfect mirror: Ns is finite, so its alpha would not be 0). */
+/* Each BSDF as the MTL statements pt_material_from_mtl() reads back into
+ * the same material (scene_pt.c): illum 7 glass with index Ni, Ks larger
+ * than Kd a GGX metal whose alpha comes from Ns, and Kd alone a diffuse
+ * surface. False, with why, for what MTL cannot say. */
+typedef bool (*mtl_writer)(FILE *f, int index, const pt_material *m, char *why, size_t why_size);
+
+static bool mtl_diffuse(FILE *f, int index, const pt_material *m, char *why, size_t why_size)
+{
+    (void)index, (void)why, (void)why_size;
+    fprintf(f, "Kd %.9g %.9g %.9g\nKs 0 0 0\nillum 1\n", (double)m->albedo.x, (double)m->albedo.y, (double)m->albedo.z);
+    return true;
+}
+
+static bool mtl_glass(FILE *f, int index, const pt_material *m, char *why, size_t why_size)
+{
+    vec3 a = m->albedo;
+    if (a.x != 1.0f || a.y != 1.0f || a.z != 1.0f) {
+        snprintf(why, why_size, "material %d: tinted glass (MTL glass reads back untinted)", index);
+        return false;
+    }
+    fprintf(f, "Kd 0 0 0\nKs 1 1 1\nNi %.9g\nillum 7\n", (double)m->ior);
+    return true;
+}
+
+static bool mtl_glossy(FILE *f, int index, const pt_material *m, char *why, size_t why_size)
+{
+    (void)index, (void)why, (void)why_size;
+    /* alpha = sqrt(2 / (Ns + 2)), the loader's mapping, solved for Ns */
+    double alpha = (double)m->roughness, ns = 2.0 / (alpha * alpha) - 2.0;
+    fprintf(f, "Kd 0 0 0\nKs %.9g %.9g %.9g\nNs %.9g\nillum 2\n", (double)m->albedo.x, (double)m->albedo.y,
+            (double)m->albedo.z, ns);
+    return true;
+}
+
+static bool mtl_mirror(FILE *f, int index, const pt_material *m, char *why, size_t why_size)
+{
+    (void)f, (void)m;
+    snprintf(why, why_size, "material %d: a perfect mirror (MTL's Ns cannot make GGX's alpha 0)", index);
+    return false;
+}
+
+/* By kind; a kind without a row has no MTL form, and is refused by name. */
+static const mtl_writer mtl_writers[BSDF_KIND_COUNT] = {
+    [BSDF_DIFFUSE] = mtl_diffuse,
+    [BSDF_GLASS] = mtl_glass,
+    [BSDF_GLOSSY] = mtl_glossy,
+    [BSDF_MIRROR] = mtl_mirror,
+};
+
+/* A material as MTL: Ke makes an emitter (diffuse, whatever its kind
+ * reflects), else its kind's writer. */
 static bool write_mtl_material(FILE *f, int index, const pt_material *m, char *why, size_t why_size)
 {
     vec3 a = m->albedo, e = m->emission;
@@ -25,28 +71,9 @@ static bool write_mtl_material(FILE *f, int index, const pt_material *m, char *w
                 (double)a.z, (double)e.x, (double)e.y, (double)e.z);
         return true;
     }
-    switch (m->kind) {
-    case BSDF_DIFFUSE:
-        fprintf(f, "Kd %.9g %.9g %.9g\nKs 0 0 0\nillum 1\n", (double)a.x, (double)a.y, (double)a.z);
-        return true;
-    case BSDF_GLASS:
-        if (a.x != 1.0f || a.y != 1.0f || a.z != 1.0f) {
-            snprintf(why, why_size, "material %d: tinted glass (MTL glass reads back untinted)", index);
-            return false;
-        }
-        fprintf(f, "Kd 0 0 0\nKs 1 1 1\nNi %.9g\nillum 7\n", (double)m->ior);
-        return true;
-    case BSDF_GLOSSY: {
-        /* alpha = sqrt(2 / (Ns + 2)), the loader's mapping, solved for Ns */
-        double alpha = (double)m->roughness, ns = 2.0 / (alpha * alpha) - 2.0;
-        fprintf(f, "Kd 0 0 0\nKs %.9g %.9g %.9g\nNs %.9g\nillum 2\n", (double)a.x, (double)a.y, (double)a.z, ns);
-        return true;
-    }
-    case BSDF_MIRROR:
-        snprintf(why, why_size, "material %d: a perfect mirror (MTL's Ns cannot make GGX's alpha 0)", index);
-        return false;
-    }
-    snprintf(why, why_size, "material %d: unknown kind", index);
+    if ((unsigned)m->kind < BSDF_KIND_COUNT && mtl_writers[m->kind] != NULL)
+        return mtl_writers[m->kind](f, index, m, why, why_size);
+    snprintf(why, why_size, "material %d: %s (MTL has no such material)", index, bsdf_kind_name(m->kind));
     return false;
 }
 

@@ -2,6 +2,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "09-path-tracing/bsdf.h"
 #include "09-path-tracing/scene_pt.h"
 #include "memory.h"
 #include "program.h"
@@ -16,29 +17,27 @@ cli_choice pt_builtin_scene_choice(const pt_builtin_scene *table, int count, con
     return (cli_choice){names, notes, 0};
 }
 
+/* A scene file's material as the path tracer's: Blinn-Phong as diffuse
+ * (with a word), emissive as a diffuse emitter, and every other kind as the
+ * BSDF it is (bsdf.c's table says how). */
 static pt_material material_from_desc(const scene_desc *d, const scene_material *sm, const char *label)
 {
-    pt_material m;
-    switch (sm->kind) {
-    case SCENE_MATERIAL_DIFFUSE:
-        return pt_diffuse(sm->albedo);
-    case SCENE_MATERIAL_BLINN_PHONG:
+    bsdf_kind k;
+    if (sm->kind == SCENE_MATERIAL_BLINN_PHONG) {
         program_warn(label, d, sm->line, sm->column,
                      "blinn_phong '%s': rendered as diffuse with albedo k_d%s; Blinn-Phong is not energy-conserving, "
                      "use glossy for a highlight", sm->name, sm->checker_size > 0 ? " (the checkerboard is not shown)" : "");
         return pt_diffuse(sm->albedo);
-    case SCENE_MATERIAL_MIRROR:
-        return pt_mirror(sm->albedo);
-    case SCENE_MATERIAL_GLASS:
-        m = pt_glass(sm->ior);
-        m.albedo = sm->albedo;
-        return m;
-    case SCENE_MATERIAL_GLOSSY:
-        return pt_glossy(sm->albedo, sm->roughness);
-    case SCENE_MATERIAL_EMISSIVE:
-        return pt_emitter(sm->albedo, sm->emission);
     }
-    return pt_diffuse(sm->albedo); /* not reached: the parser makes only the kinds above */
+    if (sm->kind == SCENE_MATERIAL_EMISSIVE)
+        return pt_emitter(sm->albedo, sm->emission);
+    if (bsdf_kind_of_scene_kind(sm->kind, &k))
+        return bsdf_material_from_scene(k, sm);
+    /* not reached: a kind of the list that is neither of the two above nor a
+     * BSDF (bsdf_kinds.h) would need a way here; test_ch09 holds every kind */
+    program_warn(label, d, sm->line, sm->column, "%s '%s': not a BSDF of this chapter's, rendered as diffuse",
+                 scene_material_kind_name(sm->kind), sm->name);
+    return pt_diffuse(sm->albedo);
 }
 
 static bool add_mesh(pt_scene *sc, const scene_desc *d, int index, char *err, size_t err_size)

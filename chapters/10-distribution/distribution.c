@@ -173,10 +173,12 @@ static vec3 trace(const distribution_tracer *dt, timed_ray tr, int depth, arriva
     if (depth + 1 > dt->max_depth)
         return radiance;
 
-    /* Each kind's way (no default: a kind missing here is a compiler warning). */
+    /* Each kind's way: mirror and glass branch as in chapter 02; diffuse,
+     * glossy and any other BSDF take the direct light through bsdf_eval,
+     * and glossy also its lobe's rays. (A later delta BSDF, whose eval is
+     * 0, would need a branch of its own, as mirror and glass have.) */
     switch (m->kind) {
-    case BSDF_DIFFUSE:
-    case BSDF_GLOSSY: {
+    default: {
         bool lobe_rays = m->kind == BSDF_GLOSSY && dt->glossy_samples > 0 && (dt->effects & EFFECT_GLOSSY);
         vec3 direct = direct_light(dt, &hit, wo, m, tr.time, lobe_rays, rng, counters);
         radiance = vec3_add(radiance, direct);

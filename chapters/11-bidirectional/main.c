@@ -7,6 +7,8 @@
 
 #include "11-bidirectional/bdpt_experiments.h"
 #include "cli.h"
+#include "counters_file.h"
+#include "image_file.h"
 #include "program.h"
 #include "mpi_split.h"
 

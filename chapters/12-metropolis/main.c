@@ -9,6 +9,8 @@
 #include "12-metropolis/mlt_experiments.h"
 #include "12-metropolis/mlt_scene.h"
 #include "cli.h"
+#include "counters_file.h"
+#include "image_file.h"
 #include "program.h"
 #include "mpi_split.h"
 

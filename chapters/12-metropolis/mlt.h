@@ -17,7 +17,7 @@
  *   mlt_acceptance  min(1, f(proposal) / f(current)): Metropolis-Hastings
  *                 for the symmetric mutations used here
  *   mlt_render    bootstrap (b and the chains' starting states), then the
- *                 chains, splatting to a common/splat_film.h film
+ *                 chains, splatting to a common/core/splat_film.h film
  *
  * Usage:
  *   mlt_options o = mlt_defaults(&pt, &cam);

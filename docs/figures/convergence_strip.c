@@ -28,6 +28,7 @@
 #include "08-monte-carlo/estimators.h"
 #include "09-path-tracing/path_tracer.h"
 #include "cli.h"
+#include "image_file.h"
 #include "memory.h"
 #include "program.h"
 #include "run_record.h"

@@ -15,7 +15,7 @@ the next hit), "shadow" (a light sample's shadow ray, unblocked), "blocked"
 (one that something stopped) or "escape" (a ray that left the scene, drawn
 some way along); the end says why the path stopped ("roulette", "max
 depth", "escape", "no effect"). Everything comes from the program's
---explain text and its camera line (common/program.c), so the drawing is
+--explain text and its camera line (common/program/program.c), so the drawing is
 what the renderer did, not a re-computation.
 
   docs/figures/explain_paths.py PROGRAM GRID OUT.json [program flags...]

@@ -1,19 +1,19 @@
-/* image.h -- a float RGB image, written as OpenEXR (the data) with an sRGB
- * PNG beside it (a preview to look at), and the error between two images.
+/* image.h -- a float RGB image, encoded as OpenEXR (the data) and as an
+ * sRGB PNG (a preview to look at), and the error between two images.
  *
  * Usage:
  *   image img = image_make(w, h);          pixels start black
  *   image_set(&img, x, y, colour);
- *   char err[IMAGE_ERROR_SIZE];
- *   if (!image_write(&img, "build/out/ch01.exr", 0.0f, err, sizeof err)) ...
+ *   image_write(&img, "build/out/ch01.exr", 0.0f, err, sizeof err);   image_file.h
  *   image_free(&img);
  *
  * Values are linear radiance, row 0 at the top. EXR keeps them exactly as
  * 32-bit floats; the PNG is a preview only: scaled by 2^exposure, clamped and
  * sRGB-encoded (gamma applied once, here, and nowhere else).
  *
- * Writes never leave a half-written file: each file is written under a
- * temporary name in the same directory and renamed into place at the end.
+ * The encoders write onto a descriptor; putting a file in place (a
+ * temporary name renamed at the end, so that no half-written file is ever
+ * seen) is the program's business, image_file.h.
  */
 #ifndef IMAGE_H
 #define IMAGE_H
@@ -47,10 +47,11 @@ static inline void image_set(image *img, int x, int y, vec3 c)
     p[2] = c.z;
 }
 
-/* Each returns true on success; on failure false, with one line naming the
- * file and the reason in err, and no file left behind. */
-bool image_write_exr(const image *img, const char *path, char *err, size_t err_size);
-/* For the tests: how many ZIP chunks image_write_exr has stored raw
+/* The image as EXR (or, below, PNG) bytes onto fd, from its start. True on
+ * success; on failure false, with one line naming `path` (the file the
+ * bytes are for, in messages only) and the reason in err. */
+bool image_encode_exr(const image *img, int fd, const char *path, char *err, size_t err_size);
+/* For the tests: how many ZIP chunks image_encode_exr has stored raw
  * because deflating did not shrink them, and how many of those deflated to
  * exactly their raw length (the case older OpenEXR libraries store wrong);
  * and the twin: false stores such chunks with other bytes than the
@@ -59,10 +60,7 @@ void image_exr_raw_chunks(long *raw, long *deflated_to_raw_length);
 void image_exr_raw_fallback(bool on);
 bool image_read_exr(image *out, const char *path, char *err, size_t err_size);
 /* exposure_stops: the preview shows radiance * 2^exposure_stops. */
-bool image_write_png(const image *img, const char *path, float exposure_stops, char *err, size_t err_size);
-/* By the path's ending: "x.exr" writes x.exr and the preview x.png beside it;
- * "x.png" writes only the preview. */
-bool image_write(const image *img, const char *path, float exposure_stops, char *err, size_t err_size);
+bool image_encode_png(const image *img, int fd, const char *path, float exposure_stops, char *err, size_t err_size);
 
 /* Mean squared error over all pixels and channels (NaN if the sizes differ). */
 double image_mse(const image *a, const image *reference);

@@ -64,7 +64,7 @@ static bool shape_sees_itself(const scene_desc *d, const scene_shape *s)
 static int kinds_passing(const int uses[SCENE_MATERIAL_KIND_COUNT], unsigned effect, char *counts, size_t size)
 {
     static const unsigned passes[SCENE_MATERIAL_KIND_COUNT] = {
-#define KIND_EFFECTS(id, keyword, effects) effects,
+#define KIND_EFFECTS(id, keyword, effects, ...) effects,
         SCENE_MATERIAL_KINDS(KIND_EFFECTS)
 #undef KIND_EFFECTS
     };

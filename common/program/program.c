@@ -7,7 +7,9 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "counters_file.h"
 #include "explain.h"
+#include "image_file.h"
 #include "input_file.h"
 #include "mpi_split.h"
 #include "progressive.h"

@@ -329,25 +329,27 @@ static bool statement_colour(const parse_context *pc, const token *t, int n, vec
 
 static bool statement_material(const parse_context *pc, scene_desc *d, const token *t, int n)
 {
-    static const key_spec spec[] = {
-        {"albedo", ARG_VEC3, REFLECTANCE},    {"diffuse", ARG_VEC3, REFLECTANCE},
-        {"specular", ARG_VEC3, REFLECTANCE},  {"shininess", ARG_NUMBER, 0.0, 1e5},
-        {"checker", ARG_VEC3, REFLECTANCE},   {"size", ARG_NUMBER, 1e-6, SCENE_MAX_COORDINATE},
-        {"ior", ARG_NUMBER, 1.0, 10.0},       {"roughness", ARG_NUMBER, 1e-3, 1.0},
-        {"emission", ARG_VEC3, RADIANCE},
+    static const key_spec spec[SCENE_KEY_COUNT] = {
+        [SCENE_KEY_ALBEDO] = {"albedo", ARG_VEC3, REFLECTANCE},
+        [SCENE_KEY_DIFFUSE] = {"diffuse", ARG_VEC3, REFLECTANCE},
+        [SCENE_KEY_SPECULAR] = {"specular", ARG_VEC3, REFLECTANCE},
+        [SCENE_KEY_SHININESS] = {"shininess", ARG_NUMBER, 0.0, 1e5},
+        [SCENE_KEY_CHECKER] = {"checker", ARG_VEC3, REFLECTANCE},
+        [SCENE_KEY_SIZE] = {"size", ARG_NUMBER, 1e-6, SCENE_MAX_COORDINATE},
+        [SCENE_KEY_IOR] = {"ior", ARG_NUMBER, 1.0, 10.0},
+        [SCENE_KEY_ROUGHNESS] = {"roughness", ARG_NUMBER, 1e-3, 1.0},
+        [SCENE_KEY_EMISSION] = {"emission", ARG_VEC3, RADIANCE},
     };
-    enum { ALBEDO, DIFFUSE, SPECULAR, SHININESS, CHECKER, SIZE, IOR, ROUGHNESS, EMISSION, KEYS };
-    /* Which keys each kind (SCENE_MATERIAL_KINDS) takes, and which it needs. */
+    enum { ALBEDO = SCENE_KEY_ALBEDO, DIFFUSE = SCENE_KEY_DIFFUSE, SPECULAR = SCENE_KEY_SPECULAR,
+           SHININESS = SCENE_KEY_SHININESS, CHECKER = SCENE_KEY_CHECKER, SIZE = SCENE_KEY_SIZE, IOR = SCENE_KEY_IOR,
+           ROUGHNESS = SCENE_KEY_ROUGHNESS, EMISSION = SCENE_KEY_EMISSION, KEYS = SCENE_KEY_COUNT };
+    /* Which keys each kind takes, and which it needs: the list's columns. */
     static const struct {
         unsigned allowed, required;
     } kinds[SCENE_MATERIAL_KIND_COUNT] = {
-        [SCENE_MATERIAL_DIFFUSE] = {1u << ALBEDO, 1u << ALBEDO},
-        [SCENE_MATERIAL_BLINN_PHONG] = {1u << DIFFUSE | 1u << SPECULAR | 1u << SHININESS | 1u << CHECKER | 1u << SIZE,
-                                        1u << DIFFUSE},
-        [SCENE_MATERIAL_MIRROR] = {1u << ALBEDO, 0},
-        [SCENE_MATERIAL_GLASS] = {1u << IOR | 1u << ALBEDO, 1u << IOR},
-        [SCENE_MATERIAL_GLOSSY] = {1u << ALBEDO | 1u << ROUGHNESS, 1u << ALBEDO | 1u << ROUGHNESS},
-        [SCENE_MATERIAL_EMISSIVE] = {1u << EMISSION | 1u << ALBEDO, 1u << EMISSION},
+#define KIND_KEYS(id, keyword, effects, keys, needs) [SCENE_MATERIAL_##id] = {keys, needs},
+        SCENE_MATERIAL_KINDS(KIND_KEYS)
+#undef KIND_KEYS
     };
     if (n < 3)
         return fail(pc, t[0].column, "material needs a name and a kind: material NAME KIND key value ...");

@@ -1,10 +1,10 @@
-/* mesh.h -- triangle meshes: loaded from Wavefront OBJ (+ MTL colours), or
- * made by procedures so that nothing needs a download.
+/* mesh.h -- triangle meshes: made by procedures so that nothing needs a
+ * download, or loaded from Wavefront OBJ (+ MTL colours) by obj.h.
  *
  * Usage:
  *   mesh m; mesh_init(&m);
  *   char err[MESH_ERROR_SIZE];
- *   if (!mesh_load_obj(&m, "bunny.obj", err, sizeof err)) { puts(err); ... }   "bunny.obj:12: ..."
+ *   if (!mesh_load_obj(&m, "bunny.obj", err, sizeof err)) { puts(err); ... }   obj.h; "bunny.obj:12: ..."
  *   mesh_icosphere(&m, vec3_make(0, 0, 0), 1.0f, 3, -1);    appends to m
  *   for (int i = 0; i < m.face_count; i++) { vec3 a = mesh_vertex(&m, i, 0); ... }
  *   mesh_free(&m);
@@ -85,22 +85,6 @@ static inline vec3 mesh_vertex(const mesh *m, int face, int k)
 
 /* Axis-aligned bounds of all face vertices; false for an empty mesh. */
 bool mesh_bounds(const mesh *m, vec3 *lo, vec3 *hi);
-
-/* ---- Wavefront OBJ ----------------------------------------------------------
- * v, vn, vt; f with any of the index forms (v, v/vt, v//vn, v/vt/vn),
- * negative (relative) indices, polygons fan-triangulated; mtllib and usemtl
- * with Kd, Ks, Ns, Ke, Ni from the MTL file; o, g, s and comments ignored.
- * On malformed input: false, err = "file:line: what is wrong", and m is left
- * as it was before the call (nothing half-loaded). The OBJ and its MTL files
- * must be regular files within input_file_mesh_limit() (input_file.h); an
- * emitting face (Ke > 0) must have area. */
-bool mesh_load_obj(mesh *m, const char *path, char *err, size_t err_size);
-/* The same from text in memory (`name` is used in messages; MTL files are
- * looked up relative to base_dir, or not at all when it is NULL). */
-bool mesh_parse_obj(mesh *m, const char *text, size_t length, const char *name, const char *base_dir, char *err,
-                    size_t err_size);
-/* Writes positions and faces (1-based), through a temporary file. */
-bool mesh_write_obj(const mesh *m, const char *path, char *err, size_t err_size);
 
 /* ---- procedural meshes (each appends to m; material may be -1) ------------- */
 

@@ -47,9 +47,8 @@
  * is copied (into a small buffer) for strtof. So the only memory a file
  * costs is what the mesh itself grows to hold.
  */
-#include "mesh.h"
+#include "obj.h"
 
-#include "atomic_file.h"
 #include "input_file.h"
 
 #include <errno.h>

@@ -3,6 +3,7 @@
 
 #include "checkpoint.h"
 #include "counters.h"
+#include "counters_file.h"
 #include "input_file.h"
 #include "mpi_split.h"
 #include "run_record.h"

@@ -1,6 +1,7 @@
 /* scene_desc.c -- a scene description once read (scene_file.h): made
  * empty and freed, its meshes loaded, where a statement was, the names of
  * its kinds. The parser that fills it is scene_file.c. */
+#include "obj.h"
 #include "scene_file.h"
 
 #include <stdio.h>
@@ -74,7 +75,7 @@ void scene_desc_where(const scene_desc *d, int line, int column, char *out, size
 const char *scene_material_kind_name(scene_material_kind k)
 {
     static const char *const names[] = {
-#define SCENE_MATERIAL_NAME(id, keyword, effects) keyword,
+#define SCENE_MATERIAL_NAME(id, keyword, ...) keyword,
         SCENE_MATERIAL_KINDS(SCENE_MATERIAL_NAME)
 #undef SCENE_MATERIAL_NAME
     };

@@ -96,8 +96,9 @@ void checkpoint_free(checkpoint *c);
  * extension (build/out/ch09.exr -> build/out/ch09.checkpoint). */
 void checkpoint_path_for_image(const char *image_path, char *out, size_t out_size);
 
-/* What a render needs to checkpoint and resume (render_job, progressive). */
-typedef struct {
+/* What a render needs to checkpoint and resume (render_job, progressive).
+ * Named, so that render_loop.h can carry a pointer to it unseen. */
+typedef struct checkpointing {
     const char *path;        /* where checkpoints go; NULL: none */
     double every_seconds;    /* at least this long between two (0: after every pass) */
     const checkpoint *resume;/* the state to continue from (rank 0 read it), or NULL */

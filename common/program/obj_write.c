@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "atomic_file.h"
-#include "mesh.h"
+#include "obj.h"
 
 bool mesh_write_obj(const mesh *m, const char *path, char *err, size_t err_size)
 {

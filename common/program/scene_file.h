@@ -40,31 +40,52 @@ enum {
     SCENE_MAX_GENERATED_TRIANGLES = 1 << 22,
 };
 
-/* The material kinds, the one list: X(ID, keyword, effects) for each, in
- * the enum's order. SCENE_MATERIAL_ID is the kind, `keyword` its name in a
- * scene file (and everywhere a kind is named), `effects` the light it can
- * pass on (effects.h's bits, read by effects_analyse(): a scene with the
- * kind may need them). The enum below, the kinds' names, the scene file's
- * parser (scene_file.c, which also says which keys each kind takes) and
- * effects_analyse() are made from it; chapter 09's BSDF kinds (scene_pt.h)
- * are the rows of it that are BSDFs. A new kind: a row here, its keys in
- * scene_file.c, and the compiler names each switch that must learn it. */
-#define SCENE_MATERIAL_KINDS(X)                                                                                \
-    X(DIFFUSE, "diffuse", EFFECT_INDIRECT)         /* Lambertian: albedo */                                  \
-    X(BLINN_PHONG, "blinn_phong", EFFECT_INDIRECT) /* k_d (maybe a checkerboard), k_s, p */                  \
-    X(MIRROR, "mirror", EFFECT_REFLECTION)         /* perfect reflection, tinted by albedo */                \
-    X(GLASS, "glass", EFFECT_REFLECTION | EFFECT_REFRACTION) /* smooth dielectric with index ior */           \
-    X(GLOSSY, "glossy", EFFECT_GLOSSY | EFFECT_INDIRECT) /* GGX microfacet: F0 = albedo, alpha = roughness */ \
-    X(EMISSIVE, "emissive", EFFECT_INDIRECT) /* diffuse albedo that also emits L_e from its front */
+/* The keys a material statement may have (scene_file.c parses them; each
+ * kind takes some of them, below). SCENE_KEY(NAME) is the key's bit. */
+enum {
+    SCENE_KEY_ALBEDO, SCENE_KEY_DIFFUSE, SCENE_KEY_SPECULAR, SCENE_KEY_SHININESS, SCENE_KEY_CHECKER,
+    SCENE_KEY_SIZE, SCENE_KEY_IOR, SCENE_KEY_ROUGHNESS, SCENE_KEY_EMISSION, SCENE_KEY_COUNT
+};
+#define SCENE_KEY(name) (1u << SCENE_KEY_##name)
+
+/* The material kinds, the one list: X(ID, keyword, effects, keys, needs)
+ * for each, in the enum's order. SCENE_MATERIAL_ID is the kind, `keyword`
+ * its name in a scene file (and everywhere a kind is named), `effects` the
+ * light it can pass on (effects.h's bits, read by effects_analyse(): a
+ * scene with the kind may need them), `keys` the keys it takes and `needs`
+ * those it must have (a glass with "roughness" is an error, not a wish
+ * silently ignored). The enum below, the kinds' names, the scene file's
+ * parser and effects_analyse() are made from it; chapter 09's BSDF kinds
+ * (bsdf_kinds.h) name the rows of it that are BSDFs. A new kind: a row
+ * here; a program that has no way of its own for it says what it shows
+ * instead (chapter 01: its albedo, as diffuse; chapter 13: refused). A
+ * user of the list takes `...` for the columns after those it reads, so
+ * that a column added at the end changes none of them. */
+#define SCENE_MATERIAL_KINDS(X)                                                                               \
+    /* Lambertian: albedo */                                                                                  \
+    X(DIFFUSE, "diffuse", EFFECT_INDIRECT, SCENE_KEY(ALBEDO), SCENE_KEY(ALBEDO))                              \
+    /* k_d (maybe a checkerboard), k_s, p */                                                                  \
+    X(BLINN_PHONG, "blinn_phong", EFFECT_INDIRECT,                                                            \
+      SCENE_KEY(DIFFUSE) | SCENE_KEY(SPECULAR) | SCENE_KEY(SHININESS) | SCENE_KEY(CHECKER) | SCENE_KEY(SIZE), \
+      SCENE_KEY(DIFFUSE))                                                                                     \
+    /* perfect reflection, tinted by albedo */                                                                \
+    X(MIRROR, "mirror", EFFECT_REFLECTION, SCENE_KEY(ALBEDO), 0)                                              \
+    /* smooth dielectric with index ior */                                                                    \
+    X(GLASS, "glass", EFFECT_REFLECTION | EFFECT_REFRACTION, SCENE_KEY(IOR) | SCENE_KEY(ALBEDO), SCENE_KEY(IOR)) \
+    /* GGX microfacet: F0 = albedo, alpha = roughness */                                                      \
+    X(GLOSSY, "glossy", EFFECT_GLOSSY | EFFECT_INDIRECT, SCENE_KEY(ALBEDO) | SCENE_KEY(ROUGHNESS),            \
+      SCENE_KEY(ALBEDO) | SCENE_KEY(ROUGHNESS))                                                               \
+    /* diffuse albedo that also emits L_e from its front */                                                   \
+    X(EMISSIVE, "emissive", EFFECT_INDIRECT, SCENE_KEY(EMISSION) | SCENE_KEY(ALBEDO), SCENE_KEY(EMISSION))
 
 typedef enum {
-#define SCENE_MATERIAL_ENUM(id, keyword, effects) SCENE_MATERIAL_##id,
+#define SCENE_MATERIAL_ENUM(id, ...) SCENE_MATERIAL_##id,
     SCENE_MATERIAL_KINDS(SCENE_MATERIAL_ENUM)
 #undef SCENE_MATERIAL_ENUM
 } scene_material_kind;
 /* How many (apart from the enum, so that a switch over the kinds names
  * only kinds). */
-#define SCENE_MATERIAL_ONE(id, keyword, effects) +1
+#define SCENE_MATERIAL_ONE(id, ...) +1
 enum { SCENE_MATERIAL_KIND_COUNT = 0 SCENE_MATERIAL_KINDS(SCENE_MATERIAL_ONE) };
 #undef SCENE_MATERIAL_ONE
 

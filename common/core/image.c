@@ -2,13 +2,13 @@
  *
  * Structure:
  *   1. image_make / image_free.
- *   2. Safe output: every file goes through atomic_file.h (a temporary file
- *      beside the target, fsync'ed and renamed over it; any failure unlinks
- *      it), so a reader sees the old file or the new one, never a
- *      half-written one.
+ *   2. Encoding onto a descriptor the caller opened: the image knows its
+ *      formats, not how files are put in place (image_file.c, on the
+ *      program's side, writes through atomic_file: a temporary file renamed
+ *      over the target, so a reader never sees a half-written one).
  *   3. EXR (the data) through the OpenEXR Core C API. We do our own file I/O
- *      (custom read/write callbacks on a descriptor we opened) for two
- *      reasons: the write goes to our temporary file, and the context's
+ *      (custom read/write callbacks on a descriptor) for two
+ *      reasons: the write goes to the caller's descriptor, and the context's
  *      user_data stays ours, so the error handler can find the buffer to put
  *      OpenEXR's message in instead of letting the library print to stderr.
  *      Pixels go straight between our interleaved RGB buffer and the
@@ -17,8 +17,6 @@
  *   5. Error metrics (MSE, relative MSE), accumulated in double.
  */
 #include "image.h"
-
-#include "atomic_file.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -337,21 +335,17 @@ static exr_result_t exr_write_rgb_chunks(exr_context_t ctxt, const image *img)
     return rv;
 }
 
-bool image_write_exr(const image *img, const char *path, char *err, size_t err_size)
+bool image_encode_exr(const image *img, int fd, const char *path, char *err, size_t err_size)
 {
     if (!image_is_writable(img)) {
         set_error(err, err_size, "cannot write '%s': the image is empty or too wide", path);
         return false;
     }
-    atomic_file out;
-    if (!atomic_file_open(&out, path, err, err_size))
-        return false;
-
-    exr_stream stream = {.fd = fileno(out.stream), .message = ""};
+    exr_stream stream = {.fd = fd, .message = ""};
     exr_context_initializer_t init = exr_initializer(&stream);
     exr_context_t ctxt = NULL;
     /* With a custom write_fn the name is only used in messages and the mode
-     * is ignored: the temporary file is ours, not the library's. */
+     * is ignored: the descriptor is the caller's, not the library's. */
     exr_result_t rv = exr_start_write(&ctxt, path, EXR_WRITE_FILE_DIRECTLY, &init);
     if (rv == EXR_ERR_SUCCESS)
         rv = exr_define_rgb(ctxt, img);
@@ -369,10 +363,9 @@ bool image_write_exr(const image *img, const char *path, char *err, size_t err_s
     exr_current_stream = NULL;
     if (rv != EXR_ERR_SUCCESS) {
         set_error(err, err_size, "cannot write '%s': %s", path, exr_stream_reason(&stream, rv));
-        atomic_file_abandon(&out);
         return false;
     }
-    return atomic_file_commit(&out, err, err_size);
+    return true;
 }
 
 /* ---- EXR reading ------------------------------------------------------- */
@@ -580,7 +573,7 @@ static void png_sink_write(void *context, void *data, int size)
     }
 }
 
-bool image_write_png(const image *img, const char *path, float exposure_stops, char *err, size_t err_size)
+bool image_encode_png(const image *img, int fd, const char *path, float exposure_stops, char *err, size_t err_size)
 {
     if (!image_is_writable(img)) {
         set_error(err, err_size, "cannot write '%s': the image is empty or too wide", path);
@@ -596,57 +589,18 @@ bool image_write_png(const image *img, const char *path, float exposure_stops, c
     for (size_t i = 0; i < count; i++)
         bytes[i] = preview_byte(img->rgb[i], scale);
 
-    atomic_file out;
-    if (!atomic_file_open(&out, path, err, err_size)) {
-        free(bytes);
-        return false;
-    }
     /* stbi_write_png_to_func rather than stbi_write_png(filename): it writes
-     * into our temporary file, and we see write errors (stbi_write_png
+     * onto the caller's descriptor, and we see write errors (stbi_write_png
      * ignores a failing fwrite or fclose, e.g. on a full disk). */
-    png_sink sink = {fileno(out.stream), 0};
+    png_sink sink = {fd, 0};
     int encoded = stbi_write_png_to_func(png_sink_write, &sink, img->width, img->height, 3, bytes, img->width * 3);
     free(bytes);
     if (!encoded || sink.error != 0) {
         set_error(err, err_size, "cannot write '%s': %s", path,
                   sink.error != 0 ? strerror(sink.error) : "PNG encoding failed");
-        atomic_file_abandon(&out);
         return false;
     }
-    return atomic_file_commit(&out, err, err_size);
-}
-
-/* ---- by file name ------------------------------------------------------ */
-
-static bool ends_with(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), k = strlen(suffix);
-    return n >= k && strcmp(s + n - k, suffix) == 0;
-}
-
-bool image_write(const image *img, const char *path, float exposure_stops, char *err, size_t err_size)
-{
-    if (ends_with(path, ".png"))
-        return image_write_png(img, path, exposure_stops, err, err_size);
-    if (!ends_with(path, ".exr")) {
-        set_error(err, err_size, "'%s': output must end in .exr or .png", path);
-        return false;
-    }
-    /* The data first: if only the preview fails, the finished EXR stays
-     * (it is complete, and the expensive part). */
-    if (!image_write_exr(img, path, err, err_size))
-        return false;
-    size_t n = strlen(path);
-    char *png_path = malloc(n + 1);
-    if (png_path == NULL) {
-        set_error(err, err_size, "cannot write the preview of '%s': %s", path, strerror(ENOMEM));
-        return false;
-    }
-    memcpy(png_path, path, n - 3);
-    memcpy(png_path + n - 3, "png", 4);
-    bool ok = image_write_png(img, png_path, exposure_stops, err, err_size);
-    free(png_path);
-    return ok;
+    return true;
 }
 
 /* ---- error metrics ----------------------------------------------------- */

@@ -1,3 +1,5 @@
+/* render.c -- render_image(): the loop of render_loop.c over MPI ranks,
+ * with a progress line and, when asked, in passes that keep checkpoints. */
 #include "render.h"
 
 #include <float.h>
@@ -7,112 +9,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifdef _OPENMP
-#include <omp.h>
-#endif
-
-#include "explain.h"
 #include "memory.h"
 #include "mpi_split.h"
 #include "progress.h"
-#include "stats.h"
 #include "timer.h"
-
-ray render_camera_ray(const render_job *job, int index, float px, float py, ray_counters *counters)
-{
-    ray r = camera_ray(job->cam, px, py);
-    counters->camera_rays++;
-    if (explain_on()) {
-        explain_line(0, "sample %d of %d, at (%.3f, %.3f) in the image", index + 1, job->spp, (double)px, (double)py);
-        explain_ray(1, "camera ray", r);
-    }
-    return r;
-}
-
-/* The state of pixel (x, y) before its first sample. */
-static render_pixel_state pixel_state_start(const render_job *job, int x, int y)
-{
-    render_pixel_state st;
-    memset(&st, 0, sizeof st);
-    st.rng = pcg32_for_pixel(job->seed, (uint64_t)y * (uint64_t)job->cam->width + (uint64_t)x);
-    return st;
-}
-
-/* Samples first .. end - 1 of pixel (x, y), added to its state: one call
- * for all spp samples, or several for consecutive ranges, make the same
- * numbers in the same order. */
-static void pixel_add_samples(const render_job *job, int x, int y, int first, int end, render_pixel_state *st,
-                              ray_counters *counters)
-{
-    int strata = 1; /* k = floor(sqrt(spp)) cells a side, when stratified */
-    while ((strata + 1) * (strata + 1) <= job->spp)
-        strata++;
-    for (int s = first; s < end; s++) {
-        vec3 sample;
-        if (job->sample != NULL) { /* the sample's own function decides all (render.h) */
-            sample = job->sample(job, x, y, s, &st->rng, counters);
-        } else {
-            float px = (float)x + 0.5f, py = (float)y + 0.5f;
-            if (job->stratify && s < strata * strata) {
-                /* cell (s mod k, s div k), and a uniform point inside it */
-                px = (float)x + ((float)(s % strata) + pcg32_float(&st->rng)) / (float)strata;
-                py = (float)y + ((float)(s / strata) + pcg32_float(&st->rng)) / (float)strata;
-            } else if (job->spp > 1 || job->jitter || job->stratify) {
-                px = (float)x + pcg32_float(&st->rng);
-                py = (float)y + pcg32_float(&st->rng);
-            }
-            ray r = render_camera_ray(job, s, px, py, counters);
-            sample = job->radiance(job->scene, r, &st->rng, counters);
-        }
-        if (explain_on()) {
-            char c[64];
-            explain_line(1, "sample radiance %s", explain_vec3(c, sample));
-        }
-        /* Drop NaN and Inf here, before they are added: one bad sample would
-         * otherwise turn the whole pixel NaN (or white) for good. Dropping
-         * biases the mean: the pixel becomes the mean of the finite samples
-         * alone, as if the dropped ones had had that mean (an Inf stood for
-         * a huge value, a NaN for an unknown one). The counters say how many
-         * (nonfinite_samples_dropped, and a warning after the render); 0 in
-         * every picture of the book, where the bias is therefore nil. */
-        if (!vec3_is_finite(sample)) {
-            counters->nonfinite_samples++;
-            explain_line(1, "NaN or Inf: dropped, not averaged");
-            continue;
-        }
-        welford_add(&st->channel[0], sample.x);
-        welford_add(&st->channel[1], sample.y);
-        welford_add(&st->channel[2], sample.z);
-    }
-}
-
-/* The pixel's value (the mean) and, if wanted, its standard error. */
-static vec3 pixel_state_value(const render_pixel_state *st, vec3 *std_error)
-{
-    const welford *channel = st->channel;
-    if (std_error != NULL)
-        *std_error = vec3_make((float)welford_standard_error(&channel[0]), (float)welford_standard_error(&channel[1]),
-                               (float)welford_standard_error(&channel[2]));
-    return vec3_make((float)welford_mean(&channel[0]), (float)welford_mean(&channel[1]),
-                     (float)welford_mean(&channel[2]));
-}
-
-vec3 render_pixel(const render_job *job, int x, int y, ray_counters *counters, vec3 *std_error)
-{
-    render_pixel_state st = pixel_state_start(job, x, y);
-    pixel_add_samples(job, x, y, 0, job->spp, &st, counters);
-    return pixel_state_value(&st, std_error);
-}
-
-static int render_threads(const render_job *job)
-{
-#ifdef _OPENMP
-    return job->threads > 0 ? job->threads : omp_get_max_threads();
-#else
-    (void)job;
-    return 1;
-#endif
-}
 
 /* The rows this rank renders (all of them on one). */
 static int owned_rows(int height)
@@ -142,38 +42,28 @@ static double gather_image(const render_job *job, image *out, ray_counters *tota
     return timer_seconds() - start;
 }
 
+/* The program's part of the loop: this rank's rows, and the progress line
+ * (in rows for a render in one pass, in rows times samples in passes). */
+static bool rank_owns_row(int y) { return mpi_split_owns_row(y); }
+
+static void advance_row(void *bar, int64_t samples_per_pixel)
+{
+    (void)samples_per_pixel;
+    progress_advance(bar, 1);
+}
+
+static void advance_bar(void *bar, int64_t samples_per_pixel) { progress_advance(bar, samples_per_pixel); }
+
 /* The render in one pass: each pixel all its samples at once. */
 static void render_whole(const render_job *job, image *out, render_stats *stats)
 {
-    const int width = job->cam->width, height = job->cam->height;
     progress bar;
-    progress_begin(&bar, job->label ? job->label : "render", owned_rows(height), job->quiet);
+    progress_begin(&bar, job->label ? job->label : "render", owned_rows(job->cam->height), job->quiet);
     ray_counters total;
     memset(&total, 0, sizeof total);
     double start = timer_seconds();
-
-    /* Rows are handed out one at a time (dynamic): rows that cross glass cost
-     * more than rows of sky, and static blocks would leave a core idle. */
-#pragma omp parallel num_threads(render_threads(job))
-    {
-        ray_counters mine;
-        memset(&mine, 0, sizeof mine);
-#pragma omp for schedule(dynamic, 1)
-        for (int y = 0; y < height; y++) {
-            if (!mpi_split_owns_row(y))
-                continue; /* another rank's */
-            for (int x = 0; x < width; x++) {
-                vec3 std_error;
-                vec3 c = render_pixel(job, x, y, &mine, job->standard_error ? &std_error : NULL);
-                image_set(out, x, y, c);
-                if (job->standard_error)
-                    image_set(job->standard_error, x, y, std_error);
-            }
-            progress_advance(&bar, 1);
-        }
-#pragma omp critical(render_counters)
-        counters_add(&total, &mine);
-    }
+    render_rows_split split = {.owns_row = rank_owns_row, .row_done = advance_row, .context = &bar};
+    render_rows(job, out, &split, &total);
     progress_end(&bar);
     double wait = 0.0, gather = gather_image(job, out, &total, &wait);
     if (stats != NULL) {
@@ -261,7 +151,7 @@ static render_pixel_state *start_states(const render_job *job, int *done, double
     *seconds = 0.0;
     memset(counters, 0, sizeof *counters);
     if (!cp->resuming)
-        return states; /* each pixel's starts with its first sample (render_in_passes) */
+        return states; /* each pixel's starts with its first sample (render_rows_pass) */
     if (mpi_split_is_root()) {
         memcpy(states, cp->resume->payload, pixels * sizeof *states);
         *done = (int)cp->resume->done;
@@ -284,29 +174,12 @@ static void render_in_passes(const render_job *job, image *out, render_stats *st
     progress bar;
     progress_begin(&bar, job->label ? job->label : "render", (int64_t)owned_rows(height) * (job->spp - done),
                    job->quiet);
+    render_rows_split split = {.owns_row = rank_owns_row, .row_done = advance_bar, .context = &bar};
     double start = timer_seconds(), last_checkpoint = start, per_sample = 0.0, gather = 0.0;
     while (done < job->spp) {
         int n = next_pass_samples(job, done, per_sample);
         double pass_start = timer_seconds();
-#pragma omp parallel num_threads(render_threads(job))
-        {
-            ray_counters mine;
-            memset(&mine, 0, sizeof mine);
-#pragma omp for schedule(dynamic, 1)
-            for (int y = 0; y < height; y++) {
-                if (!mpi_split_owns_row(y))
-                    continue;
-                for (int x = 0; x < width; x++) {
-                    render_pixel_state *st = &states[(size_t)y * width + x];
-                    if (done == 0) /* here, not all at once: the pages fill as the rows are rendered */
-                        *st = pixel_state_start(job, x, y);
-                    pixel_add_samples(job, x, y, done, done + n, st, &mine);
-                }
-                progress_advance(&bar, n);
-            }
-#pragma omp critical(render_counters)
-            counters_add(&total, &mine);
-        }
+        render_rows_pass(job, states, done, n, &split, &total);
         done += n;
         per_sample = (timer_seconds() - pass_start) / n;
         /* every rank must agree on whether to send its states now */
@@ -323,7 +196,7 @@ static void render_in_passes(const render_job *job, image *out, render_stats *st
         if (mpi_split_owns_row(y))
             for (int x = 0; x < width; x++) {
                 vec3 std_error;
-                image_set(out, x, y, pixel_state_value(&states[(size_t)y * width + x], &std_error));
+                image_set(out, x, y, render_pixel_value(&states[(size_t)y * width + x], &std_error));
                 if (job->standard_error)
                     image_set(job->standard_error, x, y, std_error);
             }

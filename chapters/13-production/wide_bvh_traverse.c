@@ -48,10 +48,16 @@ int wide_bvh_triangle_test(const wide_bvh_packet *packet, ray r, float t_max, fl
 /* ---- traversal ------------------------------------------------------------------- */
 
 
-/* What a traversal found: the closest triangle so far (4 packet + lane). */
+/* What a traversal found: the closest triangle so far (4 packet + lane),
+ * its index in the set, and the t below which a triangle is still tested:
+ * the ray's t_max until a hit, then the float just above the hit's t, so
+ * that a triangle at the very same t is tested too, and the lower index
+ * wins (test_leaf4). */
 typedef struct {
     int lane; /* -1: none */
     float t, b1, b2;
+    int index;
+    float t_test;
 } wide_bvh_found;
 
 typedef struct {
@@ -116,9 +122,13 @@ static ALWAYS_INLINE void prefetch_hit(const wide_bvh *b, int32_t lane_index)
 #endif
 }
 
-/* The leaf's packets against (t_min, found->t). The lanes hit in a packet
- * all lie before found->t; the closest of them, the first among equals,
- * wins: what testing the triangles one by one in lane order gives. */
+/* The leaf's packets against (t_min, found->t_test). The closest lane hit
+ * wins, and of equal t the lower triangle index, as in brute force: which
+ * triangle a ray through a shared edge reports then depends on the
+ * triangles alone, not on the order the walk met them. That order depends
+ * on the boxes (the same tree with larger boxes, such as quantized ones,
+ * may let a ray enter the children in another order), and the hits must
+ * not. */
 static ALWAYS_INLINE bool test_leaf4(const wide_bvh *b, uint32_t ref, const wide_bvh_ray *r4, const ray *r, wide_bvh_found *found,
                               bool stop_at_first, bool sse, bool watertight, uint64_t *primitive_tests)
 {
@@ -126,15 +136,17 @@ static ALWAYS_INLINE bool test_leaf4(const wide_bvh *b, uint32_t ref, const wide
     for (int p = 0; p * 4 < count; p++) {
         float t[4], b1[4], b2[4];
         const wide_bvh_packet *packet = &b->packets[first + p];
-        int mask = triangle_test4(packet, r4, r, found->t, t, b1, b2, sse, watertight);
+        int mask = triangle_test4(packet, r4, r, found->t_test, t, b1, b2, sse, watertight);
         *primitive_tests += (uint64_t)(count - 4 * p < 4 ? count - 4 * p : 4);
         if (mask == 0)
             continue;
         while (mask != 0) {
             int k = lowest_bit((unsigned)mask);
             mask &= mask - 1;
-            if (t[k] < found->t)
-                *found = (wide_bvh_found){4 * (first + p) + k, t[k], b1[k], b2[k]};
+            int index = wide_bvh_lane_triangle(packet->index[k]);
+            if (t[k] < found->t || (t[k] == found->t && index < found->index))
+                *found = (wide_bvh_found){4 * (first + p) + k, t[k], b1[k], b2[k], index,
+                                          nextafterf(t[k], INFINITY)};
         }
         if (stop_at_first)
             return true;
@@ -163,7 +175,7 @@ static ALWAYS_INLINE bool traversal_begin(const wide_bvh *b, const ray *r, wide_
 {
     w->r = *r;
     w->r4 = wide_bvh_ray_make(r);
-    w->found = (wide_bvh_found){-1, r->t_max, 0.0f, 0.0f};
+    w->found = (wide_bvh_found){-1, r->t_max, 0.0f, 0.0f, -1, r->t_max};
     w->current = 0; /* the root */
     w->top = 0;
     w->box_tests = w->primitive_tests = 0;

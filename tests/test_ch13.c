@@ -16,6 +16,8 @@
 
 #include <unistd.h>
 
+#include <omp.h>
+
 #include "01-ray-casting/scene.h"
 #include "04-uniform-grid/grid.h"
 #include "05-kd-tree/kdtree.h"
@@ -652,6 +654,44 @@ static void test_wide_bvh_empty_set_builds_and_misses(void **state)
     for (int i = 0; i < 3; i++)
         assert_false(found[i] || any[i]);
     accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* The wide tree on 1, 2 and 3 threads (its binary tree's halves built as
+ * OpenMP tasks, its packets filled by every thread): the same nodes and
+ * packets, byte for byte, in both layouts. */
+static void test_wide_bvh_is_the_same_on_any_number_of_threads(void **state)
+{
+    (void)state;
+    int threads = omp_get_max_threads();
+    mesh m;
+    mesh_init(&m);
+    mesh_tori_field(&m, 40960);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    for (int layout = 0; layout < 2; layout++) {
+        wide_bvh *trees[3];
+        for (int t = 0; t < 3; t++) {
+            omp_set_num_threads(t + 1);
+            trees[t] = (wide_bvh *)wide_bvh_build_layout(&set, BVH_SPLIT_SAH, (wide_bvh_layout)layout);
+        }
+        for (int t = 1; t < 3; t++) {
+            assert_int_equal(trees[t]->node_count, trees[0]->node_count);
+            assert_int_equal(trees[t]->packet_count, trees[0]->packet_count);
+            if (layout == WIDE_BVH_QUANTIZED)
+                assert_memory_equal(trees[t]->qnodes, trees[0]->qnodes,
+                                    (size_t)trees[0]->node_count * sizeof(wide_bvh_qnode));
+            else
+                assert_memory_equal(trees[t]->nodes, trees[0]->nodes,
+                                    (size_t)trees[0]->node_count * sizeof(wide_bvh_node));
+            assert_memory_equal(trees[t]->packets, trees[0]->packets,
+                                (size_t)trees[0]->packet_count * sizeof(wide_bvh_packet));
+        }
+        for (int t = 0; t < 3; t++)
+            accel_destroy(&trees[t]->base);
+    }
+    omp_set_num_threads(threads);
     triangle_set_free(&set);
     mesh_free(&m);
 }
@@ -3117,6 +3157,7 @@ int main(void)
         cmocka_unit_test(test_wide_bvh_triangle_test_matches_chapter_01),
         cmocka_unit_test(test_wide_bvh_room_walls_get_leaves_of_their_own),
         cmocka_unit_test(test_wide_bvh_empty_set_builds_and_misses),
+        cmocka_unit_test(test_wide_bvh_is_the_same_on_any_number_of_threads),
         cmocka_unit_test(test_flat_equals_brute_force_bit_for_bit),
         cmocka_unit_test(test_flat_twins_are_caught),
         cmocka_unit_test(test_flat_packets_give_each_ray_its_own_answer),

@@ -83,6 +83,7 @@ static int new_node(collapser *c)
         c->node_capacity = capacity;
     }
     wide_bvh_node *node = &c->nodes[c->node_count];
+    memset(node, 0, sizeof *node); /* the padding too: a tree is the same bytes on every build */
     for (int k = 0; k < WIDE_BVH_WIDTH; k++) {
         set_child_box(node, k, (aabb){vec3_make(INFINITY, INFINITY, INFINITY), vec3_make(-INFINITY, -INFINITY, -INFINITY)});
         node->child[k] = WIDE_BVH_EMPTY;
@@ -262,6 +263,8 @@ bool wide_bvh_use_triangle_test(accel *a, triangle_test test)
 {
     wide_bvh *b = (wide_bvh *)a;
     a->triangle_test = test;
+    /* each lane its own: any thread count writes the same packets */
+#pragma omp parallel for schedule(static) if (b->packet_count >= 1024)
     for (int i = 0; i < 4 * b->packet_count; i++) {
         wide_bvh_packet *packet = &b->packets[i / 4];
         int index = wide_bvh_lane_triangle(packet->index[i % 4]);
@@ -281,6 +284,7 @@ static bool quantize_nodes(wide_bvh *b)
         fprintf(stderr, "out of memory (asked for %zu bytes)\n", bytes);
         exit(1);
     }
+    memset(q, 0, bytes); /* the 4-wide node's padding too */
     for (int n = 0; n < b->node_count; n++) {
         const wide_bvh_node *node = &b->nodes[n];
         if (!wide_bvh_quantize_node(node, WIDE_BVH_ROUND_OUTWARD, &q[n])) {

@@ -253,8 +253,9 @@ accel *wide_bvh_build_with_top(const triangle_set *set, bvh_split split, float t
  * not finite stays exact: ask b->layout. wide_bvh_build's layout is
  * WIDE_BVH_DEFAULT_LAYOUT: exact, since on the tori field the quantized
  * nodes traced coherent rays about a fifth slower (the bytes turned back
- * into floats lengthen every node's test) and only incoherent rays on a
- * million triangles faster (+2 to +14 %; README). -DWIDE_BVH_DEFAULT_LAYOUT=
+ * into floats lengthen every node's test), incoherent ones on a million
+ * triangles 4 % slower on a quiet machine and faster only while other
+ * jobs filled the caches (README). -DWIDE_BVH_DEFAULT_LAYOUT=
  * WIDE_BVH_QUANTIZED builds everything on quantized nodes. */
 accel *wide_bvh_build_layout(const triangle_set *set, bvh_split split, wide_bvh_layout layout);
 #ifndef WIDE_BVH_DEFAULT_LAYOUT

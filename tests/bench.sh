@@ -45,7 +45,7 @@ if [ "$MODE" = full ]; then
     CYCLES_WIDTH=128 REFERENCE_SPP=8192 CYCLES_SPP="16 64 256" OURS_EXTRA_SPP="1024" SEEDS="1 2"
     LIGHTS_WIDTH=128 LIGHTS_REFERENCE_SPP=8192 LIGHTS_SPP="64 256 1024"
 else
-    ACCEL_SIZES="10240 102400" ACCEL_ARGS="--reps 1 --only wide-bvh-sah,wide-bvh-stream"
+    ACCEL_SIZES="10240 102400" ACCEL_ARGS="--reps 1 --only wide-bvh-sah,wide-bvh-quantized,wide-bvh-stream"
     TABLE_ARGS="--width 96 --spp 8" EMBREE_PT_ARGS="--width 64 --spp 8 --reps 3"
     SPEED_ARGS="--width 96 --spp 8 --reps 3"
     CYCLES_SCENES="cornell-10k glossy-glass open-100k"

@@ -9,6 +9,10 @@
  * Mrays/s for closest hit and any hit on both sets, one thread and all
  * threads. Prints a table and writes CSV. With --embree FILE (the harness's
  * output lines), prints our figures as ratios of Embree's. The row
+ * wide-bvh-sah is chapter 13's tree as the renderer builds it (exact nodes);
+ * wide-bvh-quantized the same tree with quantized nodes (its child boxes
+ * as bytes: the step's payoff, side by side; the row ends with the nodes'
+ * count and bytes).
  * wide-bvh-stream is wide-bvh-sah's tree traced through wide_bvh_closest_hit_stream()
  * and wide_bvh_any_hit_stream() in chunks of STREAM_CHUNK rays: the same
  * answers, 16 rays taking turns so that their waits for memory overlap.
@@ -158,6 +162,10 @@ static accel *build_kdtree(const triangle_set *s) { return kdtree_build(s); }
 static accel *build_bvh_median(const triangle_set *s) { return bvh_build(s, BVH_SPLIT_MEDIAN); }
 static accel *build_bvh_sah(const triangle_set *s) { return bvh_build(s, BVH_SPLIT_SAH); }
 static accel *build_wide_bvh_sah(const triangle_set *s) { return wide_bvh_build(s, BVH_SPLIT_SAH); }
+static accel *build_wide_bvh_quantized(const triangle_set *s)
+{
+    return wide_bvh_build_layout(s, BVH_SPLIT_SAH, WIDE_BVH_QUANTIZED);
+}
 static accel *build_flat(const triangle_set *s) { return flat_build(s); }
 
 static const structure structures[] = {
@@ -168,6 +176,7 @@ static const structure structures[] = {
     {"bvh-median", build_bvh_median, 1L << 30, 1 << 20, false},
     {"bvh-sah", build_bvh_sah, 1L << 30, 1 << 20, false},
     {"wide-bvh-sah", build_wide_bvh_sah, 1L << 30, 1 << 20, false},
+    {"wide-bvh-quantized", build_wide_bvh_quantized, 1L << 30, 1 << 20, false},
     {"wide-bvh-stream", build_wide_bvh_sah, 1L << 30, 1 << 20, true},
 };
 enum { STRUCTURE_COUNT = sizeof structures / sizeof structures[0] };
@@ -417,9 +426,10 @@ static void usage(void)
            "writes it as CSV).\n"
            "--max-rays N traces at most N rays of each set (a strided subset, as brute force gets):\n"
            "a rough run in seconds, which make plots uses when make bench has not run.\n"
-           "structures: brute flat grid kdtree bvh-median bvh-sah wide-bvh-sah wide-bvh-stream (flat: brute\n"
-           "force, 8 triangles per AVX instruction; wide-bvh-stream: wide-bvh-sah's tree, rays traced 16 at a\n"
-           "time, taking turns: wide_bvh_closest_hit_stream)\n");
+           "structures: brute flat grid kdtree bvh-median bvh-sah wide-bvh-sah wide-bvh-quantized wide-bvh-stream\n"
+           "(flat: brute force, 8 triangles per AVX instruction; wide-bvh-sah: chapter 13's tree, exact nodes;\n"
+           "wide-bvh-quantized: the same tree with its child boxes as bytes on a grid; wide-bvh-stream:\n"
+           "wide-bvh-sah's tree, rays traced 16 at a time, taking turns: wide_bvh_closest_hit_stream)\n");
 }
 
 int main(int argc, char **argv)
@@ -506,11 +516,11 @@ int main(int argc, char **argv)
         fprintf(csv, "structure,triangles,build_ms,bytes_per_triangle,nodes,leaves,max_depth,threads,"
                  "coherent_closest_mrays,coherent_any_mrays,incoherent_closest_mrays,incoherent_any_mrays,"
                  "coherent_closest_mrays_all,incoherent_closest_mrays_all,"
-                 "boxes_per_ray,triangles_per_ray,coherent_hits,incoherent_hits\n");
+                 "boxes_per_ray,triangles_per_ray,coherent_hits,incoherent_hits,node_bytes\n");
     /* Embree's own figures go into the same CSV, so plots draw it beside ours. */
     for (int i = 0; i < embree_count; i++)
         if (csv != NULL)
-            fprintf(csv, "embree,%d,%.3f,,,,,1,%.4f,%.4f,%.4f,%.4f,,,,,,\n", embree[i].triangles,
+            fprintf(csv, "embree,%d,%.3f,,,,,1,%.4f,%.4f,%.4f,%.4f,,,,,,,\n", embree[i].triangles,
                     embree[i].build_ms, embree[i].coherent_closest, embree[i].coherent_any,
                     embree[i].incoherent_closest, embree[i].incoherent_any);
     printf("%-10s %9s %9s %7s | %-23s | %-23s | %-15s | %s\n", "structure", "triangles", "build ms", "B/tri",
@@ -579,10 +589,17 @@ int main(int argc, char **argv)
             double boxes = (double)ic.counters.box_tests / inc.count;
             double tris = (double)ic.counters.primitive_tests / inc.count;
             double bytes_per_triangle = (double)a->stats.bytes / set.count;
+            /* a node's bytes: the wide BVH's by layout (chapter 13), else 0 */
+            size_t node_bytes = !wide_bvh_is(a)                                           ? 0
+                                : ((const wide_bvh *)a)->layout == WIDE_BVH_QUANTIZED ? sizeof(wide_bvh_qnode)
+                                                                                      : sizeof(wide_bvh_node);
 
-            printf("%-10s %9d %9.2f %7.1f | %11.3f %11.3f | %11.3f %11.3f | %7.3f %7.3f | %.1f boxes, %.1f tris\n",
+            printf("%-10s %9d %9.2f %7.1f | %11.3f %11.3f | %11.3f %11.3f | %7.3f %7.3f | %.1f boxes, %.1f tris",
                    st->name, set.count, build_ms, bytes_per_triangle, mrays_cc, mrays_ca, mrays_ic, mrays_ia,
                    mrays_cc_all, mrays_ic_all, boxes, tris);
+            if (node_bytes > 0)
+                printf(", %d nodes of %zu B", a->stats.nodes, node_bytes);
+            printf("\n");
             if (e != NULL && ray_count >= coherent.count)
                 /* Ratios to Embree, and a check that both did the same work:
                  * the sums of closest-hit t agree to a few parts per million
@@ -595,10 +612,10 @@ int main(int argc, char **argv)
                        fabs(cc.t_sum - e->coherent_t_sum) / e->coherent_t_sum,
                        fabs(ic.t_sum - e->incoherent_t_sum) / e->incoherent_t_sum);
             if (csv != NULL)
-                fprintf(csv, "%s,%d,%.3f,%.2f,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%ld,%ld\n", st->name,
+                fprintf(csv, "%s,%d,%.3f,%.2f,%d,%d,%d,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%ld,%ld,%zu\n", st->name,
                     set.count, build_ms, bytes_per_triangle, a->stats.nodes, a->stats.leaves, a->stats.max_depth,
                     threads, mrays_cc, mrays_ca, mrays_ic, mrays_ia, mrays_cc_all, mrays_ic_all, boxes, tris, cc.hits,
-                    ic.hits);
+                    ic.hits, node_bytes);
             if (whole) {
                 closest_mrays[k][0] = mrays_cc;
                 closest_mrays[k][1] = mrays_ic;

@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <omp.h>
+
 #include "03-aabb-slabs/accel_program.h"
 #include "03-aabb-slabs/accel_view.h"
 #include "06-bvh/bvh.h"
@@ -946,6 +948,64 @@ static void test_scene_without_triangles_is_an_error(void **state)
     scene_desc_free(&d);
 }
 
+/* The build shares a set's two halves out among threads (OpenMP tasks),
+ * and must make the same tree whatever the count: node for node, the same
+ * leaf order, so the same hits and images on 1 thread or 16. On meshes
+ * large enough to be shared out (BVH_TASK_MIN = 4096 triangles), both
+ * splits, 1 to 3 threads (3 on a machine with 2 cores: the halves finish
+ * in other orders). The nodes are numbered as the serial recursion numbers
+ * them: a node's children get the next two numbers when a depth-first walk
+ * reaches it, first child's subtree first. */
+static int serial_numbering_mismatches(const bvh *b, int n, int *next)
+{
+    const bvh_node *node = &b->nodes[n];
+    if (bvh_node_is_leaf(node))
+        return 0;
+    int first = *next, wrong = node->first != first;
+    *next += 2;
+    wrong += serial_numbering_mismatches(b, first, next);
+    return wrong + serial_numbering_mismatches(b, first + 1, next);
+}
+
+static void test_the_tree_is_the_same_on_any_number_of_threads(void **state)
+{
+    (void)state;
+    int threads = omp_get_max_threads();
+    for (int which = 0; which < 2; which++) {
+        mesh m;
+        mesh_init(&m);
+        if (which == 0)
+            mesh_tori_field(&m, 40960);
+        else
+            mesh_random_soup(&m, 30000, vec3_make(-2, -1, -1), vec3_make(2, 1, 1), 0.2f, 9);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        for (int split = 0; split < 2; split++) {
+            bvh *trees[3];
+            for (int t = 0; t < 3; t++) {
+                omp_set_num_threads(t + 1);
+                trees[t] = (bvh *)bvh_build(&set, split ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN);
+            }
+            int next = 1;
+            assert_int_equal(serial_numbering_mismatches(trees[0], 0, &next), 0);
+            assert_int_equal(next, trees[0]->node_count);
+            for (int t = 1; t < 3; t++) {
+                assert_int_equal(trees[t]->node_count, trees[0]->node_count);
+                assert_memory_equal(trees[t]->nodes, trees[0]->nodes, (size_t)trees[0]->node_count * sizeof(bvh_node));
+                assert_memory_equal(trees[t]->triangle_index, trees[0]->triangle_index, (size_t)set.count * sizeof(int));
+                assert_memory_equal(trees[t]->triangles, trees[0]->triangles, (size_t)set.count * sizeof(bvh_triangle));
+                assert_int_equal(trees[t]->base.stats.leaves, trees[0]->base.stats.leaves);
+                assert_int_equal(trees[t]->base.stats.max_depth, trees[0]->base.stats.max_depth);
+            }
+            for (int t = 0; t < 3; t++)
+                accel_destroy(&trees[t]->base);
+        }
+        omp_set_num_threads(threads);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -970,6 +1030,7 @@ int main(void)
         cmocka_unit_test(test_exponentially_spaced_triangles_make_a_chain),
         cmocka_unit_test(test_slab_test_matches_chapter_03),
         cmocka_unit_test(test_empty_set_builds_and_misses),
+        cmocka_unit_test(test_the_tree_is_the_same_on_any_number_of_threads),
     };
     return cmocka_run_group_tests_name("ch06 bvh", tests, NULL, NULL);
 }

@@ -16,6 +16,8 @@
 
 #include <unistd.h>
 
+#include <omp.h>
+
 #include "01-ray-casting/scene.h"
 #include "04-uniform-grid/grid.h"
 #include "05-kd-tree/kdtree.h"
@@ -134,6 +136,10 @@ enum { WIDE_BVH_KERNELS = sizeof wide_bvh_kernels / sizeof wide_bvh_kernels[0] }
 
 static accel *build_wide_bvh_sah(const triangle_set *set) { return wide_bvh_build(set, BVH_SPLIT_SAH); }
 static accel *build_wide_bvh_median(const triangle_set *set) { return wide_bvh_build(set, BVH_SPLIT_MEDIAN); }
+static accel *build_wide_bvh_quantized(const triangle_set *set)
+{
+    return wide_bvh_build_layout(set, BVH_SPLIT_SAH, WIDE_BVH_QUANTIZED);
+}
 static accel *build_wide_bvh_sah_scalar(const triangle_set *set)
 {
     accel *a = wide_bvh_build(set, BVH_SPLIT_SAH);
@@ -145,6 +151,7 @@ static void test_wide_bvh_agrees_with_brute_force(void **state)
 {
     (void)state;
     accel_check_all(build_wide_bvh_sah, 15000, "wide bvh sah");
+    accel_check_all(build_wide_bvh_quantized, 15000, "wide bvh sah, quantized nodes");
     accel_check_all(build_wide_bvh_median, 3000, "wide bvh median");
 }
 
@@ -155,12 +162,14 @@ static void test_wide_bvh_scalar_kernel_agrees_with_brute_force(void **state)
     accel_check_all(build_wide_bvh_sah_scalar, 5000, "wide bvh sah, scalar kernel");
 }
 
-/* Walks the 4-wide tree: each child box contains the boxes below it and its
- * triangles' boxes, empty slots come last and have the empty box, each
- * triangle is in exactly one lane, with its own P0 and edges. */
-static void check_wide_bvh_subtree(const wide_bvh *b, uint32_t ref, aabb box, int depth, int *seen, int *leaves,
-                               int *nodes_seen)
+/* Walks the wide tree: each child box contains its triangles' boxes (and,
+ * exact, the boxes below it), empty slots come last and have the empty box,
+ * each triangle is in exactly one lane, with its own P0 and edges. Returns
+ * the union of the subtree's triangle boxes. */
+static aabb check_wide_bvh_subtree(const wide_bvh *b, uint32_t ref, aabb box, int depth, int *seen, int *leaves,
+                                   int *nodes_seen)
 {
+    aabb below = {vec3_make(INFINITY, INFINITY, INFINITY), vec3_make(-INFINITY, -INFINITY, -INFINITY)};
     assert_true(depth < WIDE_BVH_STACK_SIZE / (WIDE_BVH_WIDTH - 1));
     if (wide_bvh_is_leaf(ref)) {
         int count = wide_bvh_leaf_triangles(ref), first = wide_bvh_leaf_first_packet(ref);
@@ -183,6 +192,7 @@ static void check_wide_bvh_subtree(const wide_bvh *b, uint32_t ref, aabb box, in
             assert_true(t >= 0 && t < b->triangle_count);
             seen[t]++;
             assert_true(box_contains(box, b->base.set->boxes[t]));
+            below = aabb_union(below, b->base.set->boxes[t]);
             const triangle *tri = &b->base.set->triangles[t];
             if (!moller_trumbore) { /* the corners, or NaN for a degenerate triangle */
                 bool degenerate = triangle_is_degenerate(tri);
@@ -202,25 +212,29 @@ static void check_wide_bvh_subtree(const wide_bvh *b, uint32_t ref, aabb box, in
                 assert_memory_equal(&p2, &tri->p2, sizeof p2);
             }
         }
-        return;
+        return below;
     }
     assert_true(ref < (uint32_t)b->node_count);
     (*nodes_seen)++;
-    const wide_bvh_node *node = &b->nodes[ref];
     bool empty_seen = false;
     for (int k = 0; k < WIDE_BVH_WIDTH; k++) {
-        aabb child = {vec3_make(node->bounds[0][k], node->bounds[1][k], node->bounds[2][k]),
-                      vec3_make(node->bounds[3][k], node->bounds[4][k], node->bounds[5][k])};
-        if (node->child[k] == WIDE_BVH_EMPTY) {
+        aabb child = wide_bvh_child_box(b, (int)ref, k);
+        if (wide_bvh_child(b, (int)ref, k) == WIDE_BVH_EMPTY) {
             assert_true(k > 0);
-            assert_true(child.lo.x == INFINITY && child.hi.x == -INFINITY);
+            assert_true(k >= wide_bvh_children(b, (int)ref));
+            if (b->layout == WIDE_BVH_EXACT) /* (quantized: lo 255, hi 0, and masked) */
+                assert_true(child.lo.x == INFINITY && child.hi.x == -INFINITY);
             empty_seen = true;
             continue;
         }
         assert_false(empty_seen); /* children first, empty slots last */
-        assert_true(box_contains(box, child));
-        check_wide_bvh_subtree(b, node->child[k], child, depth + 1, seen, leaves, nodes_seen);
+        if (b->layout == WIDE_BVH_EXACT)
+            assert_true(box_contains(box, child));
+        aabb sub = check_wide_bvh_subtree(b, wide_bvh_child(b, (int)ref, k), child, depth + 1, seen, leaves, nodes_seen);
+        assert_true(box_contains(child, sub));
+        below = aabb_union(below, sub);
     }
+    return below;
 }
 
 static void check_wide_bvh_structure(const accel *a)
@@ -246,8 +260,10 @@ static void test_wide_bvh_every_triangle_in_exactly_one_lane_and_boxes_nest(void
         accel_check_make_mesh(&m, (accel_check_mesh)kind);
         triangle_set set;
         triangle_set_from_mesh(&set, &m);
-        for (int split = 0; split < 2; split++) {
-            accel *a = wide_bvh_build(&set, split ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN);
+        for (int split = 0; split < 4; split++) { /* median, SAH; exact, quantized */
+            accel *a = wide_bvh_build_layout(&set, split % 2 ? BVH_SPLIT_SAH : BVH_SPLIT_MEDIAN,
+                                             split < 2 ? WIDE_BVH_EXACT : WIDE_BVH_QUANTIZED);
+            assert_int_equal(((const wide_bvh *)a)->layout, split < 2 ? WIDE_BVH_EXACT : WIDE_BVH_QUANTIZED);
             check_wide_bvh_structure(a);
             /* the lanes rewritten for Moller-Trumbore, and back */
             assert_true(accel_use_triangle_test(a, TRIANGLE_TEST_MOLLER_TRUMBORE));
@@ -561,15 +577,11 @@ static double wide_bvh_largest_leaf_share(const accel *a)
     double largest = 0.0;
     for (int pass = 0; pass < 2; pass++)
         for (int n = 0; n < (pass == 0 ? 1 : b->node_count); n++)
-            for (int k = 0; k < WIDE_BVH_WIDTH; k++) {
-                const wide_bvh_node *node = &b->nodes[n];
-                if (node->child[k] == WIDE_BVH_EMPTY)
-                    continue;
-                aabb box = {vec3_make(node->bounds[0][k], node->bounds[1][k], node->bounds[2][k]),
-                            vec3_make(node->bounds[3][k], node->bounds[4][k], node->bounds[5][k])};
+            for (int k = 0; k < wide_bvh_children(b, n); k++) {
+                aabb box = wide_bvh_child_box(b, n, k);
                 if (pass == 0)
                     root = aabb_union(root, box);
-                else if (wide_bvh_is_leaf(node->child[k]))
+                else if (wide_bvh_is_leaf(wide_bvh_child(b, n, k)))
                     largest = fmax(largest, aabb_surface_area(box) / aabb_surface_area(root));
             }
     return largest;
@@ -645,6 +657,44 @@ static void test_wide_bvh_empty_set_builds_and_misses(void **state)
     for (int i = 0; i < 3; i++)
         assert_false(found[i] || any[i]);
     accel_destroy(a);
+    triangle_set_free(&set);
+    mesh_free(&m);
+}
+
+/* The wide tree on 1, 2 and 3 threads (its binary tree's halves built as
+ * OpenMP tasks, its packets filled by every thread): the same nodes and
+ * packets, byte for byte, in both layouts. */
+static void test_wide_bvh_is_the_same_on_any_number_of_threads(void **state)
+{
+    (void)state;
+    int threads = omp_get_max_threads();
+    mesh m;
+    mesh_init(&m);
+    mesh_tori_field(&m, 40960);
+    triangle_set set;
+    triangle_set_from_mesh(&set, &m);
+    for (int layout = 0; layout < 2; layout++) {
+        wide_bvh *trees[3];
+        for (int t = 0; t < 3; t++) {
+            omp_set_num_threads(t + 1);
+            trees[t] = (wide_bvh *)wide_bvh_build_layout(&set, BVH_SPLIT_SAH, (wide_bvh_layout)layout);
+        }
+        for (int t = 1; t < 3; t++) {
+            assert_int_equal(trees[t]->node_count, trees[0]->node_count);
+            assert_int_equal(trees[t]->packet_count, trees[0]->packet_count);
+            if (layout == WIDE_BVH_QUANTIZED)
+                assert_memory_equal(trees[t]->qnodes, trees[0]->qnodes,
+                                    (size_t)trees[0]->node_count * sizeof(wide_bvh_qnode));
+            else
+                assert_memory_equal(trees[t]->nodes, trees[0]->nodes,
+                                    (size_t)trees[0]->node_count * sizeof(wide_bvh_node));
+            assert_memory_equal(trees[t]->packets, trees[0]->packets,
+                                (size_t)trees[0]->packet_count * sizeof(wide_bvh_packet));
+        }
+        for (int t = 0; t < 3; t++)
+            accel_destroy(&trees[t]->base);
+    }
+    omp_set_num_threads(threads);
     triangle_set_free(&set);
     mesh_free(&m);
 }
@@ -2124,7 +2174,7 @@ static void leak_trace_case(const leak_case *c, leak_tally *t)
     triangle_set set;
     triangle_set_from_mesh(&set, c->m);
     /* the structures, each switched to the case's test */
-    enum { STRUCTURES = 13 };
+    enum { STRUCTURES = 16 };
     struct {
         char name[48];
         accel *a;
@@ -2138,17 +2188,20 @@ static void leak_trace_case(const leak_case *c, leak_tally *t)
     snprintf(s[n].name, sizeof s[n].name, "ch06 bvh sah, distance order"), s[n].a = bvh_build(&set, BVH_SPLIT_SAH);
     bvh_set_order(s[n++].a, BVH_ORDER_DISTANCE);
     snprintf(s[n].name, sizeof s[n].name, "ch06 bvh median"), s[n++].a = bvh_build(&set, BVH_SPLIT_MEDIAN);
+    /* the wide BVH in every kernel, with exact and with quantized nodes */
     const int wide_bvh_first = n;
-    snprintf(s[n].name, sizeof s[n].name, "ch13 wide bvh (scalar)"), s[n].a = wide_bvh_build(&set, BVH_SPLIT_SAH);
-    assert_true(wide_bvh_set_kernel(s[n++].a, WIDE_BVH_KERNEL_SCALAR));
-    if (wide_bvh_kernel_runs(WIDE_BVH_KERNEL_SSE)) {
-        snprintf(s[n].name, sizeof s[n].name, "ch13 wide bvh (sse)"), s[n].a = wide_bvh_build(&set, BVH_SPLIT_SAH);
-        assert_true(wide_bvh_set_kernel(s[n++].a, WIDE_BVH_KERNEL_SSE));
-    }
-    if (wide_bvh_kernel_runs(WIDE_BVH_KERNEL_AVX)) {
-        snprintf(s[n].name, sizeof s[n].name, "ch13 wide bvh (avx)"), s[n].a = wide_bvh_build(&set, BVH_SPLIT_SAH);
-        assert_true(wide_bvh_set_kernel(s[n++].a, WIDE_BVH_KERNEL_AVX));
-    }
+    const char *kernel_names_wide[] = {"scalar", "sse", "avx"};
+    for (int layout = 0; layout < 2; layout++)
+        for (int k = 0; k < WIDE_BVH_KERNELS; k++) {
+            accel *a = wide_bvh_build_layout(&set, BVH_SPLIT_SAH, (wide_bvh_layout)layout);
+            if (!wide_bvh_set_kernel(a, wide_bvh_kernels[k])) {
+                accel_destroy(a);
+                continue;
+            }
+            snprintf(s[n].name, sizeof s[n].name, "ch13 wide bvh%s (%s)", layout ? " quantized" : "",
+                     kernel_names_wide[k]);
+            s[n++].a = a;
+        }
     const int flat_first = n;
     const flat_kernel kernels[] = {FLAT_KERNEL_AVX512, FLAT_KERNEL_AVX, FLAT_KERNEL_SSE, FLAT_KERNEL_SCALAR};
     const char *kernel_names[] = {"avx-512 registers", "avx", "sse", "scalar"};
@@ -2358,6 +2411,258 @@ static void test_moller_trumbore_leaks_through_every_entry_point(void **state)
         quiet += t.leaks[e] == 0;
     }
     assert_int_equal(quiet, 0);
+}
+
+/* ---- quantized nodes (wide_bvh_qnode) -------------------------------------------- */
+
+/* One parent's children for the quantization tests, of a kind that has
+ * broken quantizers: random boxes at sizes from 1e-30 to 1e30, far from
+ * the origin relative to their size (1e7 with size 1e-3, where a float's
+ * step is 1), flat and zero-size ones, children equal to each other or to
+ * the parent, boxes reaching +-3e38, planes at -0 and +0, and sizes
+ * below the smallest normal float. Returns the number of children. */
+static int quantize_case(wide_bvh_node *node, int kind, pcg32 *rng)
+{
+    memset(node, 0, sizeof *node);
+    int children = 1 + (int)pcg32_bounded(rng, WIDE_BVH_WIDTH);
+    static const float sizes[] = {1e-30f, 1e-20f, 1e-3f, 1.0f, 1e3f, 1e20f, 1e30f, 1e-40f};
+    float size = sizes[pcg32_bounded(rng, sizeof sizes / sizeof sizes[0])];
+    float offset = 0.0f;
+    if (kind % 4 == 1)
+        offset = 1e7f, size = 1e-3f; /* far out: a float's step there is 1 */
+    else if (kind % 4 == 2)
+        offset = size * powf(10.0f, 8.0f * pcg32_float(rng)); /* far relative to its size */
+    float sign = pcg32_bounded(rng, 2) ? -1.0f : 1.0f;
+    for (int k = 0; k < children; k++) {
+        for (int axis = 0; axis < 3; axis++) {
+            float lo = sign * offset + size * (2.0f * pcg32_float(rng) - 1.0f);
+            float hi = lo + size * pcg32_float(rng);
+            if (kind % 4 == 3) { /* +-3e38, or planes at -0 and +0 */
+                lo = pcg32_bounded(rng, 2) ? -3e38f * pcg32_float(rng) : -0.0f;
+                hi = pcg32_bounded(rng, 2) ? 3e38f * pcg32_float(rng) : 0.0f;
+            }
+            uint32_t shape = pcg32_bounded(rng, 6);
+            if (shape == 0 || (shape == 1 && axis == 1))
+                hi = lo; /* a point, or flat in y */
+            node->bounds[axis][k] = lo;
+            node->bounds[axis + 3][k] = hi;
+        }
+        if (k > 0 && pcg32_bounded(rng, 5) == 0) /* the same box as the one before */
+            for (int p = 0; p < 6; p++)
+                node->bounds[p][k] = node->bounds[p][k - 1];
+        node->child[k] = (uint32_t)k;
+    }
+    for (int k = children; k < WIDE_BVH_WIDTH; k++) {
+        for (int axis = 0; axis < 3; axis++) {
+            node->bounds[axis][k] = INFINITY;
+            node->bounds[axis + 3][k] = -INFINITY;
+        }
+        node->child[k] = WIDE_BVH_EMPTY;
+    }
+    node->children = (uint32_t)children;
+    return children;
+}
+
+/* How many children of the cases' quantized nodes do not contain their
+ * exact box, or have a NaN plane, with planes rounded `rounding`; and the
+ * mean share of the parent's extent that quantizing added to a child's
+ * (outward: at most 2 steps of 2^e, each below 1/127 of the extent). */
+static long quantize_failures(wide_bvh_rounding rounding, int trials, double *growth)
+{
+    pcg32 rng = pcg32_for_pixel(2017, (uint64_t)rounding);
+    long failures = 0, measured = 0;
+    double grown = 0.0;
+    for (int i = 0; i < trials; i++) {
+        wide_bvh_node exact;
+        int children = quantize_case(&exact, i, &rng);
+        wide_bvh_qnode q;
+        assert_true(wide_bvh_quantize_node(&exact, rounding, &q));
+        assert_int_equal(q.children, children);
+        for (int k = 0; k < WIDE_BVH_WIDTH; k++) {
+            assert_int_equal(q.child[k], exact.child[k]);
+            if (k >= children) { /* empty: lo above hi on every axis */
+                for (int axis = 0; axis < 3; axis++)
+                    assert_true(q.bounds[axis][k] == 255 && q.bounds[axis + 3][k] == 0);
+                continue;
+            }
+            aabb box = wide_bvh_qnode_box(&q, k);
+            for (int axis = 0; axis < 3; axis++) {
+                float lo = vec3_axis(box.lo, axis), hi = vec3_axis(box.hi, axis);
+                bool contains = lo <= exact.bounds[axis][k] && hi >= exact.bounds[axis + 3][k];
+                failures += !contains || isnan(lo) || isnan(hi);
+                double parent = (double)wide_bvh_dequantize(q.origin[axis], q.exponent[axis], 255) - q.origin[axis];
+                if (contains && parent > 0.0 && isfinite(parent) && isfinite(hi - lo)) {
+                    grown += ((double)hi - lo - ((double)exact.bounds[axis + 3][k] - exact.bounds[axis][k])) / parent;
+                    measured++;
+                }
+            }
+        }
+    }
+    *growth = measured > 0 ? grown / (double)measured : 0.0;
+    return failures;
+}
+
+/* Every quantized box contains the exact box it stands for, on random and
+ * adversarial parents (quantize_case), and no plane is NaN. The twin rounds
+ * each plane to the nearest grid plane instead of outward: its boxes are as
+ * tight on average, but some do not contain their exact box, so a ray
+ * through the part cut off would miss a triangle: caught. */
+static void test_quantized_boxes_contain_their_exact_boxes(void **state)
+{
+    (void)state;
+    enum { TRIALS = 200000 };
+    double outward_growth = 0.0, nearest_growth = 0.0;
+    long outward = quantize_failures(WIDE_BVH_ROUND_OUTWARD, TRIALS, &outward_growth);
+    long nearest = quantize_failures(WIDE_BVH_ROUND_NEAREST, TRIALS, &nearest_growth);
+    print_message("quantized boxes, %d parents: rounded outward %ld not containing their box (each axis grew by "
+                  "%.2f %% of the parent's on average); to nearest %ld\n",
+                  TRIALS, outward, 100.0 * outward_growth, nearest);
+    assert_int_equal(outward, 0);
+    assert_true(nearest > 1000);
+    /* a node whose box is not finite cannot go on a grid */
+    wide_bvh_node infinite;
+    pcg32 rng = pcg32_for_pixel(2017, 7);
+    quantize_case(&infinite, 0, &rng);
+    infinite.bounds[4][0] = INFINITY;
+    wide_bvh_qnode q;
+    assert_false(wide_bvh_quantize_node(&infinite, WIDE_BVH_ROUND_OUTWARD, &q));
+}
+
+/* The kernels dequantize in SIMD (bytes widened, converted, times the step,
+ * plus the origin): each must test the boxes wide_bvh_qnode_box() gives,
+ * bit for bit, as the exact node's test would test them, and never an empty
+ * slot. */
+static void test_quantized_slab_test_is_the_exact_test_of_its_boxes(void **state)
+{
+    (void)state;
+    pcg32 rng = pcg32_for_pixel(2017, 11);
+    long hits = 0;
+    for (int i = 0; i < 20000; i++) {
+        wide_bvh_node exact, dequantized;
+        int children = quantize_case(&exact, i, &rng);
+        wide_bvh_qnode q;
+        assert_true(wide_bvh_quantize_node(&exact, WIDE_BVH_ROUND_OUTWARD, &q));
+        dequantized = exact;
+        for (int k = 0; k < children; k++) {
+            aabb box = wide_bvh_qnode_box(&q, k);
+            for (int axis = 0; axis < 3; axis++) {
+                dequantized.bounds[axis][k] = vec3_axis(box.lo, axis);
+                dequantized.bounds[axis + 3][k] = vec3_axis(box.hi, axis);
+            }
+        }
+        /* a ray from near the boxes towards one of them, sometimes along an axis */
+        aabb target = wide_bvh_qnode_box(&q, (int)pcg32_bounded(&rng, (uint32_t)children));
+        vec3 centre = vec3_scale(vec3_add(target.lo, target.hi), 0.5f), extent = aabb_extent(target);
+        if (!isfinite(centre.x + centre.y + centre.z)) /* a box reaching inf (the +-3e38 cases) */
+            centre = vec3_make(0.0f, 0.0f, 0.0f);
+        float reach = fmaxf(fmaxf(extent.x, extent.y), extent.z) + fmaxf(1e-30f, 1e-6f * fabsf(centre.x));
+        reach = fminf(reach, 1e37f);
+        vec3 o = vec3_add(centre, vec3_scale(accel_check_random_unit(&rng), 3.0f * reach));
+        ray r = ray_make(o, vec3_sub(centre, o));
+        if (i % 7 == 0)
+            r.direction.y = i % 14 ? 0.0f : -0.0f;
+        for (int kernel = 0; kernel < WIDE_BVH_KERNELS; kernel++) {
+            if (!wide_bvh_kernel_runs(wide_bvh_kernels[kernel]))
+                continue;
+            float want[WIDE_BVH_WIDTH], got[WIDE_BVH_WIDTH];
+            int want_mask = wide_bvh_slab_test(&dequantized, r, r.t_min, r.t_max, want, WIDE_BVH_KERNEL_SCALAR);
+            int got_mask = wide_bvh_qslab_test(&q, r, r.t_min, r.t_max, got, wide_bvh_kernels[kernel]);
+            assert_int_equal(got_mask, want_mask);
+            assert_true(got_mask >> children == 0);
+            for (int k = 0; k < children; k++)
+                if (want_mask >> k & 1)
+                    assert_memory_equal(&got[k], &want[k], sizeof got[k]);
+            hits += kernel == 0 ? __builtin_popcount((unsigned)want_mask) : 0;
+        }
+    }
+    print_message("quantized slab tests: 20000 nodes, %ld boxes hit\n", hits);
+    assert_true(hits > 20000);
+}
+
+/* The quantized tree finds what the exact tree finds, bit for bit: the same
+ * triangle, t and barycentrics for every ray (and so the same hit record),
+ * the same any hit, on every mesh of the differential test and on the leak
+ * test's closed meshes scaled from 1e-4 to 1e4 and moved far off, in every
+ * kernel and through the streams. Rays aimed at shared edges and vertices
+ * tie between triangles; the lower index wins in both (and in brute force),
+ * whatever order their larger boxes let the walk meet them in. */
+static long quantized_mismatches(const triangle_set *set, const ray *rays, int count, const accel *brute)
+{
+    accel *trees[2] = {wide_bvh_build_layout(set, BVH_SPLIT_SAH, WIDE_BVH_EXACT),
+                       wide_bvh_build_layout(set, BVH_SPLIT_SAH, WIDE_BVH_QUANTIZED)};
+    assert_int_equal(((const wide_bvh *)trees[1])->layout, WIDE_BVH_QUANTIZED);
+    wide_bvh_raw_hit *raw = calloc((size_t)count, sizeof *raw), *stream = calloc((size_t)count, sizeof *stream);
+    bool *found = calloc((size_t)count, sizeof *found);
+    long mismatches = 0;
+    for (int kernel = 0; kernel < WIDE_BVH_KERNELS; kernel++) {
+        if (!wide_bvh_set_kernel(trees[0], wide_bvh_kernels[kernel]) ||
+            !wide_bvh_set_kernel(trees[1], wide_bvh_kernels[kernel]))
+            continue;
+        ray_counters counters = {0};
+        for (int i = 0; i < count; i++) {
+            wide_bvh_raw_hit want, got;
+            wide_bvh_closest_hit_raw(trees[0], rays[i], &want, &counters);
+            wide_bvh_closest_hit_raw(trees[1], rays[i], &got, &counters);
+            raw[i] = got;
+            bool same = memcmp(&want, &got, sizeof want) == 0 &&
+                        accel_any_hit(trees[0], rays[i], &counters) == accel_any_hit(trees[1], rays[i], &counters);
+            hit_record brute_hit;
+            if (kernel == 0 && accel_closest_hit(brute, rays[i], &brute_hit, &counters))
+                same = same && got.index == brute_hit.shape_id && got.t == brute_hit.t;
+            mismatches += !same;
+        }
+        wide_bvh_closest_hit_stream_raw(trees[1], rays, count, stream, found, &counters);
+        for (int i = 0; i < count; i++)
+            mismatches += memcmp(&raw[i], &stream[i], sizeof raw[i]) != 0;
+    }
+    free(raw);
+    free(stream);
+    free(found);
+    accel_destroy(trees[0]);
+    accel_destroy(trees[1]);
+    return mismatches;
+}
+
+static void test_quantized_tree_hits_are_the_exact_trees_bit_for_bit(void **state)
+{
+    (void)state;
+    enum { RAYS = 3000 };
+    ray *rays = calloc(RAYS, sizeof *rays);
+    long mismatches = 0, cases = 0;
+    for (int kind = 0; kind < MESH_KIND_COUNT; kind++) {
+        mesh m;
+        accel_check_make_mesh(&m, (accel_check_mesh)kind);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        pcg32 rng = pcg32_for_pixel(2017, 100 + (uint64_t)kind);
+        for (int i = 0; i < RAYS; i++)
+            rays[i] = accel_check_ray(&m, set.bounds.lo, set.bounds.hi, &rng, i);
+        accel *brute = brute_force_build(&set);
+        mismatches += quantized_mismatches(&set, rays, RAYS, brute);
+        cases++;
+        accel_destroy(brute);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    pcg32 rng = pcg32_for_pixel(2017, 200);
+    for (int s = 0; s < LEAK_SCALES; s++) {
+        mesh m;
+        leak_mesh_jittered_icosphere(&m, 2, &rng);
+        float offset = fminf(LEAK_OFFSET_MAX, leak_offset_sizes[LEAK_OFFSETS - 1] * leak_scales[s]);
+        leak_mesh_transform(&m, leak_scales[s], vec3_scale(leak_random_unit(&rng), offset));
+        int n = leak_rays_make(&m, RAYS, &rng, rays);
+        triangle_set set;
+        triangle_set_from_mesh(&set, &m);
+        accel *brute = brute_force_build(&set);
+        mismatches += quantized_mismatches(&set, rays, n, brute);
+        cases++;
+        accel_destroy(brute);
+        triangle_set_free(&set);
+        mesh_free(&m);
+    }
+    free(rays);
+    print_message("quantized against exact trees: %ld meshes, %ld rays differ\n", cases, mismatches);
+    assert_int_equal(mismatches, 0);
 }
 
 static void test_fast_sincos_turns_is_within_a_few_ulps(void **state)
@@ -3133,6 +3438,7 @@ int main(void)
         cmocka_unit_test(test_wide_bvh_triangle_test_matches_chapter_01),
         cmocka_unit_test(test_wide_bvh_room_walls_get_leaves_of_their_own),
         cmocka_unit_test(test_wide_bvh_empty_set_builds_and_misses),
+        cmocka_unit_test(test_wide_bvh_is_the_same_on_any_number_of_threads),
         cmocka_unit_test(test_flat_equals_brute_force_bit_for_bit),
         cmocka_unit_test(test_flat_twins_are_caught),
         cmocka_unit_test(test_flat_packets_give_each_ray_its_own_answer),
@@ -3155,6 +3461,9 @@ int main(void)
         cmocka_unit_test(test_lanes_bounce_is_chapter_09s),
         cmocka_unit_test(test_no_ray_leaks_through_a_closed_mesh_anywhere),
         cmocka_unit_test(test_moller_trumbore_leaks_through_every_entry_point),
+        cmocka_unit_test(test_quantized_boxes_contain_their_exact_boxes),
+        cmocka_unit_test(test_quantized_slab_test_is_the_exact_test_of_its_boxes),
+        cmocka_unit_test(test_quantized_tree_hits_are_the_exact_trees_bit_for_bit),
         cmocka_unit_test(test_sobol_pixel_draws_chapter_09s_numbers),
         cmocka_unit_test(test_the_benchmark_scenes_are_what_they_say),
         cmocka_unit_test(test_light_tree_picks_with_its_pmf),

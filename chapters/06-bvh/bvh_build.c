@@ -57,9 +57,6 @@ typedef struct {
 typedef struct {
     build_triangle *tris;
     bvh_node *nodes; /* room for 2 N - 1, the most a binary tree with N leaves can have */
-    int node_count;
-    int leaves;
-    int max_depth;
     bvh_split split;
     bvh_sah_params sah;
     float root_area; /* the root box's, for sah.top_area_fraction */
@@ -349,11 +346,20 @@ static bool split_sah(builder *b, int begin, int end, const box3 *box, const box
 
 /* ---- the recursion --------------------------------------------------------- */
 
-static void build_node(builder *b, int node_index, int begin, int end, int depth)
+/* Sets of at least this many triangles build their two halves in parallel
+ * (an OpenMP task for the first); smaller ones are not worth a task. */
+enum { BVH_TASK_MIN = 4096 };
+
+/* The lecture's recursion. The nodes below a set of n triangles (at most
+ * 2 n - 2) get slots of their own from `descendants` on: the children the
+ * first two, the first child's subtree the next 2 n_L - 2, the second's
+ * the rest. So the two halves of a large set can be built at the same time
+ * (an OpenMP task for the first) without waiting for each other's node
+ * count, and the tree is the same however they were shared out;
+ * number_nodes() numbers it afterwards as the serial recursion would. */
+static void build_node(builder *b, int node_index, int descendants, int begin, int end, int depth)
 {
     bvh_node *node = &b->nodes[node_index];
-    if (depth > b->max_depth)
-        b->max_depth = depth;
 
     /* Find bounding box (and that of the centroids, which the splits use) */
     box3 box = box3_empty(), centroids = box3_empty();
@@ -375,17 +381,52 @@ static void build_node(builder *b, int node_index, int begin, int end, int depth
         /* Store objects in each leaf node: they are tris[begin, end) */
         node->first = begin;
         node->count_axis = (uint32_t)(end - begin) << 2;
-        b->leaves++;
         return;
     }
     /* The two children side by side: the second child's index is implicit. */
-    int first_child = b->node_count;
-    b->node_count += 2;
+    int first_child = descendants;
     node->first = first_child;
     node->count_axis = (uint32_t)axis;
+    int first_descendants = first_child + 2, second_descendants = first_descendants + 2 * (mid - begin) - 2;
     /* Recompute the bounding box of the subsets: the first step of each child */
-    build_node(b, first_child, begin, mid, depth + 1);
-    build_node(b, first_child + 1, mid, end, depth + 1);
+    if (end - begin >= BVH_TASK_MIN) {
+#pragma omp task default(none) firstprivate(b, first_child, first_descendants, begin, mid, depth)
+        build_node(b, first_child, first_descendants, begin, mid, depth + 1);
+    } else {
+        build_node(b, first_child, first_descendants, begin, mid, depth + 1);
+    }
+    build_node(b, first_child + 1, second_descendants, mid, end, depth + 1);
+}
+
+/* Copy the subtree at `from` of the build's sparse array into `to`,
+ * numbered as the serial recursion numbers it: a node's two children get
+ * the next two numbers when it is reached, then the first child's subtree
+ * is numbered, then the second's. Counts the leaves and the depth. */
+typedef struct {
+    const bvh_node *from;
+    bvh_node *to;
+    int count, leaves, max_depth;
+} numbering;
+
+static void number_nodes(numbering *n, int from, int to, int depth)
+{
+    bvh_node node = n->from[from];
+    if (depth > n->max_depth)
+        n->max_depth = depth;
+    if (bvh_node_is_leaf(&node)) {
+        n->leaves++;
+        if (n->to != NULL)
+            n->to[to] = node;
+        return;
+    }
+    int first = n->count;
+    n->count += 2;
+    if (n->to != NULL) {
+        n->to[to] = node;
+        n->to[to].first = first;
+    }
+    number_nodes(n, node.first, first, depth + 1);
+    number_nodes(n, node.first + 1, first + 1, depth + 1);
 }
 
 /* ---- the node array ----------------------------------------------------------- */
@@ -441,6 +482,7 @@ static bvh_triangle bvh_triangle_make(const triangle *t, triangle_test test)
 /* The leaves' triangles, in leaf order, in the form b's triangle test reads. */
 static void bvh_triangles_fill(bvh *b)
 {
+#pragma omp parallel for schedule(static) if (b->triangle_count >= BVH_TASK_MIN)
     for (int i = 0; i < b->triangle_count; i++)
         b->triangles[i] = bvh_triangle_make(&b->base.set->triangles[b->triangle_index[i]], b->base.triangle_test);
 }
@@ -505,17 +547,24 @@ accel *bvh_build_with(const triangle_set *set, bvh_split split, const bvh_sah_pa
     b.sah = *sah;
     b.tris = memory_allocate((size_t)n, sizeof *b.tris);
     b.nodes = bvh_nodes_allocate(2 * n - 1);
+#pragma omp parallel for schedule(static) if (n >= BVH_TASK_MIN)
     for (int i = 0; i < n; i++) {
         const aabb *box = &set->boxes[i];
         b.tris[i] = (build_triangle){{box->lo.x, box->lo.y, box->lo.z}, {box->hi.x, box->hi.y, box->hi.z}, i};
     }
-    b.node_count = 1;
-    build_node(&b, 0, 0, n, 0);
+    /* The root's subtree in slots 1 .. 2 n - 2, its halves as tasks of the
+     * team's threads (one thread: the serial recursion). */
+#pragma omp parallel if (n >= BVH_TASK_MIN)
+#pragma omp single
+    build_node(&b, 0, 1, 0, n, 0);
 
-    /* Flatten: the nodes already are one array; keep only the used part. */
-    result->nodes = bvh_nodes_allocate(b.node_count);
-    memcpy(result->nodes, b.nodes, (size_t)b.node_count * sizeof *b.nodes);
-    result->node_count = b.node_count;
+    /* Flatten: count the nodes, then number them in the serial order. */
+    numbering count = {b.nodes, NULL, 1, 0, 0};
+    number_nodes(&count, 0, 0, 0);
+    result->nodes = bvh_nodes_allocate(count.count);
+    numbering number = {b.nodes, result->nodes, 1, 0, 0};
+    number_nodes(&number, 0, 0, 0);
+    result->node_count = number.count;
     bvh_nodes_free(b.nodes);
     /* Copy the triangles in leaf order, as the triangle test reads them. */
     result->triangles = memory_allocate((size_t)n, sizeof *result->triangles);
@@ -525,7 +574,7 @@ accel *bvh_build_with(const triangle_set *set, bvh_split split, const bvh_sah_pa
     bvh_triangles_fill(result);
     free(b.tris);
 
-    bvh_fill_stats(result, split == BVH_SPLIT_SAH ? "bvh sah" : "bvh median", b.leaves, b.max_depth);
+    bvh_fill_stats(result, split == BVH_SPLIT_SAH ? "bvh sah" : "bvh median", number.leaves, number.max_depth);
     result->base.stats.build_seconds = timer_seconds() - start;
     return &result->base;
 }

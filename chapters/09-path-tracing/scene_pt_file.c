@@ -140,7 +140,17 @@ void pt_scene_describe(const pt_scene *sc, scene_desc *d)
         sm.ior = m->ior;
         scene_desc_add_material(d, sm);
     }
-    for (int i = 0; i < sc->geometry.face_count + sc->sphere_count; i++) {
+    /* One shape per triangle: for a mesh of a million, a gigabyte of
+     * descriptions (each has room for a path), so the array is made once
+     * at its size, not grown, and filled by every thread: most of the time
+     * goes to the system clearing the new pages, which threads do side by
+     * side. Each shape is its own, so the description does not depend on
+     * the thread count. */
+    int shapes = sc->geometry.face_count + sc->sphere_count, first = d->shape_count;
+    d->shapes = memory_grow(d->shapes, &d->shape_capacity, first + shapes, sizeof *d->shapes);
+    d->shape_count += shapes;
+#pragma omp parallel for schedule(static) if (shapes >= 4096)
+    for (int i = 0; i < shapes; i++) {
         scene_shape s;
         memset(&s, 0, sizeof s);
         if (i < sc->geometry.face_count) {
@@ -156,7 +166,7 @@ void pt_scene_describe(const pt_scene *sc, scene_desc *d)
             s.inside_out = sp->inside_out;
             s.material = sp->material;
         }
-        scene_desc_add_shape(d, s);
+        d->shapes[first + i] = s;
     }
     for (int i = 0; i < sc->point_light_count; i++)
         scene_desc_add_point_light(d, sc->point_lights[i].position, sc->point_lights[i].intensity);

@@ -17,6 +17,7 @@
 #include "image_file.h"
 #include "program.h"
 #include "run_record.h"
+#include "timer.h"
 #include "mpi_split.h"
 
 typedef struct {
@@ -104,6 +105,9 @@ static int render(cli_options *opts, const production_flags *f)
     char err[1024];
     scene_desc desc;
     bool from_file;
+    /* the work before the first sample, by the wall clock: what more
+     * threads do not speed up unless it is parallel too */
+    double start = timer_seconds();
     if (!load_scene(opts, f, &sc, &desc, &from_file, err, sizeof err)) {
         fprintf(stderr, "13-production: %s\n", err);
         scene_desc_free(&desc);
@@ -111,8 +115,10 @@ static int render(cli_options *opts, const production_flags *f)
     }
     pt_scene_check_scale(&sc, "13-production", stderr);
     pt_scene_check_lights(&sc, "13-production", stderr);
+    double loaded = timer_seconds();
     if (!from_file)
         pt_scene_describe(&sc, &desc);
+    double described = timer_seconds();
     camera_override_apply(&f->view, &sc.eye, &sc.target, &sc.vertical_fov_degrees);
     if (pt_scene_has_no_light(&sc, err, sizeof err))
         fprintf(stderr, "13-production: warning: %s\n", err);
@@ -130,7 +136,9 @@ static int render(cli_options *opts, const production_flags *f)
     }
     scene_desc_free(&desc);
     bool walls = f->walls.index == 0;
+    double built = timer_seconds();
     pt_scene_use_accel(&sc, walls ? production_scene_accel : production_scene_accel_no_walls, &sc);
+    double ready = timer_seconds();
     program_note_accel(sc.bvh->stats.name);
     path_tracer pt = production_path_tracer_defaults(&sc);
     pt.effects = effects_decide(&e, EFFECT_ALL);
@@ -143,8 +151,12 @@ static int render(cli_options *opts, const production_flags *f)
     int status;
     run_record_note("russian_roulette", pt_russian_roulette_name(pt.russian_roulette));
     run_record_note("sampler", PT_SAMPLER_NAMES[pt.sampler]);
-    if (!opts->quiet && !opts->explain)
+    if (!opts->quiet && !opts->explain) {
         report_structures(&sc, walls);
+        printf("13-production: before the first sample %.3f s on %d threads: the scene %.3f s, its description "
+               "%.3f s, the structures %.3f s\n", ready - start, opts->threads, loaded - start, described - loaded,
+               ready - built);
+    }
     bool wide = !f->one_path && !opts->explain && path_tracer_wide_supported(&pt, why, sizeof why);
     if (wide && opts->resume != NULL)
         fprintf(stderr, "13-production: --resume %s: eight paths at a time keep no checkpoints (--one-path does)\n",

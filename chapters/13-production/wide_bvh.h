@@ -102,6 +102,71 @@ typedef struct {
 
 _Static_assert(sizeof(wide_bvh_node) % 64 == 0, "a node is whole cache lines");
 
+/* The same node with its children's boxes quantized (Embree's compressed
+ * nodes; Ylitie et al., "Efficient incoherent ray traversal on GPUs through
+ * compressed wide BVHs", 2017): each plane of each child as one byte q on a
+ * grid over the node's own box, origin + q 2^e per axis, with the node's
+ * box's lower corner as origin and the smallest power of two 2^e whose
+ * grid of 255 steps reaches its upper corner. A child's lower planes are
+ * rounded down onto the grid and its upper planes up, so the box the
+ * traversal tests contains the exact one: it may let a ray in that the
+ * exact box would not, never the other way round. The traversal turns the
+ * bytes back into floats (wide_bvh_dequantize) and runs the same slab test
+ * on them. 96 bytes for 8 children (the exact node's 256), 64 for 4 (128);
+ * an 8-wide node is aligned to half a cache line, so it spans two lines
+ * wherever it starts, as the exact one spans four. Empty slots have
+ * q lo 255, hi 0, and are masked by `children` as well. */
+#if WIDE_BVH_WIDTH == 8
+#define WIDE_BVH_QNODE_ALIGN 32
+#else
+#define WIDE_BVH_QNODE_ALIGN 64
+#endif
+typedef struct {
+    _Alignas(WIDE_BVH_QNODE_ALIGN) uint8_t bounds[6][WIDE_BVH_WIDTH]; /* the planes of bvh_node.bounds, by child */
+    float origin[3];
+    int8_t exponent[3]; /* the grid's step per axis is 2^exponent */
+    uint8_t children;   /* how many slots are not empty */
+    uint32_t child[WIDE_BVH_WIDTH];
+} wide_bvh_qnode;
+
+_Static_assert(sizeof(wide_bvh_qnode) == (WIDE_BVH_WIDTH == 8 ? 96 : 64), "a quantized node is 96 or 64 bytes");
+
+/* Which nodes a tree is made of (wide_bvh_build_layout). */
+typedef enum { WIDE_BVH_EXACT, WIDE_BVH_QUANTIZED } wide_bvh_layout;
+
+/* The grid's step 2^e as a float, for e in [-126, 127]: built from its
+ * bits, as the SIMD kernels build it. */
+static inline float wide_bvh_step(int exponent)
+{
+    union {
+        uint32_t bits;
+        float value;
+    } u = {(uint32_t)(exponent + 127) << 23};
+    return u.value;
+}
+
+/* Plane q of an axis with this origin and exponent, exactly as every
+ * kernel computes it: (float)q times the step (exact), plus the origin
+ * (rounded). Non-decreasing in q; never NaN for a finite origin. */
+static inline float wide_bvh_dequantize(float origin, int exponent, int q)
+{
+    float offset = (float)q * wide_bvh_step(exponent);
+    return origin + offset;
+}
+
+/* How a plane goes onto the grid: outward (lower planes down, upper planes
+ * up: what the tree does) or to the nearest grid plane (the tests' twin,
+ * whose boxes do not always contain the exact ones). */
+typedef enum { WIDE_BVH_ROUND_OUTWARD, WIDE_BVH_ROUND_NEAREST } wide_bvh_rounding;
+
+/* The exact node quantized into q: its children's references, and the
+ * boxes of its first `children` slots; the other slots empty. Returns
+ * false (q undefined) if their union is not finite: such a node cannot be
+ * put on a grid, and the tree keeps exact nodes. */
+bool wide_bvh_quantize_node(const wide_bvh_node *exact, wide_bvh_rounding rounding, wide_bvh_qnode *q);
+/* Child k's box as the traversal tests it. */
+aabb wide_bvh_qnode_box(const wide_bvh_qnode *q, int k);
+
 /* Four triangles as the 4-lane test reads them, by coordinate then by lane
  * (p0[1][k] is lane k's P0.y), and which triangle of the set each lane is
  * (right there, in the cache lines just read, when a hit needs it). 160
@@ -165,7 +230,9 @@ typedef enum { WIDE_BVH_KERNEL_SSE, WIDE_BVH_KERNEL_SCALAR, WIDE_BVH_KERNEL_AVX 
 
 typedef struct {
     accel base;
-    wide_bvh_node *nodes; /* nodes[0] is the root */
+    wide_bvh_node *nodes;   /* nodes[0] is the root; NULL when quantized */
+    wide_bvh_qnode *qnodes; /* the same nodes, quantized; NULL when exact */
+    wide_bvh_layout layout;
     int node_count;
     wide_bvh_packet *packets; /* a leaf's packets are consecutive */
     int packet_count;
@@ -181,6 +248,25 @@ accel *wide_bvh_build(const triangle_set *set, bvh_split split);
  * the sets with at least top_area_fraction of the root's surface area; 0:
  * none, C_t = 1 everywhere (the tests' twin). */
 accel *wide_bvh_build_with_top(const triangle_set *set, bvh_split split, float top_area_fraction);
+
+/* The same tree with nodes of the given layout. A tree whose boxes are
+ * not finite stays exact: ask b->layout. wide_bvh_build's layout is
+ * WIDE_BVH_DEFAULT_LAYOUT: exact, since on the tori field the quantized
+ * nodes traced coherent rays about a fifth slower (the bytes turned back
+ * into floats lengthen every node's test), incoherent ones on a million
+ * triangles 4 % slower on a quiet machine and faster only while other
+ * jobs filled the caches (README). -DWIDE_BVH_DEFAULT_LAYOUT=
+ * WIDE_BVH_QUANTIZED builds everything on quantized nodes. */
+accel *wide_bvh_build_layout(const triangle_set *set, bvh_split split, wide_bvh_layout layout);
+#ifndef WIDE_BVH_DEFAULT_LAYOUT
+#define WIDE_BVH_DEFAULT_LAYOUT WIDE_BVH_EXACT
+#endif
+
+/* Node n's child k as the traversal sees it, whatever the layout: its
+ * reference, and its box (dequantized); and how many children it has. */
+uint32_t wide_bvh_child(const wide_bvh *b, int n, int k);
+aabb wide_bvh_child_box(const wide_bvh *b, int n, int k);
+int wide_bvh_children(const wide_bvh *b, int n);
 
 /* Was `a` built by wide_bvh_build()? */
 bool wide_bvh_is(const accel *a);
@@ -199,6 +285,9 @@ bool wide_bvh_kernel_runs(wide_bvh_kernel kernel);
  * scalar test, returning the mask of lanes hit and their t, b1, b2 (lanes
  * not hit are left as they were). */
 int wide_bvh_slab_test(const wide_bvh_node *node, ray r, float t_min, float t_max, float t_enter[WIDE_BVH_WIDTH], wide_bvh_kernel kernel);
+/* The same for a quantized node's boxes (the AVX kernel needs AVX2 here). */
+int wide_bvh_qslab_test(const wide_bvh_qnode *node, ray r, float t_min, float t_max, float t_enter[WIDE_BVH_WIDTH],
+                        wide_bvh_kernel kernel);
 int wide_bvh_triangle_test(const wide_bvh_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
                        wide_bvh_kernel kernel, triangle_test test);
 

@@ -83,6 +83,7 @@ static int new_node(collapser *c)
         c->node_capacity = capacity;
     }
     wide_bvh_node *node = &c->nodes[c->node_count];
+    memset(node, 0, sizeof *node); /* the padding too: a tree is the same bytes on every build */
     for (int k = 0; k < WIDE_BVH_WIDTH; k++) {
         set_child_box(node, k, (aabb){vec3_make(INFINITY, INFINITY, INFINITY), vec3_make(-INFINITY, -INFINITY, -INFINITY)});
         node->child[k] = WIDE_BVH_EMPTY;
@@ -262,6 +263,8 @@ bool wide_bvh_use_triangle_test(accel *a, triangle_test test)
 {
     wide_bvh *b = (wide_bvh *)a;
     a->triangle_test = test;
+    /* each lane its own: any thread count writes the same packets */
+#pragma omp parallel for schedule(static) if (b->packet_count >= 1024)
     for (int i = 0; i < 4 * b->packet_count; i++) {
         wide_bvh_packet *packet = &b->packets[i / 4];
         int index = wide_bvh_lane_triangle(packet->index[i % 4]);
@@ -270,12 +273,51 @@ bool wide_bvh_use_triangle_test(accel *a, triangle_test test)
     return true;
 }
 
+/* The exact nodes quantized, or false (and nothing changed) if a node's
+ * box is not finite. The exact nodes are then freed: they are not read
+ * again. */
+static bool quantize_nodes(wide_bvh *b)
+{
+    size_t bytes = (size_t)b->node_count * sizeof(wide_bvh_qnode);
+    wide_bvh_qnode *q = aligned_alloc(64, (bytes + 63) / 64 * 64);
+    if (q == NULL) {
+        fprintf(stderr, "out of memory (asked for %zu bytes)\n", bytes);
+        exit(1);
+    }
+    memset(q, 0, bytes); /* the 4-wide node's padding too */
+    for (int n = 0; n < b->node_count; n++) {
+        const wide_bvh_node *node = &b->nodes[n];
+        if (!wide_bvh_quantize_node(node, WIDE_BVH_ROUND_OUTWARD, &q[n])) {
+            free(q);
+            return false;
+        }
+    }
+    b->qnodes = huge_copy(q, bytes);
+    free(q);
+    free(b->nodes);
+    b->nodes = NULL;
+    b->layout = WIDE_BVH_QUANTIZED;
+    return true;
+}
+
+static accel *build_tree(const triangle_set *set, bvh_split split, float top_area_fraction, wide_bvh_layout layout);
+
 accel *wide_bvh_build(const triangle_set *set, bvh_split split)
 {
-    return wide_bvh_build_with_top(set, split, WIDE_BVH_SAH.top_area_fraction);
+    return build_tree(set, split, WIDE_BVH_SAH.top_area_fraction, WIDE_BVH_DEFAULT_LAYOUT);
+}
+
+accel *wide_bvh_build_layout(const triangle_set *set, bvh_split split, wide_bvh_layout layout)
+{
+    return build_tree(set, split, WIDE_BVH_SAH.top_area_fraction, layout);
 }
 
 accel *wide_bvh_build_with_top(const triangle_set *set, bvh_split split, float top_area_fraction)
+{
+    return build_tree(set, split, top_area_fraction, WIDE_BVH_DEFAULT_LAYOUT);
+}
+
+static accel *build_tree(const triangle_set *set, bvh_split split, float top_area_fraction, wide_bvh_layout layout)
 {
     double start = timer_seconds();
     bvh_sah_params sah = WIDE_BVH_SAH;
@@ -328,12 +370,16 @@ accel *wide_bvh_build_with_top(const triangle_set *set, bvh_split split, float t
     free(c.nodes);
     free(c.packets);
     accel_destroy(binary_accel);
+    if (layout == WIDE_BVH_QUANTIZED && b->node_count > 0)
+        quantize_nodes(b);
     wide_bvh_use_triangle_test(&b->base, TRIANGLE_TEST_WATERTIGHT); /* the lanes' coordinates */
+    wide_bvh_set_kernel(&b->base, b->kernel); /* the kernel's ops for the layout */
     if (wide_bvh_kernel_runs(WIDE_BVH_KERNEL_AVX))
         wide_bvh_set_kernel(&b->base, WIDE_BVH_KERNEL_AVX);
 
     b->base.stats.name = split == BVH_SPLIT_SAH ? "wide bvh sah" : "wide bvh median";
-    b->base.stats.bytes = sizeof *b + (size_t)b->node_count * sizeof(wide_bvh_node) +
+    size_t node_bytes = b->layout == WIDE_BVH_QUANTIZED ? sizeof(wide_bvh_qnode) : sizeof(wide_bvh_node);
+    b->base.stats.bytes = sizeof *b + (size_t)b->node_count * node_bytes +
                           (size_t)b->packet_count * sizeof(wide_bvh_packet);
     b->base.stats.nodes = b->node_count;
     b->base.stats.leaves = c.leaves;

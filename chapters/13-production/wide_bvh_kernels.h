@@ -10,6 +10,7 @@
 #define WIDE_BVH_KERNELS_H
 
 #include <math.h>
+#include <string.h>
 
 #include "13-production/wide_bvh.h"
 #include "06-bvh/bvh_internal.h"
@@ -86,57 +87,139 @@ static inline wide_bvh_ray wide_bvh_ray_make(const ray *r)
  * instruction, a group of four at a time: one group for a 4-wide node, two
  * for 8-wide. */
 
-static inline int slab_test4_scalar(const wide_bvh_node *node, const wide_bvh_ray *r, float t_min, float t_max,
-                                    float t_enter[WIDE_BVH_WIDTH])
+/* bounds: the node's planes, bounds[p * WIDE_BVH_WIDTH + k] plane p of child k */
+static inline int slab_planes_scalar(const float *bounds, const wide_bvh_ray *r, float t_min, float t_max,
+                                     float t_enter[WIDE_BVH_WIDTH])
 {
     int mask = 0;
     for (int k = 0; k < WIDE_BVH_WIDTH; k++)
-        mask |= bvh_slab_test_planes((const float *)node->bounds + k, WIDE_BVH_WIDTH, &r->scalar, t_min, t_max,
-                                     &t_enter[k])
+        mask |= bvh_slab_test_planes(bounds + k, WIDE_BVH_WIDTH, &r->scalar, t_min, t_max, &t_enter[k])
                 << k;
     return mask;
+}
+
+static inline int slab_test4_scalar(const wide_bvh_node *node, const wide_bvh_ray *r, float t_min, float t_max,
+                                    float t_enter[WIDE_BVH_WIDTH])
+{
+    return slab_planes_scalar(&node->bounds[0][0], r, t_min, t_max, t_enter);
+}
+
+/* A quantized node: its planes dequantized (wide_bvh_dequantize), then the
+ * same test; the empty slots masked. */
+static inline int qslab_test_scalar(const wide_bvh_qnode *node, const wide_bvh_ray *r, float t_min, float t_max,
+                                    float t_enter[WIDE_BVH_WIDTH])
+{
+    float bounds[6][WIDE_BVH_WIDTH];
+    for (int p = 0; p < 6; p++)
+        for (int k = 0; k < WIDE_BVH_WIDTH; k++)
+            bounds[p][k] = wide_bvh_dequantize(node->origin[p % 3], node->exponent[p % 3], node->bounds[p][k]);
+    return slab_planes_scalar(&bounds[0][0], r, t_min, t_max, t_enter) & ((1 << node->children) - 1);
 }
 
 #if WIDE_BVH_HAVE_SSE
 /* _mm_max_ps(a, b) is a > b ? a : b and _mm_min_ps(a, b) is a < b ? a : b,
  * operand order included (with a NaN, they return b): exactly the scalar
  * selections above. */
+/* The slab test's arithmetic on the planes near_x .. far_z (variables of
+ * vector type V, intrinsics prefix P: SSE's or AVX's), in
+ * bvh_slab_test_planes' order: defines enter and exit. */
+#define SLAB_PLANES(V, P, ox, oy, oz, ix, iy, iz)                                                              \
+    near_x = P##_mul_ps(P##_sub_ps(near_x, ox), ix);                                                           \
+    far_x = P##_mul_ps(P##_sub_ps(far_x, ox), ix);                                                             \
+    near_y = P##_mul_ps(P##_sub_ps(near_y, oy), iy);                                                           \
+    far_y = P##_mul_ps(P##_sub_ps(far_y, oy), iy);                                                             \
+    near_z = P##_mul_ps(P##_sub_ps(near_z, oz), iz);                                                           \
+    far_z = P##_mul_ps(P##_sub_ps(far_z, oz), iz);                                                             \
+    V enter = P##_set1_ps(t_min), exit = P##_set1_ps(INFINITY);                                                \
+    enter = P##_max_ps(near_x, enter);                                                                         \
+    enter = P##_max_ps(near_y, enter);                                                                         \
+    enter = P##_max_ps(near_z, enter);                                                                         \
+    exit = P##_min_ps(far_x, exit);                                                                            \
+    exit = P##_min_ps(far_y, exit);                                                                            \
+    exit = P##_min_ps(far_z, exit);                                                                            \
+    exit = P##_mul_ps(exit, P##_set1_ps(BVH_SLAB_ROUNDING_PAD));                                               \
+    exit = P##_min_ps(P##_set1_ps(t_max), exit)
+
+/* Four boxes, given their six planes (near and far of each axis, for this
+ * ray): the mask hit and t_enter. */
+static inline int slab_group_sse(const wide_bvh_ray *r, __m128 near_x, __m128 far_x, __m128 near_y, __m128 far_y,
+                                 __m128 near_z, __m128 far_z, float t_min, float t_max, float t_enter[4])
+{
+    SLAB_PLANES(__m128, _mm, r->origin[0], r->origin[1], r->origin[2], r->inverse_direction[0],
+                r->inverse_direction[1], r->inverse_direction[2]);
+    _mm_storeu_ps(t_enter, enter);
+    return _mm_movemask_ps(_mm_cmple_ps(enter, exit));
+}
+
 static inline int slab_test4_sse(const wide_bvh_node *node, const wide_bvh_ray *r, float t_min, float t_max,
                                  float t_enter[WIDE_BVH_WIDTH])
 {
     const bvh_ray *s = &r->scalar;
     int mask = 0;
     for (int g = 0; g < WIDE_BVH_WIDTH; g += 4) {
-        __m128 near_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[s->near_x][g]), r->origin[0]), r->inverse_direction[0]);
-        __m128 far_x = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[r->far_x][g]), r->origin[0]), r->inverse_direction[0]);
-        __m128 near_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[s->near_y][g]), r->origin[1]), r->inverse_direction[1]);
-        __m128 far_y = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[r->far_y][g]), r->origin[1]), r->inverse_direction[1]);
-        __m128 near_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[s->near_z][g]), r->origin[2]), r->inverse_direction[2]);
-        __m128 far_z = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(&node->bounds[r->far_z][g]), r->origin[2]), r->inverse_direction[2]);
-        __m128 enter = _mm_set1_ps(t_min), exit = _mm_set1_ps(INFINITY);
-        enter = _mm_max_ps(near_x, enter);
-        enter = _mm_max_ps(near_y, enter);
-        enter = _mm_max_ps(near_z, enter);
-        exit = _mm_min_ps(far_x, exit);
-        exit = _mm_min_ps(far_y, exit);
-        exit = _mm_min_ps(far_z, exit);
-        exit = _mm_mul_ps(exit, _mm_set1_ps(BVH_SLAB_ROUNDING_PAD));
-        exit = _mm_min_ps(_mm_set1_ps(t_max), exit);
-        _mm_storeu_ps(&t_enter[g], enter);
-        mask |= _mm_movemask_ps(_mm_cmple_ps(enter, exit)) << g;
+        mask |= slab_group_sse(r, _mm_load_ps(&node->bounds[s->near_x][g]), _mm_load_ps(&node->bounds[r->far_x][g]),
+                               _mm_load_ps(&node->bounds[s->near_y][g]), _mm_load_ps(&node->bounds[r->far_y][g]),
+                               _mm_load_ps(&node->bounds[s->near_z][g]), _mm_load_ps(&node->bounds[r->far_z][g]),
+                               t_min, t_max, &t_enter[g])
+                << g;
         if (g + 4 < WIDE_BVH_WIDTH && node->child[g + 4] == WIDE_BVH_EMPTY)
             break; /* the next four slots are empty: no box there to hit */
     }
     return mask;
 }
+
+/* Plane p of children g .. g + 3 of a quantized node, in SSE2: four bytes
+ * widened to four ints (exact), to floats (exact), times the step (exact),
+ * plus the origin: wide_bvh_dequantize's operations. */
+static inline __m128 dequantize4_sse(const wide_bvh_qnode *node, int p, int g, const __m128 step[3])
+{
+    int32_t bytes;
+    memcpy(&bytes, &node->bounds[p][g], sizeof bytes);
+    const __m128i zero = _mm_setzero_si128();
+    __m128i q = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(bytes), zero), zero);
+    return _mm_add_ps(_mm_set1_ps(node->origin[p % 3]), _mm_mul_ps(_mm_cvtepi32_ps(q), step[p % 3]));
+}
+
+static inline int qslab_test_sse(const wide_bvh_qnode *node, const wide_bvh_ray *r, float t_min, float t_max,
+                                 float t_enter[WIDE_BVH_WIDTH])
+{
+    const bvh_ray *s = &r->scalar;
+    const __m128 step[3] = {_mm_set1_ps(wide_bvh_step(node->exponent[0])), _mm_set1_ps(wide_bvh_step(node->exponent[1])),
+                            _mm_set1_ps(wide_bvh_step(node->exponent[2]))};
+    int mask = 0;
+    for (int g = 0; g < node->children; g += 4)
+        mask |= slab_group_sse(r, dequantize4_sse(node, s->near_x, g, step), dequantize4_sse(node, r->far_x, g, step),
+                               dequantize4_sse(node, s->near_y, g, step), dequantize4_sse(node, r->far_y, g, step),
+                               dequantize4_sse(node, s->near_z, g, step), dequantize4_sse(node, r->far_z, g, step),
+                               t_min, t_max, &t_enter[g])
+                << g;
+    return mask & ((1 << node->children) - 1);
+}
 #endif
 
 #if WIDE_BVH_HAVE_AVX
+#if WIDE_BVH_WIDTH == 8
+/* Eight boxes, given their six planes for this ray: the mask hit and
+ * t_enter. _mm256_max_ps and _mm256_min_ps select as their SSE forms do,
+ * and _CMP_LE_OQ answers as _mm_cmple_ps (false for NaN): the same answer
+ * for every box. */
+AVX_CODE static inline int slab_planes_avx(const wide_bvh_ray *r, __m256 near_x, __m256 far_x, __m256 near_y,
+                                           __m256 far_y, __m256 near_z, __m256 far_z, float t_min, float t_max,
+                                           float t_enter[WIDE_BVH_WIDTH])
+{
+    const bvh_ray *s = &r->scalar;
+    const __m256 ox = _mm256_set1_ps(s->origin.x), oy = _mm256_set1_ps(s->origin.y), oz = _mm256_set1_ps(s->origin.z);
+    const __m256 ix = _mm256_set1_ps(s->inverse_direction.x), iy = _mm256_set1_ps(s->inverse_direction.y);
+    const __m256 iz = _mm256_set1_ps(s->inverse_direction.z);
+    SLAB_PLANES(__m256, _mm256, ox, oy, oz, ix, iy, iz);
+    _mm256_storeu_ps(t_enter, enter);
+    return _mm256_movemask_ps(_mm256_cmp_ps(enter, exit, _CMP_LE_OQ));
+}
+#endif
+
 /* The same for all WIDE_BVH_WIDTH boxes of a node at once: one test of eight
  * lanes for an 8-wide node (a 4-wide one: the SSE test, in AVX's
- * encoding). _mm256_max_ps and _mm256_min_ps select as their SSE forms do,
- * and _CMP_LE_OQ answers as _mm_cmple_ps (false for NaN): the same answer
- * for every box. The empty slots' boxes (+inf, -inf) fail as in the SSE
+ * encoding). The empty slots' boxes (+inf, -inf) fail as in the SSE
  * test. Its target is AVX, so it is not always_inline: it is inlined into
  * the AVX entry points (flatten), which alone call it. */
 AVX_CODE static inline int slab_test_avx(const wide_bvh_node *node, const wide_bvh_ray *r, float t_min,
@@ -144,29 +227,51 @@ AVX_CODE static inline int slab_test_avx(const wide_bvh_node *node, const wide_b
 {
 #if WIDE_BVH_WIDTH == 8
     const bvh_ray *s = &r->scalar;
-    const __m256 ox = _mm256_set1_ps(s->origin.x), oy = _mm256_set1_ps(s->origin.y), oz = _mm256_set1_ps(s->origin.z);
-    const __m256 ix = _mm256_set1_ps(s->inverse_direction.x), iy = _mm256_set1_ps(s->inverse_direction.y);
-    const __m256 iz = _mm256_set1_ps(s->inverse_direction.z);
-    __m256 near_x = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[s->near_x]), ox), ix);
-    __m256 far_x = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[r->far_x]), ox), ix);
-    __m256 near_y = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[s->near_y]), oy), iy);
-    __m256 far_y = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[r->far_y]), oy), iy);
-    __m256 near_z = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[s->near_z]), oz), iz);
-    __m256 far_z = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(node->bounds[r->far_z]), oz), iz);
-    __m256 enter = _mm256_set1_ps(t_min), exit = _mm256_set1_ps(INFINITY);
-    enter = _mm256_max_ps(near_x, enter);
-    enter = _mm256_max_ps(near_y, enter);
-    enter = _mm256_max_ps(near_z, enter);
-    exit = _mm256_min_ps(far_x, exit);
-    exit = _mm256_min_ps(far_y, exit);
-    exit = _mm256_min_ps(far_z, exit);
-    exit = _mm256_mul_ps(exit, _mm256_set1_ps(BVH_SLAB_ROUNDING_PAD));
-    exit = _mm256_min_ps(_mm256_set1_ps(t_max), exit);
-    _mm256_storeu_ps(t_enter, enter);
-    return _mm256_movemask_ps(_mm256_cmp_ps(enter, exit, _CMP_LE_OQ));
+    return slab_planes_avx(r, _mm256_load_ps(node->bounds[s->near_x]), _mm256_load_ps(node->bounds[r->far_x]),
+                           _mm256_load_ps(node->bounds[s->near_y]), _mm256_load_ps(node->bounds[r->far_y]),
+                           _mm256_load_ps(node->bounds[s->near_z]), _mm256_load_ps(node->bounds[r->far_z]), t_min,
+                           t_max, t_enter);
 #else
     return slab_test4_sse(node, r, t_min, t_max, t_enter);
 #endif
+}
+
+/* A quantized node in AVX2 (its one instruction that widens eight bytes to
+ * eight ints): plane p of the eight children, wide_bvh_dequantize's
+ * operations; then the same test. A 4-wide node: the SSE test in AVX2's
+ * encoding. */
+#define AVX2_CODE __attribute__((target("avx2")))
+#if WIDE_BVH_WIDTH == 8
+AVX2_CODE static inline __m256 dequantize8_avx2(const wide_bvh_qnode *node, int p, const __m256 step[3])
+{
+    __m256i q = _mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)node->bounds[p]));
+    return _mm256_add_ps(_mm256_set1_ps(node->origin[p % 3]), _mm256_mul_ps(_mm256_cvtepi32_ps(q), step[p % 3]));
+}
+#endif
+
+AVX2_CODE static inline int qslab_test_avx2(const wide_bvh_qnode *node, const wide_bvh_ray *r, float t_min,
+                                            float t_max, float t_enter[WIDE_BVH_WIDTH])
+{
+#if WIDE_BVH_WIDTH == 8
+    const bvh_ray *s = &r->scalar;
+    const __m256 step[3] = {_mm256_set1_ps(wide_bvh_step(node->exponent[0])),
+                            _mm256_set1_ps(wide_bvh_step(node->exponent[1])),
+                            _mm256_set1_ps(wide_bvh_step(node->exponent[2]))};
+    int mask = slab_planes_avx(r, dequantize8_avx2(node, s->near_x, step), dequantize8_avx2(node, r->far_x, step),
+                               dequantize8_avx2(node, s->near_y, step), dequantize8_avx2(node, r->far_y, step),
+                               dequantize8_avx2(node, s->near_z, step), dequantize8_avx2(node, r->far_z, step), t_min,
+                               t_max, t_enter);
+    return mask & ((1 << node->children) - 1);
+#else
+    return qslab_test_sse(node, r, t_min, t_max, t_enter);
+#endif
+}
+
+AVX2_CODE __attribute__((noinline)) static int qslab_test_avx2_alone(const wide_bvh_qnode *node,
+                                                                    const wide_bvh_ray *r, float t_min, float t_max,
+                                                                    float t_enter[WIDE_BVH_WIDTH])
+{
+    return qslab_test_avx2(node, r, t_min, t_max, t_enter);
 }
 
 AVX_CODE __attribute__((noinline)) static int slab_test_avx_alone(const wide_bvh_node *node, const wide_bvh_ray *r,

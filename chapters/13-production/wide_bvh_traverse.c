@@ -29,6 +29,22 @@ int wide_bvh_slab_test(const wide_bvh_node *node, ray r, float t_min, float t_ma
     return slab_test4_scalar(node, &r4, t_min, t_max, t_enter);
 }
 
+int wide_bvh_qslab_test(const wide_bvh_qnode *node, ray r, float t_min, float t_max, float t_enter[WIDE_BVH_WIDTH],
+                        wide_bvh_kernel kernel)
+{
+    wide_bvh_ray r4 = wide_bvh_ray_make(&r);
+#if WIDE_BVH_HAVE_AVX
+    if (kernel == WIDE_BVH_KERNEL_AVX)
+        return qslab_test_avx2_alone(node, &r4, t_min, t_max, t_enter);
+#endif
+#if WIDE_BVH_HAVE_SSE
+    if (kernel == WIDE_BVH_KERNEL_SSE)
+        return qslab_test_sse(node, &r4, t_min, t_max, t_enter);
+#endif
+    (void)kernel;
+    return qslab_test_scalar(node, &r4, t_min, t_max, t_enter);
+}
+
 int wide_bvh_triangle_test(const wide_bvh_packet *packet, ray r, float t_max, float t[4], float b1[4], float b2[4],
                        wide_bvh_kernel kernel, triangle_test test)
 {
@@ -48,10 +64,16 @@ int wide_bvh_triangle_test(const wide_bvh_packet *packet, ray r, float t_max, fl
 /* ---- traversal ------------------------------------------------------------------- */
 
 
-/* What a traversal found: the closest triangle so far (4 packet + lane). */
+/* What a traversal found: the closest triangle so far (4 packet + lane),
+ * its index in the set, and the t below which a triangle is still tested:
+ * the ray's t_max until a hit, then the float just above the hit's t, so
+ * that a triangle at the very same t is tested too, and the lower index
+ * wins (test_leaf4). */
 typedef struct {
     int lane; /* -1: none */
     float t, b1, b2;
+    int index;
+    float t_test;
 } wide_bvh_found;
 
 typedef struct {
@@ -71,12 +93,15 @@ static inline int lowest_bit(unsigned mask) { return __builtin_ctz(mask); }
  * a call to a pure function whose result is unused for dead code. Where
  * this function was not inlined early, as in the closest-hit traversal, the
  * call and every prefetch in it silently vanished (objdump showed none). */
-static ALWAYS_INLINE void prefetch_child(const wide_bvh *b, uint32_t ref)
+static ALWAYS_INLINE void prefetch_child(const wide_bvh *b, uint32_t ref, bool quantized)
 {
 #if defined(__GNUC__)
     if (!wide_bvh_is_leaf(ref)) {
-        const char *p = (const char *)&b->nodes[ref];
-        for (size_t line = 0; line < sizeof(wide_bvh_node); line += 64)
+        /* a quantized 8-wide node, 96 bytes from a multiple of 32: two lines,
+         * at p and p + 64, wherever it starts */
+        const char *p = quantized ? (const char *)&b->qnodes[ref] : (const char *)&b->nodes[ref];
+        size_t size = quantized ? sizeof(wide_bvh_qnode) : sizeof(wide_bvh_node);
+        for (size_t line = 0; line < size; line += 64)
             __builtin_prefetch(p + line);
         return;
     }
@@ -91,6 +116,7 @@ static ALWAYS_INLINE void prefetch_child(const wide_bvh *b, uint32_t ref)
 #else
     (void)b;
     (void)ref;
+    (void)quantized;
 #endif
 }
 
@@ -116,9 +142,13 @@ static ALWAYS_INLINE void prefetch_hit(const wide_bvh *b, int32_t lane_index)
 #endif
 }
 
-/* The leaf's packets against (t_min, found->t). The lanes hit in a packet
- * all lie before found->t; the closest of them, the first among equals,
- * wins: what testing the triangles one by one in lane order gives. */
+/* The leaf's packets against (t_min, found->t_test). The closest lane hit
+ * wins, and of equal t the lower triangle index, as in brute force: which
+ * triangle a ray through a shared edge reports then depends on the
+ * triangles alone, not on the order the walk met them. That order depends
+ * on the boxes (the same tree with larger boxes, such as quantized ones,
+ * may let a ray enter the children in another order), and the hits must
+ * not. */
 static ALWAYS_INLINE bool test_leaf4(const wide_bvh *b, uint32_t ref, const wide_bvh_ray *r4, const ray *r, wide_bvh_found *found,
                               bool stop_at_first, bool sse, bool watertight, uint64_t *primitive_tests)
 {
@@ -126,15 +156,17 @@ static ALWAYS_INLINE bool test_leaf4(const wide_bvh *b, uint32_t ref, const wide
     for (int p = 0; p * 4 < count; p++) {
         float t[4], b1[4], b2[4];
         const wide_bvh_packet *packet = &b->packets[first + p];
-        int mask = triangle_test4(packet, r4, r, found->t, t, b1, b2, sse, watertight);
+        int mask = triangle_test4(packet, r4, r, found->t_test, t, b1, b2, sse, watertight);
         *primitive_tests += (uint64_t)(count - 4 * p < 4 ? count - 4 * p : 4);
         if (mask == 0)
             continue;
         while (mask != 0) {
             int k = lowest_bit((unsigned)mask);
             mask &= mask - 1;
-            if (t[k] < found->t)
-                *found = (wide_bvh_found){4 * (first + p) + k, t[k], b1[k], b2[k]};
+            int index = wide_bvh_lane_triangle(packet->index[k]);
+            if (t[k] < found->t || (t[k] == found->t && index < found->index))
+                *found = (wide_bvh_found){4 * (first + p) + k, t[k], b1[k], b2[k], index,
+                                          nextafterf(t[k], INFINITY)};
         }
         if (stop_at_first)
             return true;
@@ -163,7 +195,7 @@ static ALWAYS_INLINE bool traversal_begin(const wide_bvh *b, const ray *r, wide_
 {
     w->r = *r;
     w->r4 = wide_bvh_ray_make(r);
-    w->found = (wide_bvh_found){-1, r->t_max, 0.0f, 0.0f};
+    w->found = (wide_bvh_found){-1, r->t_max, 0.0f, 0.0f, -1, r->t_max};
     w->current = 0; /* the root */
     w->top = 0;
     w->box_tests = w->primitive_tests = 0;
@@ -173,26 +205,51 @@ static ALWAYS_INLINE bool traversal_begin(const wide_bvh *b, const ray *r, wide_
 /* Visit w->current -- slab-test a node's children, or test a leaf's
  * triangles -- and choose the next one to visit. Returns false when the
  * walk is over: the stack is empty, or (any hit) a triangle was hit. */
-static ALWAYS_INLINE bool traversal_step(const wide_bvh *b, wide_bvh_traversal *w, bool stop_at_first, bool sse, bool avx,
-                                         bool watertight)
+/* The slab test of node n's children, by layout and kernel: the mask of
+ * those hit, their t_enter, and where their references are. */
+static ALWAYS_INLINE int node_test(const wide_bvh *b, uint32_t n, const wide_bvh_traversal *w, float cull,
+                                   float t_enter[WIDE_BVH_WIDTH], const uint32_t **child, int *children, bool sse,
+                                   bool avx, bool quantized)
 {
-    if (!wide_bvh_is_leaf(w->current)) {
-        const wide_bvh_node *node = &b->nodes[w->current];
-        float t_enter[WIDE_BVH_WIDTH];
-        float cull = w->found.t * BVH_CULL_SLACK;
-        int mask;
+    if (quantized) {
+        const wide_bvh_qnode *node = &b->qnodes[n];
+        *child = node->child;
+        *children = node->children;
 #if WIDE_BVH_HAVE_AVX
         if (avx)
-            mask = slab_test_avx(node, &w->r4, w->r.t_min, cull, t_enter);
-        else
+            return qslab_test_avx2(node, &w->r4, w->r.t_min, cull, t_enter);
 #endif
 #if WIDE_BVH_HAVE_SSE
         if (sse)
-            mask = slab_test4_sse(node, &w->r4, w->r.t_min, cull, t_enter);
-        else
+            return qslab_test_sse(node, &w->r4, w->r.t_min, cull, t_enter);
 #endif
-            mask = slab_test4_scalar(node, &w->r4, w->r.t_min, cull, t_enter);
-        w->box_tests += node->children;
+        return qslab_test_scalar(node, &w->r4, w->r.t_min, cull, t_enter);
+    }
+    const wide_bvh_node *node = &b->nodes[n];
+    *child = node->child;
+    *children = (int)node->children;
+#if WIDE_BVH_HAVE_AVX
+    if (avx)
+        return slab_test_avx(node, &w->r4, w->r.t_min, cull, t_enter);
+#endif
+#if WIDE_BVH_HAVE_SSE
+    if (sse)
+        return slab_test4_sse(node, &w->r4, w->r.t_min, cull, t_enter);
+#endif
+    (void)sse, (void)avx;
+    return slab_test4_scalar(node, &w->r4, w->r.t_min, cull, t_enter);
+}
+
+static ALWAYS_INLINE bool traversal_step(const wide_bvh *b, wide_bvh_traversal *w, bool stop_at_first, bool sse, bool avx,
+                                         bool watertight, bool quantized)
+{
+    if (!wide_bvh_is_leaf(w->current)) {
+        float t_enter[WIDE_BVH_WIDTH];
+        float cull = w->found.t * BVH_CULL_SLACK;
+        const uint32_t *child;
+        int children;
+        int mask = node_test(b, w->current, w, cull, t_enter, &child, &children, sse, avx, quantized);
+        w->box_tests += (uint64_t)children;
         if (mask != 0 && stop_at_first) {
             /* Any hit: every child hit may end the walk, whichever is
              * first; no order to sort. Visit the nearest (the likeliest to
@@ -205,10 +262,10 @@ static ALWAYS_INLINE bool traversal_step(const wide_bvh *b, wide_bvh_traversal *
                 bool nearer = t_enter[j] < t_enter[k];
                 int pushed = nearer ? k : j;
                 k = nearer ? j : k;
-                prefetch_child(b, node->child[pushed]);
-                w->stack[w->top++] = (wide_bvh_entry){node->child[pushed], t_enter[pushed]};
+                prefetch_child(b, child[pushed], quantized);
+                w->stack[w->top++] = (wide_bvh_entry){child[pushed], t_enter[pushed]};
             }
-            w->current = node->child[k];
+            w->current = child[k];
             return true;
         }
         if (mask != 0) {
@@ -216,7 +273,7 @@ static ALWAYS_INLINE bool traversal_step(const wide_bvh *b, wide_bvh_traversal *
             mask &= mask - 1;
             if (mask == 0) {
                 /* one child hit: no order to decide */
-                w->current = node->child[k];
+                w->current = child[k];
                 return true;
             }
             int k2 = lowest_bit((unsigned)mask);
@@ -225,9 +282,9 @@ static ALWAYS_INLINE bool traversal_step(const wide_bvh *b, wide_bvh_traversal *
                 /* two (the commonest case): one comparison orders them */
                 bool second_first = t_enter[k2] < t_enter[k];
                 int near = second_first ? k2 : k, far = second_first ? k : k2;
-                prefetch_child(b, node->child[far]);
-                w->stack[w->top++] = (wide_bvh_entry){node->child[far], t_enter[far]};
-                w->current = node->child[near];
+                prefetch_child(b, child[far], quantized);
+                w->stack[w->top++] = (wide_bvh_entry){child[far], t_enter[far]};
+                w->current = child[near];
                 return true;
             }
             mask |= 1 << k2;
@@ -235,13 +292,13 @@ static ALWAYS_INLINE bool traversal_step(const wide_bvh *b, wide_bvh_traversal *
              * (insertion sort), push all but the nearest, visit it. */
             wide_bvh_entry hits[WIDE_BVH_WIDTH];
             int n = 0;
-            hits[n++] = (wide_bvh_entry){node->child[k], t_enter[k]};
-            prefetch_child(b, node->child[k]);
+            hits[n++] = (wide_bvh_entry){child[k], t_enter[k]};
+            prefetch_child(b, child[k], quantized);
             while (mask != 0) {
                 k = lowest_bit((unsigned)mask);
                 mask &= mask - 1;
-                wide_bvh_entry e = {node->child[k], t_enter[k]};
-                prefetch_child(b, e.ref);
+                wide_bvh_entry e = {child[k], t_enter[k]};
+                prefetch_child(b, e.ref, quantized);
                 int j = n++;
                 while (j > 0 && hits[j - 1].t_enter < e.t_enter) {
                     hits[j] = hits[j - 1];
@@ -270,11 +327,11 @@ static ALWAYS_INLINE bool traversal_step(const wide_bvh *b, wide_bvh_traversal *
 }
 
 static ALWAYS_INLINE wide_bvh_found traverse4(const wide_bvh *b, const ray *r, bool stop_at_first, bool sse, bool avx,
-                                          bool watertight, ray_counters *counters)
+                                          bool watertight, bool quantized, ray_counters *counters)
 {
     wide_bvh_traversal w;
     if (traversal_begin(b, r, &w))
-        while (traversal_step(b, &w, stop_at_first, sse, avx, watertight))
+        while (traversal_step(b, &w, stop_at_first, sse, avx, watertight, quantized))
             ;
     counters->box_tests += w.box_tests;
     counters->primitive_tests += w.primitive_tests;
@@ -303,108 +360,6 @@ static bool finish_closest(const wide_bvh *b, const wide_bvh_found *found, const
     return true;
 }
 
-/* One walk per kernel and query, each with the kernel and the query
- * constant inside (ALWAYS_INLINE), the triangle test chosen once per ray.
- * The AVX ones are compiled for AVX, everything they call inlined
- * (flatten), the SSE tests included, in AVX's encoding. */
-static ALWAYS_INLINE wide_bvh_found traverse4_with(const accel *a, const ray *r, bool stop_at_first, bool sse, bool avx,
-                                               ray_counters *counters)
-{
-    const wide_bvh *b = (const wide_bvh *)a;
-    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
-        return traverse4(b, r, stop_at_first, sse, avx, true, counters);
-    return traverse4(b, r, stop_at_first, sse, avx, false, counters);
-}
-
-static wide_bvh_found closest_scalar(const accel *a, const ray *r, ray_counters *counters)
-{
-    return traverse4_with(a, r, false, false, false, counters);
-}
-
-static wide_bvh_found any_scalar(const accel *a, const ray *r, ray_counters *counters)
-{
-    return traverse4_with(a, r, true, false, false, counters);
-}
-
-#if WIDE_BVH_HAVE_SSE
-static wide_bvh_found closest_sse(const accel *a, const ray *r, ray_counters *counters)
-{
-    return traverse4_with(a, r, false, true, false, counters);
-}
-
-static wide_bvh_found any_sse(const accel *a, const ray *r, ray_counters *counters)
-{
-    return traverse4_with(a, r, true, true, false, counters);
-}
-#endif
-
-#if WIDE_BVH_HAVE_AVX
-AVX_CODE __attribute__((flatten)) static wide_bvh_found closest_avx(const accel *a, const ray *r,
-                                                                      ray_counters *counters)
-{
-    return traverse4_with(a, r, false, true, true, counters);
-}
-
-AVX_CODE __attribute__((flatten)) static wide_bvh_found any_avx(const accel *a, const ray *r, ray_counters *counters)
-{
-    return traverse4_with(a, r, true, true, true, counters);
-}
-#endif
-
-/* The walk of the tree's kernel. */
-static wide_bvh_found closest_found(const accel *a, const ray *r, ray_counters *counters)
-{
-    switch (((const wide_bvh *)a)->kernel) {
-#if WIDE_BVH_HAVE_AVX
-    case WIDE_BVH_KERNEL_AVX:
-        return closest_avx(a, r, counters);
-#endif
-#if WIDE_BVH_HAVE_SSE
-    case WIDE_BVH_KERNEL_SSE:
-        return closest_sse(a, r, counters);
-#endif
-    default:
-        return closest_scalar(a, r, counters);
-    }
-}
-
-static bool closest_hit_scalar(const accel *a, ray r, hit_record *hit, ray_counters *counters)
-{
-    wide_bvh_found found = closest_scalar(a, &r, counters);
-    return finish_closest((const wide_bvh *)a, &found, &r, hit);
-}
-
-static bool any_hit_scalar(const accel *a, ray r, ray_counters *counters)
-{
-    return any_scalar(a, &r, counters).lane >= 0;
-}
-
-#if WIDE_BVH_HAVE_SSE
-static bool closest_hit_sse(const accel *a, ray r, hit_record *hit, ray_counters *counters)
-{
-    wide_bvh_found found = closest_sse(a, &r, counters);
-    return finish_closest((const wide_bvh *)a, &found, &r, hit);
-}
-
-static bool any_hit_sse(const accel *a, ray r, ray_counters *counters)
-{
-    return any_sse(a, &r, counters).lane >= 0;
-}
-#endif
-
-#if WIDE_BVH_HAVE_AVX
-static bool closest_hit_avx(const accel *a, ray r, hit_record *hit, ray_counters *counters)
-{
-    wide_bvh_found found = closest_avx(a, &r, counters);
-    return finish_closest((const wide_bvh *)a, &found, &r, hit);
-}
-
-static bool any_hit_avx(const accel *a, ray r, ray_counters *counters)
-{
-    return any_avx(a, &r, counters).lane >= 0;
-}
-#endif
-
 /* ---- a stream of rays, taking turns ---------------------------------------------------
  * On a mesh far larger than the cache, one ray's walk is a chain of waits:
  * a node must arrive from memory before its boxes can say which node comes
@@ -417,7 +372,7 @@ static bool any_hit_avx(const accel *a, ray r, ray_counters *counters)
  * order: the same hits, bit for bit. */
 static ALWAYS_INLINE void stream4(const wide_bvh *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
                                   wide_bvh_found *raw, bool stop_at_first, bool sse, bool avx, bool watertight,
-                                  ray_counters *counters)
+                                  bool quantized, ray_counters *counters)
 {
     wide_bvh_traversal lanes[WIDE_BVH_STREAM_LANES];
     int ray_of[WIDE_BVH_STREAM_LANES]; /* the ray each lane walks, -1: none left */
@@ -459,8 +414,8 @@ static ALWAYS_INLINE void stream4(const wide_bvh *b, const ray *rays, int count,
             if (ray_of[k] < 0)
                 continue;
             wide_bvh_traversal *w = &lanes[k];
-            if (traversal_step(b, w, stop_at_first, sse, avx, watertight)) {
-                prefetch_child(b, w->current);
+            if (traversal_step(b, w, stop_at_first, sse, avx, watertight, quantized)) {
+                prefetch_child(b, w->current, quantized);
                 continue;
             }
             int i = ray_of[k];
@@ -491,54 +446,133 @@ static ALWAYS_INLINE void stream4(const wide_bvh *b, const ray *rays, int count,
     }
 }
 
-/* The query and the triangle test chosen once per stream, so stream4() is
- * compiled with them fixed, for each kernel. */
+/* ---- one walk per kernel, layout and query -----------------------------------------
+ * Each with the kernel, the layout and the query constant inside
+ * (ALWAYS_INLINE), the triangle test chosen once per ray or stream. The
+ * AVX ones are compiled for AVX (exact nodes) or AVX2 (quantized ones),
+ * everything they call inlined (flatten), the SSE tests included, in AVX's
+ * encoding. */
+static ALWAYS_INLINE wide_bvh_found traverse4_with(const accel *a, const ray *r, bool stop_at_first, bool sse, bool avx,
+                                               bool quantized, ray_counters *counters)
+{
+    const wide_bvh *b = (const wide_bvh *)a;
+    if (a->triangle_test == TRIANGLE_TEST_WATERTIGHT)
+        return traverse4(b, r, stop_at_first, sse, avx, true, quantized, counters);
+    return traverse4(b, r, stop_at_first, sse, avx, false, quantized, counters);
+}
+
 static ALWAYS_INLINE void stream4_with(const wide_bvh *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
-                                       wide_bvh_found *raw, bool stop_at_first, bool sse, bool avx,
+                                       wide_bvh_found *raw, bool stop_at_first, bool sse, bool avx, bool quantized,
                                        ray_counters *counters)
 {
     bool watertight = b->base.triangle_test == TRIANGLE_TEST_WATERTIGHT;
     if (stop_at_first) {
         if (watertight)
-            stream4(b, rays, count, hits, hit_found, NULL, true, sse, avx, true, counters);
+            stream4(b, rays, count, hits, hit_found, NULL, true, sse, avx, true, quantized, counters);
         else
-            stream4(b, rays, count, hits, hit_found, NULL, true, sse, avx, false, counters);
+            stream4(b, rays, count, hits, hit_found, NULL, true, sse, avx, false, quantized, counters);
     } else if (raw != NULL) {
-        stream4(b, rays, count, hits, hit_found, raw, false, sse, avx, watertight, counters);
+        stream4(b, rays, count, hits, hit_found, raw, false, sse, avx, watertight, quantized, counters);
     } else if (watertight) {
-        stream4(b, rays, count, hits, hit_found, NULL, false, sse, avx, true, counters);
+        stream4(b, rays, count, hits, hit_found, NULL, false, sse, avx, true, quantized, counters);
     } else {
-        stream4(b, rays, count, hits, hit_found, NULL, false, sse, avx, false, counters);
+        stream4(b, rays, count, hits, hit_found, NULL, false, sse, avx, false, quantized, counters);
     }
 }
 
-#if WIDE_BVH_HAVE_AVX
-AVX_CODE __attribute__((flatten)) static void stream4_avx(const wide_bvh *b, const ray *rays, int count,
-                                                                hit_record *hits, bool *hit_found, wide_bvh_found *raw,
-                                                                bool stop_at_first, ray_counters *counters)
-{
-    stream4_with(b, rays, count, hits, hit_found, raw, stop_at_first, true, true, counters);
-}
+static void wide_bvh_destroy(accel *a);
+
+typedef wide_bvh_found (*walk_fn)(const accel *a, const ray *r, ray_counters *counters);
+typedef void (*stream_fn)(const wide_bvh *b, const ray *rays, int count, hit_record *hits, bool *hit_found,
+                          wide_bvh_found *raw, bool stop_at_first, ray_counters *counters);
+
+/* A kernel's entry points for one layout: the closest-hit walk, the
+ * stream, and the accel_ops (closest and any hit). */
+typedef struct {
+    walk_fn closest;
+    stream_fn stream;
+    accel_ops ops;
+} entry_points;
+
+#define WIDE_BVH_ENTRY_POINTS(NAME, TARGET, SSE, AVX, QUANTIZED)                                                  \
+    TARGET static wide_bvh_found closest_##NAME(const accel *a, const ray *r, ray_counters *counters)            \
+    {                                                                                                            \
+        return traverse4_with(a, r, false, SSE, AVX, QUANTIZED, counters);                                       \
+    }                                                                                                            \
+    TARGET static wide_bvh_found any_##NAME(const accel *a, const ray *r, ray_counters *counters)                \
+    {                                                                                                            \
+        return traverse4_with(a, r, true, SSE, AVX, QUANTIZED, counters);                                        \
+    }                                                                                                            \
+    TARGET static void stream_##NAME(const wide_bvh *b, const ray *rays, int count, hit_record *hits,            \
+                                     bool *hit_found, wide_bvh_found *raw, bool stop_at_first,                  \
+                                     ray_counters *counters)                                                     \
+    {                                                                                                            \
+        stream4_with(b, rays, count, hits, hit_found, raw, stop_at_first, SSE, AVX, QUANTIZED, counters);        \
+    }                                                                                                            \
+    static bool closest_hit_##NAME(const accel *a, ray r, hit_record *hit, ray_counters *counters)               \
+    {                                                                                                            \
+        wide_bvh_found found = closest_##NAME(a, &r, counters);                                                  \
+        return finish_closest((const wide_bvh *)a, &found, &r, hit);                                             \
+    }                                                                                                            \
+    static bool any_hit_##NAME(const accel *a, ray r, ray_counters *counters)                                    \
+    {                                                                                                            \
+        return any_##NAME(a, &r, counters).lane >= 0;                                                            \
+    }                                                                                                            \
+    static const entry_points entry_##NAME = {                                                                   \
+        closest_##NAME, stream_##NAME, {closest_hit_##NAME, any_hit_##NAME, wide_bvh_destroy, wide_bvh_use_triangle_test}};
+
+WIDE_BVH_ENTRY_POINTS(scalar, , false, false, false)
+WIDE_BVH_ENTRY_POINTS(scalar_quantized, , false, false, true)
+#if WIDE_BVH_HAVE_SSE
+WIDE_BVH_ENTRY_POINTS(sse, , true, false, false)
+WIDE_BVH_ENTRY_POINTS(sse_quantized, , true, false, true)
 #endif
+#if WIDE_BVH_HAVE_AVX
+WIDE_BVH_ENTRY_POINTS(avx, AVX_CODE __attribute__((flatten)), true, true, false)
+WIDE_BVH_ENTRY_POINTS(avx_quantized, AVX2_CODE __attribute__((flatten)), true, true, true)
+#endif
+
+/* The entry points of a layout and kernel (NULL: not compiled in). */
+static const entry_points *entry_points_of(wide_bvh_layout layout, wide_bvh_kernel kernel)
+{
+    static const entry_points *const table[2][3] = {
+        [WIDE_BVH_EXACT] =
+            {
+                [WIDE_BVH_KERNEL_SCALAR] = &entry_scalar,
+#if WIDE_BVH_HAVE_SSE
+                [WIDE_BVH_KERNEL_SSE] = &entry_sse,
+#endif
+#if WIDE_BVH_HAVE_AVX
+                [WIDE_BVH_KERNEL_AVX] = &entry_avx,
+#endif
+            },
+        [WIDE_BVH_QUANTIZED] =
+            {
+                [WIDE_BVH_KERNEL_SCALAR] = &entry_scalar_quantized,
+#if WIDE_BVH_HAVE_SSE
+                [WIDE_BVH_KERNEL_SSE] = &entry_sse_quantized,
+#endif
+#if WIDE_BVH_HAVE_AVX
+                [WIDE_BVH_KERNEL_AVX] = &entry_avx_quantized,
+#endif
+            },
+    };
+    return table[layout][kernel];
+}
+
+static const entry_points *entry_points_of_tree(const wide_bvh *b) { return entry_points_of(b->layout, b->kernel); }
+
+/* The walk of the tree's kernel. */
+static wide_bvh_found closest_found(const accel *a, const ray *r, ray_counters *counters)
+{
+    return entry_points_of_tree((const wide_bvh *)a)->closest(a, r, counters);
+}
 
 static void stream4_with_kernel(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
                                 wide_bvh_found *raw, bool stop_at_first, ray_counters *counters)
 {
     const wide_bvh *b = (const wide_bvh *)a;
-#if WIDE_BVH_HAVE_AVX
-    if (b->kernel == WIDE_BVH_KERNEL_AVX) {
-        stream4_avx(b, rays, count, hits, hit_found, raw, stop_at_first, counters);
-        return;
-    }
-#endif
-#if WIDE_BVH_HAVE_SSE
-    if (b->kernel == WIDE_BVH_KERNEL_SSE) {
-        stream4_with(b, rays, count, hits, hit_found, raw, stop_at_first, true, false, counters);
-        return;
-    }
-#endif
-    bool watertight = a->triangle_test == TRIANGLE_TEST_WATERTIGHT;
-    stream4(b, rays, count, hits, hit_found, raw, stop_at_first, false, false, watertight, counters);
+    entry_points_of_tree(b)->stream(b, rays, count, hits, hit_found, raw, stop_at_first, counters);
 }
 
 void wide_bvh_closest_hit_stream(const accel *a, const ray *rays, int count, hit_record *hits, bool *hit_found,
@@ -586,27 +620,16 @@ static void wide_bvh_destroy(accel *a)
 {
     wide_bvh *b = (wide_bvh *)a;
     free(b->nodes);
+    free(b->qnodes);
     free(b->packets);
     free(b);
 }
-
-static const accel_ops wide_bvh_ops_scalar = {closest_hit_scalar, any_hit_scalar, wide_bvh_destroy, wide_bvh_use_triangle_test};
-#if WIDE_BVH_HAVE_SSE
-static const accel_ops wide_bvh_ops_sse = {closest_hit_sse, any_hit_sse, wide_bvh_destroy, wide_bvh_use_triangle_test};
-#endif
-#if WIDE_BVH_HAVE_AVX
-static const accel_ops wide_bvh_ops_avx = {closest_hit_avx, any_hit_avx, wide_bvh_destroy, wide_bvh_use_triangle_test};
-#endif
 
 bool wide_bvh_is(const accel *a) { return a != NULL && a->ops->destroy == wide_bvh_destroy; }
 
 const accel_ops *wide_bvh_default_ops(void)
 {
-#if WIDE_BVH_HAVE_SSE
-    return &wide_bvh_ops_sse;
-#else
-    return &wide_bvh_ops_scalar;
-#endif
+    return &entry_points_of(WIDE_BVH_EXACT, WIDE_BVH_HAVE_SSE ? WIDE_BVH_KERNEL_SSE : WIDE_BVH_KERNEL_SCALAR)->ops;
 }
 
 bool wide_bvh_kernel_runs(wide_bvh_kernel kernel)
@@ -628,19 +651,15 @@ bool wide_bvh_kernel_runs(wide_bvh_kernel kernel)
 
 bool wide_bvh_set_kernel(accel *a, wide_bvh_kernel kernel)
 {
-    static const accel_ops *const ops[] = {
-#if WIDE_BVH_HAVE_SSE
-        [WIDE_BVH_KERNEL_SSE] = &wide_bvh_ops_sse,
-#endif
-#if WIDE_BVH_HAVE_AVX
-        [WIDE_BVH_KERNEL_AVX] = &wide_bvh_ops_avx,
-#endif
-        [WIDE_BVH_KERNEL_SCALAR] = &wide_bvh_ops_scalar,
-    };
+    wide_bvh *b = (wide_bvh *)a;
     if (!wide_bvh_kernel_runs(kernel))
         return false;
-    wide_bvh *b = (wide_bvh *)a;
+#if WIDE_BVH_HAVE_AVX
+    /* the quantized nodes' AVX test widens bytes with AVX2 */
+    if (kernel == WIDE_BVH_KERNEL_AVX && b->layout == WIDE_BVH_QUANTIZED && !__builtin_cpu_supports("avx2"))
+        return false;
+#endif
     b->kernel = kernel;
-    b->base.ops = ops[kernel];
+    b->base.ops = &entry_points_of(b->layout, kernel)->ops;
     return true;
 }

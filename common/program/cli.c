@@ -489,6 +489,9 @@ void cli_parse_or_exit(int argc, char **argv, const cli_spec *spec, cli_options 
 #ifdef _OPENMP
     if (opts->threads == 0)
         opts->threads = omp_get_max_threads();
+    /* Everything else the program runs in parallel (building its trees)
+     * takes --threads too, not only the render. */
+    omp_set_num_threads(opts->threads);
 #else
     opts->threads = 1;
 #endif

@@ -66,9 +66,9 @@ int wide_bvh_triangle_test(const wide_bvh_packet *packet, ray r, float t_max, fl
 
 /* What a traversal found: the closest triangle so far (4 packet + lane),
  * its index in the set, and the t below which a triangle is still tested:
- * the ray's t_max until a hit, then the float just above the hit's t, so
- * that a triangle at the very same t is tested too, and the lower index
- * wins (test_leaf4). */
+ * the ray's t_max until a hit, then the hit's t (an exact tree) or the
+ * float just above it (a quantized tree: a triangle at the very same t is
+ * tested too, and the lower index wins; test_leaf4). */
 typedef struct {
     int lane; /* -1: none */
     float t, b1, b2;
@@ -142,15 +142,31 @@ static ALWAYS_INLINE void prefetch_hit(const wide_bvh *b, int32_t lane_index)
 #endif
 }
 
+/* The float just above a hit's t: one more in its bit pattern where t is
+ * positive and finite (every hit the walk keeps), nextafterf elsewhere.
+ * libm's nextafterf is a call, and this runs on every closer hit. */
+static ALWAYS_INLINE float float_above(float t)
+{
+    if (!(t > 0.0f && t < INFINITY))
+        return nextafterf(t, INFINITY);
+    uint32_t bits;
+    memcpy(&bits, &t, sizeof bits);
+    bits += 1;
+    memcpy(&t, &bits, sizeof t);
+    return t;
+}
+
 /* The leaf's packets against (t_min, found->t_test). The closest lane hit
- * wins, and of equal t the lower triangle index, as in brute force: which
- * triangle a ray through a shared edge reports then depends on the
- * triangles alone, not on the order the walk met them. That order depends
- * on the boxes (the same tree with larger boxes, such as quantized ones,
- * may let a ray enter the children in another order), and the hits must
- * not. */
+ * wins. In a quantized tree, of equal t the lower triangle index wins too,
+ * as in brute force: which triangle a ray through a shared edge reports
+ * then depends on the triangles alone, not on the order the walk met them.
+ * That order depends on the boxes (the same tree with larger boxes may let
+ * a ray enter the children in another order), and the hits must not. The
+ * exact tree's walk meets them in chapter 06's order, which gives brute
+ * force's answer already (the differential tests), so it keeps the
+ * cheaper test: no index to load on every hit. */
 static ALWAYS_INLINE bool test_leaf4(const wide_bvh *b, uint32_t ref, const wide_bvh_ray *r4, const ray *r, wide_bvh_found *found,
-                              bool stop_at_first, bool sse, bool watertight, uint64_t *primitive_tests)
+                              bool stop_at_first, bool sse, bool watertight, bool quantized, uint64_t *primitive_tests)
 {
     int count = wide_bvh_leaf_triangles(ref), first = wide_bvh_leaf_first_packet(ref);
     for (int p = 0; p * 4 < count; p++) {
@@ -163,10 +179,15 @@ static ALWAYS_INLINE bool test_leaf4(const wide_bvh *b, uint32_t ref, const wide
         while (mask != 0) {
             int k = lowest_bit((unsigned)mask);
             mask &= mask - 1;
+            if (!quantized) {
+                if (t[k] < found->t)
+                    *found = (wide_bvh_found){4 * (first + p) + k, t[k], b1[k], b2[k], -1, t[k]};
+                continue;
+            }
             int index = wide_bvh_lane_triangle(packet->index[k]);
             if (t[k] < found->t || (t[k] == found->t && index < found->index))
                 *found = (wide_bvh_found){4 * (first + p) + k, t[k], b1[k], b2[k], index,
-                                          nextafterf(t[k], INFINITY)};
+                                          float_above(t[k])};
         }
         if (stop_at_first)
             return true;
@@ -311,7 +332,7 @@ static ALWAYS_INLINE bool traversal_step(const wide_bvh *b, wide_bvh_traversal *
             w->current = hits[n - 1].ref;
             return true;
         }
-    } else if (test_leaf4(b, w->current, &w->r4, &w->r, &w->found, stop_at_first, sse, watertight,
+    } else if (test_leaf4(b, w->current, &w->r4, &w->r, &w->found, stop_at_first, sse, watertight, quantized,
                           &w->primitive_tests)) {
         return false;
     }

@@ -26,6 +26,19 @@ static const double T_TOLERANCE = 1e-5;
 
 /* ---- a handful of triangles and a tree over them --------------------------- */
 
+/* How far each vertex of the icosphere moves, at most (about a tenth of an
+ * edge at subdivision 3): enough that no two faces share a plane by
+ * symmetry, so the rays meet faces at every angle, not only the few the
+ * perfect icosphere has. */
+#define VERTEX_JITTER 0.02f
+/* The angles (radians) between a ray and a face it grazes: from where a
+ * float direction can no longer tell the face's plane (10⁻⁷, about one
+ * ulp) to steep rays; and the band the kd-tree's fixed margin of 2⁻¹⁶
+ * fails in (10⁻⁶ to 10⁻³), where the hit's error bound must take over. */
+#define GRAZING_ANGLE_MIN 1e-7
+#define GRAZING_ANGLE_MAX 1.0
+#define FIXED_MARGIN_FAILS_MIN 1e-6
+#define FIXED_MARGIN_FAILS_MAX 1e-3
 typedef struct {
     mesh m;
     triangle_set set;
@@ -858,7 +871,7 @@ static void vertex_rays_make(vertex_rays *vr, uint64_t seed)
     mesh_icosphere(&vr->m, vec3_make(0, 0, 0), 1.0f, 3, -1);
     for (int i = 0; i < vr->m.position_count; i++) /* up to about a tenth of an edge */
         vr->m.positions[i] = vec3_add(vr->m.positions[i], vec3_scale(accel_check_random_unit(&vr->rng),
-                                                                     0.02f * pcg32_float(&vr->rng)));
+                                                                     VERTEX_JITTER * pcg32_float(&vr->rng)));
     triangle_set_from_mesh(&vr->set, &vr->m);
 }
 
@@ -916,7 +929,7 @@ static void test_hit_error_bound_holds_at_grazing_angles(void **state)
     for (int i = 0; i < 20000; i++) {
         int face;
         vec3 v;
-        ray r = vertex_ray(&vr, 1e-7, 1.0, &face, &v);
+        ray r = vertex_ray(&vr, GRAZING_ANGLE_MIN, GRAZING_ANGLE_MAX, &face, &v);
         const watertight_ray wr = watertight_ray_make(&r);
         for (int f = 0; f < vr.set.count; f++) {
             const triangle *tri = &vr.set.triangles[f];
@@ -1007,7 +1020,7 @@ static void test_grazing_vertex_rays_differ_from_brute_force_only_where_it_errs(
     for (int i = 0; i < rays; i++) {
         int face;
         vec3 v;
-        ray r = vertex_ray(&vr, 1e-6, 1e-3, &face, &v);
+        ray r = vertex_ray(&vr, FIXED_MARGIN_FAILS_MIN, FIXED_MARGIN_FAILS_MAX, &face, &v);
         hit_record want;
         ray_counters c = {0};
         bool want_hit = accel_closest_hit(brute, r, &want, &c);

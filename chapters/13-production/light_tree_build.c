@@ -310,14 +310,20 @@ static int16_t snorm16(float x, bool down)
     return (int16_t)(down ? floorf(scaled) : lrintf(scaled));
 }
 
+/* How much the bounding sphere's radius is widened: the centre and the
+ * length of the diagonal each round (a few ulps, parts in 10⁷), and a
+ * sphere that rounds short could leave an emitter's corner outside, so the
+ * importance would underrate it. A part in a million covers them. */
+#define LIGHT_TREE_RADIUS_SLACK 1e-6f
+
 /* The node the walk reads, from the bounds: the box's bounding sphere
- * (its radius a part in a million over, for the rounding of centre and
- * length), the cone packed (light_tree_node). */
+ * (its radius widened by LIGHT_TREE_RADIUS_SLACK), the cone packed
+ * (light_tree_node). */
 static light_tree_node node_from(const light_bounds *b, int32_t index)
 {
     vec3 centre = aabb_centroid(b->box);
     light_tree_node node = {.centre = {centre.x, centre.y, centre.z},
-                            .radius = 0.5f * vec3_length(aabb_extent(b->box)) * (1.0f + 1e-6f),
+                            .radius = 0.5f * vec3_length(aabb_extent(b->box)) * (1.0f + LIGHT_TREE_RADIUS_SLACK),
                             .power = b->power, .cos_theta_o = snorm16(b->cos_theta_o, true), .index = index};
     node.axis[0] = snorm16(b->axis.x, false);
     node.axis[1] = snorm16(b->axis.y, false);

@@ -33,6 +33,16 @@
  * arithmetic on them would overflow to Inf in a ray-sphere test). */
 static const double SCENE_MAX_COORDINATE = 1e7;
 static const double SCENE_MAX_RADIANCE = 1e9;
+/* The smallest length a shape or a checker square may have: below it a
+ * length is a typo (or 0), and at 1e7 from the origin it is already below
+ * one float step. */
+static const double SCENE_MIN_LENGTH = 1e-6;
+/* The smallest GGX alpha a glossy material may have (docs/scene-format.md):
+ * below it the lobe (about α radians wide) is narrower than a pixel at any
+ * usual field of view, so it renders as a mirror, while its peak density
+ * 1 / (π α²) grows without bound and the MIS weights with it: a mirror is
+ * the kind for that. */
+static const double SCENE_MIN_ROUGHNESS = 1e-3;
 /* A camera's vertical field of view in degrees: open, and short of 180 where
  * tan(fov / 2), the image plane's half height, goes to infinity. */
 static const double SCENE_MIN_FOV = 0.01, SCENE_MAX_FOV = 179.0;
@@ -335,9 +345,9 @@ static bool statement_material(const parse_context *pc, scene_desc *d, const tok
         [SCENE_KEY_SPECULAR] = {"specular", ARG_VEC3, REFLECTANCE},
         [SCENE_KEY_SHININESS] = {"shininess", ARG_NUMBER, 0.0, 1e5},
         [SCENE_KEY_CHECKER] = {"checker", ARG_VEC3, REFLECTANCE},
-        [SCENE_KEY_SIZE] = {"size", ARG_NUMBER, 1e-6, SCENE_MAX_COORDINATE},
+        [SCENE_KEY_SIZE] = {"size", ARG_NUMBER, SCENE_MIN_LENGTH, SCENE_MAX_COORDINATE},
         [SCENE_KEY_IOR] = {"ior", ARG_NUMBER, 1.0, 10.0},
-        [SCENE_KEY_ROUGHNESS] = {"roughness", ARG_NUMBER, 1e-3, 1.0},
+        [SCENE_KEY_ROUGHNESS] = {"roughness", ARG_NUMBER, SCENE_MIN_ROUGHNESS, 1.0},
         [SCENE_KEY_EMISSION] = {"emission", ARG_VEC3, RADIANCE},
     };
     enum { ALBEDO = SCENE_KEY_ALBEDO, DIFFUSE = SCENE_KEY_DIFFUSE, SPECULAR = SCENE_KEY_SPECULAR,
@@ -477,7 +487,7 @@ static bool statement_light(const parse_context *pc, scene_desc *d, const token 
 static bool statement_sphere(const parse_context *pc, scene_desc *d, const token *t, int n)
 {
     static const key_spec spec[] = {{"center", ARG_VEC3, COORD},
-                                    {"radius", ARG_NUMBER, 1e-6, SCENE_MAX_COORDINATE},
+                                    {"radius", ARG_NUMBER, SCENE_MIN_LENGTH, SCENE_MAX_COORDINATE},
                                     {"material", ARG_WORD, 0, 0},
                                     {"inside_out", ARG_FLAG, 0, 0}};
     key_value v[4];
@@ -556,8 +566,8 @@ static bool statement_polygon(const parse_context *pc, scene_desc *d, const toke
 static bool statement_implicit(const parse_context *pc, scene_desc *d, const token *t, int n)
 {
     static const key_spec spec[] = {{"center", ARG_VEC3, COORD},
-                                    {"major", ARG_NUMBER, 1e-6, SCENE_MAX_COORDINATE},
-                                    {"minor", ARG_NUMBER, 1e-6, SCENE_MAX_COORDINATE},
+                                    {"major", ARG_NUMBER, SCENE_MIN_LENGTH, SCENE_MAX_COORDINATE},
+                                    {"minor", ARG_NUMBER, SCENE_MIN_LENGTH, SCENE_MAX_COORDINATE},
                                     {"material", ARG_WORD, 0, 0}};
     if (n < 2 || !token_is(&t[1], "torus"))
         return fail(pc, n < 2 ? t[0].column : t[1].column, "implicit surfaces known: torus (implicit torus center .. "

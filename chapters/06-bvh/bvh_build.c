@@ -439,7 +439,10 @@ static void number_nodes(numbering *n, int from, int to, int depth)
  * line of its own. */
 enum { CACHE_LINE = 64 };
 
-bvh_node *bvh_nodes_allocate(int count)
+/* The array, not cleared: the build's sparse array is written by the
+ * threads that build each subtree (the first touch of its pages shared out
+ * with the work), and read only where a node was written. */
+static bvh_node *nodes_reserve(int count, size_t *bytes_out)
 {
     size_t bytes = ((size_t)count + 1) * sizeof(bvh_node);
     bytes = (bytes + CACHE_LINE - 1) / CACHE_LINE * CACHE_LINE; /* aligned_alloc wants a multiple */
@@ -448,8 +451,16 @@ bvh_node *bvh_nodes_allocate(int count)
         fprintf(stderr, "out of memory (asked for %zu bytes)\n", bytes);
         exit(1);
     }
-    memset(base, 0, bytes);
+    *bytes_out = bytes;
     return base + 1;
+}
+
+bvh_node *bvh_nodes_allocate(int count)
+{
+    size_t bytes;
+    bvh_node *nodes = nodes_reserve(count, &bytes);
+    memset(nodes - 1, 0, bytes);
+    return nodes;
 }
 
 void bvh_nodes_free(bvh_node *nodes)
@@ -526,6 +537,47 @@ accel *bvh_build_max_leaf(const triangle_set *set, int max_leaf_size)
     return bvh_build_with(set, BVH_SPLIT_SAH, &sah);
 }
 
+void bvh_tree_build(const triangle_set *set, bvh_split split, const bvh_sah_params *sah, bvh_tree *out)
+{
+    int n = set->count;
+    *out = (bvh_tree){NULL, NULL, n};
+    if (n == 0)
+        return;
+    /* Everything allocated once, up front: the working set, and the most
+     * nodes a tree over n triangles can have (2 n - 1, every leaf holding
+     * one triangle). */
+    builder b = {0};
+    b.split = split;
+    b.sah = *sah;
+    b.tris = memory_allocate((size_t)n, sizeof *b.tris);
+    size_t bytes;
+    b.nodes = nodes_reserve(2 * n - 1, &bytes);
+#pragma omp parallel for schedule(static) if (n >= BVH_TASK_MIN)
+    for (int i = 0; i < n; i++) {
+        const aabb *box = &set->boxes[i];
+        b.tris[i] = (build_triangle){{box->lo.x, box->lo.y, box->lo.z}, {box->hi.x, box->hi.y, box->hi.z}, i};
+    }
+    /* The root's subtree in slots 1 .. 2 n - 2, its halves as tasks of the
+     * team's threads (one thread: the serial recursion). */
+#pragma omp parallel if (n >= BVH_TASK_MIN)
+#pragma omp single
+    build_node(&b, 0, 1, 0, n, 0);
+
+    out->nodes = b.nodes;
+    out->triangle_index = memory_allocate((size_t)n, sizeof *out->triangle_index);
+#pragma omp parallel for schedule(static) if (n >= BVH_TASK_MIN)
+    for (int i = 0; i < n; i++)
+        out->triangle_index[i] = b.tris[i].index;
+    free(b.tris);
+}
+
+void bvh_tree_free(bvh_tree *tree)
+{
+    bvh_nodes_free(tree->nodes);
+    free(tree->triangle_index);
+    *tree = (bvh_tree){NULL, NULL, 0};
+}
+
 accel *bvh_build_with(const triangle_set *set, bvh_split split, const bvh_sah_params *sah)
 {
     double start = timer_seconds();
@@ -538,41 +590,22 @@ accel *bvh_build_with(const triangle_set *set, bvh_split split, const bvh_sah_pa
         result->base.stats.build_seconds = timer_seconds() - start;
         return &result->base;
     }
-
-    /* Everything allocated once, up front: the working set, and the most
-     * nodes a tree over n triangles can have (2 n - 1, every leaf holding
-     * one triangle). Whatever is left over is given back at the end. */
-    builder b = {0};
-    b.split = split;
-    b.sah = *sah;
-    b.tris = memory_allocate((size_t)n, sizeof *b.tris);
-    b.nodes = bvh_nodes_allocate(2 * n - 1);
-#pragma omp parallel for schedule(static) if (n >= BVH_TASK_MIN)
-    for (int i = 0; i < n; i++) {
-        const aabb *box = &set->boxes[i];
-        b.tris[i] = (build_triangle){{box->lo.x, box->lo.y, box->lo.z}, {box->hi.x, box->hi.y, box->hi.z}, i};
-    }
-    /* The root's subtree in slots 1 .. 2 n - 2, its halves as tasks of the
-     * team's threads (one thread: the serial recursion). */
-#pragma omp parallel if (n >= BVH_TASK_MIN)
-#pragma omp single
-    build_node(&b, 0, 1, 0, n, 0);
+    bvh_tree tree;
+    bvh_tree_build(set, split, sah, &tree);
 
     /* Flatten: count the nodes, then number them in the serial order. */
-    numbering count = {b.nodes, NULL, 1, 0, 0};
+    numbering count = {tree.nodes, NULL, 1, 0, 0};
     number_nodes(&count, 0, 0, 0);
     result->nodes = bvh_nodes_allocate(count.count);
-    numbering number = {b.nodes, result->nodes, 1, 0, 0};
+    numbering number = {tree.nodes, result->nodes, 1, 0, 0};
     number_nodes(&number, 0, 0, 0);
     result->node_count = number.count;
-    bvh_nodes_free(b.nodes);
     /* Copy the triangles in leaf order, as the triangle test reads them. */
+    result->triangle_index = tree.triangle_index;
+    tree.triangle_index = NULL;
     result->triangles = memory_allocate((size_t)n, sizeof *result->triangles);
-    result->triangle_index = memory_allocate((size_t)n, sizeof *result->triangle_index);
-    for (int i = 0; i < n; i++)
-        result->triangle_index[i] = b.tris[i].index;
     bvh_triangles_fill(result);
-    free(b.tris);
+    bvh_tree_free(&tree);
 
     bvh_fill_stats(result, split == BVH_SPLIT_SAH ? "bvh sah" : "bvh median", number.leaves, number.max_depth);
     result->base.stats.build_seconds = timer_seconds() - start;

@@ -105,6 +105,22 @@ typedef struct {
 
 accel *bvh_build_with(const triangle_set *set, bvh_split split, const bvh_sah_params *sah);
 
+/* The tree as the recursion built it, for a caller that lays it out its own
+ * way (chapter 13's collapse into wide nodes): nodes in the slots of a
+ * sparse array of 2 N - 1 (the root in slot 0, a node's two children side
+ * by side at first and first + 1; the slots no node reached are never
+ * written), and the triangles' leaf order. bvh_build_with() numbers these nodes densely and
+ * copies the triangles in leaf order for chapter 06's walk; a caller with
+ * its own layout skips both. Free with bvh_tree_free(). */
+typedef struct {
+    bvh_node *nodes;
+    int *triangle_index;
+    int triangle_count;
+} bvh_tree;
+
+void bvh_tree_build(const triangle_set *set, bvh_split split, const bvh_sah_params *sah, bvh_tree *out);
+void bvh_tree_free(bvh_tree *tree);
+
 /* Boxes are culled against the closest hit times this: see bvh_traverse.c
  * for why and how much. */
 static const float BVH_CULL_SLACK = 1.0f + 0x1.0p-9f;

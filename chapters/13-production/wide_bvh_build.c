@@ -40,7 +40,7 @@
 static const bvh_sah_params WIDE_BVH_SAH = {1.0f, 4, 8, 0.1f, 0.25f};
 
 typedef struct {
-    const bvh *binary;
+    const bvh_tree *binary; /* the binary tree as chapter 06's recursion built it */
     const triangle_set *set;
     wide_bvh_node *nodes;
     int node_count, node_capacity;
@@ -59,29 +59,62 @@ static void set_child_box(wide_bvh_node *node, int k, aabb box)
     node->bounds[5][k] = box.hi.z;
 }
 
-/* Nodes start on a cache line (aligned_alloc wants a multiple of it). */
-static wide_bvh_node *nodes_allocate(int count)
+/* The tree's arrays, in memory the kernel may map with 2 MB pages. With
+ * 4 KB pages, 1 M triangles' 53 MB span 13 000 pages, far more than the
+ * processor's address translation cache holds (about 1 500 entries): on
+ * incoherent rays nearly every node fetched would first need a page-table
+ * walk. In 2 MB pages they span 27. Linux grants such "transparent huge
+ * pages" to memory that asks for them with madvise() (when the system
+ * setting is "madvise", the common default) and that is 2 MB-aligned.
+ * Embree does the same. A hint: if it is refused, nothing changes but the
+ * speed. */
+enum { HUGE_PAGE = 2 << 20 };
+
+static void *huge_allocate(size_t bytes)
 {
-    size_t bytes = ((size_t)count * sizeof(wide_bvh_node) + 63) / 64 * 64;
-    wide_bvh_node *nodes = aligned_alloc(64, bytes);
-    if (nodes == NULL) {
-        fprintf(stderr, "out of memory (asked for %zu bytes)\n", bytes);
+    size_t rounded = (bytes + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
+    void *p = rounded >= HUGE_PAGE && bytes >= HUGE_PAGE / 2 ? aligned_alloc(HUGE_PAGE, rounded)
+                                                             : aligned_alloc(64, (bytes + 63) / 64 * 64);
+    if (p == NULL) {
+        fprintf(stderr, "out of memory (asked for %zu bytes)\n", rounded);
         exit(1);
     }
-    return nodes;
+#ifdef MADV_HUGEPAGE
+    if (bytes >= HUGE_PAGE / 2)
+        madvise(p, rounded, MADV_HUGEPAGE);
+#endif
+    return p;
+}
+
+static void *huge_copy(const void *data, size_t bytes)
+{
+    void *p = huge_allocate(bytes);
+    memcpy(p, data, bytes);
+    return p;
+}
+
+/* The array at *data, of *capacity elements of `size` bytes, the first
+ * `count` of them in use, with room for at least `needed`: doubled, and
+ * copied, when it is short. The collapse fills the tree's arrays where
+ * they stay, so a copy happens only when the first guess was short. */
+static void *huge_grow(void *data, int *capacity, int count, int needed, size_t size)
+{
+    if (needed <= *capacity)
+        return data;
+    int grown = *capacity > 0 ? *capacity : 16;
+    while (grown < needed)
+        grown *= 2;
+    void *p = huge_allocate((size_t)grown * size);
+    memcpy(p, data, (size_t)count * size);
+    free(data);
+    *capacity = grown;
+    return p;
 }
 
 /* A new node, all slots empty: a box no ray hits, and no triangles. */
 static int new_node(collapser *c)
 {
-    if (c->node_count == c->node_capacity) {
-        int capacity = c->node_capacity * 2;
-        wide_bvh_node *grown = nodes_allocate(capacity);
-        memcpy(grown, c->nodes, (size_t)c->node_count * sizeof(wide_bvh_node));
-        free(c->nodes);
-        c->nodes = grown;
-        c->node_capacity = capacity;
-    }
+    c->nodes = huge_grow(c->nodes, &c->node_capacity, c->node_count, c->node_count + 1, sizeof *c->nodes);
     wide_bvh_node *node = &c->nodes[c->node_count];
     memset(node, 0, sizeof *node); /* the padding too: a tree is the same bytes on every build */
     for (int k = 0; k < WIDE_BVH_WIDTH; k++) {
@@ -115,7 +148,7 @@ static uint32_t emit_leaf(collapser *c, int first, int count, aabb box, int dept
         fprintf(stderr, "wide BVH: more than %d packets of triangles\n", 1 << WIDE_BVH_PACKET_SHIFT);
         exit(1);
     }
-    c->packets = memory_grow(c->packets, &c->packet_capacity, p + packets, sizeof *c->packets);
+    c->packets = huge_grow(c->packets, &c->packet_capacity, p, p + packets, sizeof *c->packets);
     c->packet_count += packets;
     memset(&c->packets[p], 0, (size_t)packets * sizeof *c->packets);
     for (int i = 0; i < 4 * packets; i++) {
@@ -133,33 +166,6 @@ static uint32_t emit_leaf(collapser *c, int first, int count, aabb box, int dept
     return WIDE_BVH_LEAF | (uint32_t)count << WIDE_BVH_PACKET_SHIFT | (uint32_t)p;
 }
 
-/* The finished arrays, in memory the kernel may map with 2 MB pages. With
- * 4 KB pages, 1 M triangles' 53 MB span 13 000 pages, far more than the
- * processor's address translation cache holds (about 1 500 entries): on
- * incoherent rays nearly every node fetched would first need a page-table
- * walk. In 2 MB pages they span 27. Linux grants such "transparent huge
- * pages" to memory that asks for them with madvise() (when the system
- * setting is "madvise", the common default) and that is 2 MB-aligned.
- * Embree does the same. A hint: if it is refused, nothing changes but the
- * speed. */
-enum { HUGE_PAGE = 2 << 20 };
-
-static void *huge_copy(const void *data, size_t bytes)
-{
-    size_t rounded = (bytes + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
-    void *p = rounded >= HUGE_PAGE && bytes >= HUGE_PAGE / 2 ? aligned_alloc(HUGE_PAGE, rounded)
-                                                             : aligned_alloc(64, (bytes + 63) / 64 * 64);
-    if (p == NULL) {
-        fprintf(stderr, "out of memory (asked for %zu bytes)\n", rounded);
-        exit(1);
-    }
-#ifdef MADV_HUGEPAGE
-    if (bytes >= HUGE_PAGE / 2)
-        madvise(p, rounded, MADV_HUGEPAGE);
-#endif
-    memcpy(p, data, bytes);
-    return p;
-}
 
 /* Fill node n, already allocated, as the 4-wide node standing for binary
  * interior node `binary_node`: start from its two children and, while there
@@ -322,8 +328,9 @@ static accel *build_tree(const triangle_set *set, bvh_split split, float top_are
     double start = timer_seconds();
     bvh_sah_params sah = WIDE_BVH_SAH;
     sah.top_area_fraction = top_area_fraction;
-    accel *binary_accel = bvh_build_with(set, split, &sah);
-    const bvh *binary = (const bvh *)binary_accel;
+    bvh_tree binary_tree;
+    bvh_tree_build(set, split, &sah, &binary_tree);
+    const bvh_tree *binary = &binary_tree;
 
     wide_bvh *b = memory_allocate(1, sizeof *b);
     b->base.ops = wide_bvh_default_ops();
@@ -336,16 +343,18 @@ static accel *build_tree(const triangle_set *set, bvh_split split, float top_are
         fprintf(stderr, "wide BVH: more than %d triangles\n", WIDE_BVH_LANE_EXACT - 1);
         exit(1);
     }
-    if (binary->node_count > 0) {
-        /* A 4-wide tree has about a third as many nodes as the binary one
-         * has interior nodes; the array grows if that is not enough. */
-        c.node_capacity = binary->node_count / 4 + 4;
-        c.nodes = nodes_allocate(c.node_capacity);
+    if (set->count > 0) {
+        /* A node for every sixteen triangles or fewer (leaves of four to
+         * eight, up to WIDE_BVH_WIDTH children a node): room for one in
+         * eight; the array grows if that is not enough. Room not used is
+         * never touched, so the system gives it no memory. */
+        c.node_capacity = set->count / 8 + 4;
+        c.nodes = huge_allocate((size_t)c.node_capacity * sizeof *c.nodes);
         /* Leaves do not fill every packet (95 % of lanes on the tori field):
          * room for 75 %, so that the array (a copy of every triangle) is
          * not copied again as it grows, nearly always. */
         c.packet_capacity = set->count / 3 + 16;
-        c.packets = memory_allocate((size_t)c.packet_capacity, sizeof *c.packets);
+        c.packets = huge_allocate((size_t)c.packet_capacity * sizeof *c.packets);
         const bvh_node *root = &binary->nodes[0];
         if (bvh_node_is_leaf(root)) {
             /* one leaf: a root node with one child */
@@ -365,11 +374,14 @@ static accel *build_tree(const triangle_set *set, bvh_split split, float top_are
     }
     b->node_count = c.node_count;
     b->packet_count = c.packet_count;
-    b->nodes = c.node_count > 0 ? huge_copy(c.nodes, (size_t)c.node_count * sizeof(wide_bvh_node)) : NULL;
-    b->packets = c.packet_count > 0 ? huge_copy(c.packets, (size_t)c.packet_count * sizeof(wide_bvh_packet)) : NULL;
-    free(c.nodes);
-    free(c.packets);
-    accel_destroy(binary_accel);
+    /* in place: the arrays were allocated for the finished tree */
+    b->nodes = c.node_count > 0 ? c.nodes : NULL;
+    b->packets = c.packet_count > 0 ? c.packets : NULL;
+    if (b->nodes == NULL)
+        free(c.nodes);
+    if (b->packets == NULL)
+        free(c.packets);
+    bvh_tree_free(&binary_tree);
     if (layout == WIDE_BVH_QUANTIZED && b->node_count > 0)
         quantize_nodes(b);
     wide_bvh_use_triangle_test(&b->base, TRIANGLE_TEST_WATERTIGHT); /* the lanes' coordinates */

@@ -21,6 +21,8 @@ void scene_desc_free(scene_desc *d)
 {
     free(d->materials);
     free(d->lights);
+    for (int i = 0; i < d->shape_count; i++)
+        free(d->shapes[i].path);
     free(d->shapes);
     scene_desc_init(d);
 }

@@ -269,8 +269,10 @@ static bool resolve_material(const parse_context *pc, const scene_desc *d, const
 
 static bool add_shape(const parse_context *pc, scene_desc *d, scene_shape *s, int column)
 {
-    if (d->shape_count >= SCENE_MAX_SHAPES)
+    if (d->shape_count >= SCENE_MAX_SHAPES) {
+        free(s->path);
         return fail(pc, column, "too many shapes (at most %d)", SCENE_MAX_SHAPES);
+    }
     s->line = pc->line;
     s->column = column;
     d->shapes = memory_grow(d->shapes, &d->shape_capacity, d->shape_count + 1, sizeof *s);
@@ -611,13 +613,16 @@ static bool statement_mesh(const parse_context *pc, scene_desc *d, const token *
         if (v[2].present)
             return fail(pc, v[2].column, "'triangles' is for generated meshes, not OBJ files");
         s.kind = SCENE_SHAPE_MESH_OBJ;
+        char path[SCENE_PATH_SIZE];
         int written;
         if (v[0].text[0] == '/' || base_dir == NULL || base_dir[0] == '\0')
-            written = snprintf(s.path, sizeof s.path, "%s", v[0].text);
+            written = snprintf(path, sizeof path, "%s", v[0].text);
         else
-            written = snprintf(s.path, sizeof s.path, "%s/%s", base_dir, v[0].text);
-        if (written < 0 || written >= (int)sizeof s.path)
+            written = snprintf(path, sizeof path, "%s/%s", base_dir, v[0].text);
+        if (written < 0 || written >= (int)sizeof path)
             return fail(pc, v[0].column, "the mesh path is too long");
+        s.path = memory_allocate((size_t)written + 1, 1);
+        memcpy(s.path, path, (size_t)written + 1);
     } else {
         if (strcmp(v[1].text, "tori_field") != 0)
             return fail(pc, v[1].value_column, "unknown mesh generator '%s' (tori_field)", v[1].text);

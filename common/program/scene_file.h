@@ -132,7 +132,11 @@ typedef struct {
     vec3 point, normal; /* plane (normal unit) */
     vec3 p[4];          /* triangle p[0..2], quad p[0..3] */
     float major, minor; /* torus */
-    char path[SCENE_PATH_SIZE]; /* mesh: resolved against the scene file's directory */
+    /* mesh: resolved against the scene file's directory; the description's
+     * own copy (scene_desc_free frees it), NULL for every other shape, so
+     * that a description of a million triangles is not a gigabyte of room
+     * for paths */
+    char *path;
     int triangles;              /* tori field size */
     int line, column;
 } scene_shape;

@@ -133,10 +133,13 @@ void pt_scene_use_accel(pt_scene *sc, pt_accel_builder build, const void *contex
  * L_e's channels (positive whenever any channel is). */
 static double emitter_weight(vec3 le) { return ((double)le.x + (double)le.y + (double)le.z) / 3.0; }
 
+static pt_accel_builder finish_builder = build_bvh;
+void pt_scene_finish_builds(pt_accel_builder build) { finish_builder = build; }
+
 void pt_scene_finish(pt_scene *sc)
 {
     triangle_set_from_mesh(&sc->triangles, &sc->geometry);
-    sc->bvh = build_bvh(&sc->triangles, NULL);
+    sc->bvh = finish_builder != NULL ? finish_builder(&sc->triangles, NULL) : NULL;
     /* The emitter table: every triangle whose material emits, with the
      * running sum of powers, to pick one in proportion to its power. */
     int n = 0;

@@ -97,6 +97,12 @@ void pt_scene_add_point_light(pt_scene *sc, vec3 position, vec3 intensity);
 /* Builds the BVH over the triangles (chapter 06's, binned SAH) and the
  * emitter table. */
 void pt_scene_finish(pt_scene *sc);
+/* What pt_scene_finish() builds over the triangles from now on: chapter
+ * 06's BVH (the default), or nothing (NULL: the scene traces no triangles
+ * until pt_scene_use_accel()). A program that puts its own structure in
+ * place at once (chapter 13) asks for nothing: a BVH over a million
+ * triangles is a second's work to throw away. */
+void pt_scene_finish_builds(pt_accel_builder build);
 /* Trace the triangles through another structure: build(set, context)
  * replaces the BVH (after pt_scene_finish). */
 void pt_scene_use_accel(pt_scene *sc, pt_accel_builder build, const void *context);

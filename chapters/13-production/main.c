@@ -84,6 +84,8 @@ static void report_structures(const pt_scene *sc, bool walls_asked)
 static bool load_scene(cli_options *opts, const production_flags *f, pt_scene *sc, scene_desc *desc, bool *from_file,
                        char *err, size_t err_size)
 {
+    /* the production structures are built below, in place of chapter 06's */
+    pt_scene_finish_builds(NULL);
     *from_file = program_load_scene(opts, "13-production", desc);
     if (opts->quiet)
         pt_scene_report_materials(NULL);

@@ -202,6 +202,7 @@ static wide_scene_tracers embree8_tracers(const accel *walls)
     t.occluders = t.walls != NULL ? (wide_tracer){embree8_closest_hit, embree8_any_hit, walls_occluders(walls),
                                                   "Embree rtcIntersect8"}
                                   : wide_tracer_for(NULL);
+    t.lights = walls_light_tree(walls);
     return t;
 }
 #endif

@@ -33,13 +33,20 @@ bool path_tracer_wide_uses_light_tree(const pt_scene *sc)
                                      (light_picking == WIDE_LIGHTS_AUTO && sc->emitter_count >= LIGHT_TREE_MIN_EMITTERS));
 }
 
-/* The tree into *tree and a pointer to it, if the render picks by it;
- * else NULL. Built inside the render's time: it is part of its cost. */
-static const light_tree *lights_for(const pt_scene *sc, light_tree *tree)
+/* The light tree the render picks by, or NULL if it picks by power: the
+ * one built with the scene's structures, or, where none was (a tree asked
+ * for on a scene of few emitters), one built into *tree now, which
+ * *built says the caller frees. */
+static const light_tree *lights_for(const pt_scene *sc, const wide_scene_tracers *trace, light_tree *tree,
+                                    bool *built)
 {
+    *built = false;
     if (!path_tracer_wide_uses_light_tree(sc))
         return NULL;
+    if (trace->lights != NULL)
+        return trace->lights;
     light_tree_build(tree, sc);
+    *built = true;
     return tree;
 }
 
@@ -94,6 +101,7 @@ wide_scene_tracers wide_scene_tracers_for(const pt_scene *sc)
     t.all = wide_tracer_for(walls ? walls_all(a) : a);
     t.walls = walls && walls_found(a) ? a : NULL;
     t.occluders = wide_tracer_for(t.walls != NULL ? walls_occluders(a) : NULL);
+    t.lights = walls_light_tree(a);
     return t;
 }
 
@@ -707,7 +715,8 @@ bool render_estimate_wide_traced(const path_tracer *pt, const wide_scene_tracers
         pdf_area[k] = pt_scene_emitter_pdf_area(sc, k);
     double start = timer_seconds();
     light_tree tree;
-    const light_tree *lights = lights_for(sc, &tree);
+    bool built;
+    const light_tree *lights = lights_for(sc, trace, &tree, &built);
     /* Each row is one job, its pixels' streams its own: the same image
      * for any number of threads and any order of rows. */
 #pragma omp parallel num_threads(threads)
@@ -726,7 +735,7 @@ bool render_estimate_wide_traced(const path_tracer *pt, const wide_scene_tracers
         counters_add(&e.counters, &mine);
     }
     e.seconds = timer_seconds() - start;
-    if (lights != NULL)
+    if (built)
         light_tree_free(&tree);
     free(pdf_area);
     *out = e;
@@ -756,7 +765,8 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
     shadow_queue queue = queue_make(pt->scene);
     ray_counters ignored = {0};
     light_tree tree;
-    const light_tree *lights = lights_for(pt->scene, &tree);
+    bool built;
+    const light_tree *lights = lights_for(pt->scene, &trace, &tree, &built);
     long total = (long)cam->width * cam->height;
     int runs = pixels / LANES, done = 0;
     double start = timer_seconds();
@@ -776,7 +786,7 @@ double render_estimate_wide_pilot(const path_tracer *pt, const camera *cam, int 
     }
     double seconds = timer_seconds() - start;
     queue_free(&queue);
-    if (lights != NULL)
+    if (built)
         light_tree_free(&tree);
     free(pdf_area);
     image_free(&mean);

@@ -60,6 +60,7 @@
 #include "09-path-tracing/experiments.h"
 #include "09-path-tracing/path_tracer.h"
 #include "13-production/wide_trace.h"
+#include "13-production/light_tree.h"
 
 /* What chapter 13's program renders with unless told otherwise (and what
  * make bench times as chapter 13): chapter 09's defaults, with the rung,
@@ -87,10 +88,11 @@ bool path_tracer_wide_supported(const path_tracer *pt, char *why, size_t why_siz
 typedef struct {
     wide_tracer all, occluders;
     const accel *walls;
+    const light_tree *lights; /* the scene's, built with the structures; NULL: none built */
 } wide_scene_tracers;
 
 /* The tracers of the scene's own structure (sc->bvh): wide_tracer_for()
- * of it, or of the walls_accel's two structures. */
+ * of it, or of the walls_accel's two structures, and its light tree. */
 wide_scene_tracers wide_scene_tracers_for(const pt_scene *sc);
 
 /* render_estimate(), eight paths at a time: the same per-pixel streams, the

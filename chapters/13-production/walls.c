@@ -9,6 +9,7 @@
 
 #include "13-production/wide_bvh.h"
 #include "13-production/flat.h"
+#include "13-production/light_tree.h"
 #include "memory.h"
 
 #if defined(__SSE2__)
@@ -36,6 +37,11 @@ struct walls_accel {
     bool off;         /* walls_accel_build(..., false): every shadow ray meets every triangle */
     char name[64];    /* "walls over <the structure's name>" */
     walls_inner_builder inner; /* what `all` and `occluders` are */
+    /* The scene's light tree (light_tree.h), for a scene of at least
+     * LIGHT_TREE_MIN_EMITTERS emitting triangles: built once with the
+     * structures, before the first sample, not at every render. */
+    light_tree lights;
+    bool has_lights;
 };
 
 /* At most this many triangles: no tree (production_accel_build). */
@@ -402,6 +408,8 @@ static void walls_destroy(accel *a)
     accel_destroy(w->occluders);
     triangle_set_free(&w->occluder_triangles);
     free(w->wall_planes);
+    if (w->has_lights)
+        light_tree_free(&w->lights);
     free(w);
 }
 
@@ -439,12 +447,21 @@ accel *walls_accel_build_over(const triangle_set *set, const pt_scene *scene, bo
     w->base.stats = w->all->stats;
     w->off = !on;
     find_walls(w, scene);
+    w->has_lights = scene->emitter_count >= LIGHT_TREE_MIN_EMITTERS;
+    if (w->has_lights)
+        light_tree_build(&w->lights, scene);
     snprintf(w->name, sizeof w->name, "%s%s", w->wall_group_count > 0 && on ? "walls over " : "", w->all->stats.name);
     w->base.stats.name = w->name;
     return &w->base;
 }
 
 const accel *walls_all(const accel *a) { return ((const walls_accel *)a)->all; }
+
+const light_tree *walls_light_tree(const accel *a)
+{
+    const walls_accel *w = (const walls_accel *)a;
+    return walls_is(a) && w->has_lights ? &w->lights : NULL;
+}
 
 const accel *walls_occluders(const accel *a)
 {

@@ -31,6 +31,7 @@
 #include "09-path-tracing/scene_pt.h"
 #include "03-aabb-slabs/accel.h"
 #include "13-production/rays8.h"
+#include "13-production/light_tree.h"
 
 /* The flat set for at most 64 triangles, else the 8-wide BVH (binned SAH). */
 accel *production_accel_build(const triangle_set *set);
@@ -63,6 +64,10 @@ void walls_drop_slack(accel *a);
 /* The structure of all triangles, and of the occluders (NULL if none). */
 const accel *walls_all(const accel *a);
 const accel *walls_occluders(const accel *a);
+/* The scene's light tree, built with the structures for a scene of at
+ * least LIGHT_TREE_MIN_EMITTERS emitting triangles; else NULL (and NULL
+ * when a is not a walls_accel). */
+const light_tree *walls_light_tree(const accel *a);
 
 /* Do both ends of r, r(t_min) and r(t_max), lie in front of every wall
  * plane, by more than the rounding of the test? False for an infinite

@@ -285,7 +285,7 @@ static void print_comparison(const char *name, int triangles, const test_compari
 /* ---- Embree's figures ------------------------------------------------------------ */
 
 typedef struct {
-    int triangles;
+    int triangles, threads; /* threads: of Embree's build (its rays are traced on one) */
     double build_ms, coherent_closest, coherent_any, incoherent_closest, incoherent_any;
     double coherent_t_sum, incoherent_t_sum;
 } embree_figures;
@@ -306,6 +306,9 @@ static int embree_load(const char *path, embree_figures *out, int max)
             continue;
         if (sscanf(line, "EMBREE tris=%d", &e.triangles) != 1)
             continue;
+        p = strstr(line, " threads=");
+        if (p == NULL || sscanf(p + 9, "%d", &e.threads) != 1)
+            e.threads = 1;
 #define FIELD(name, dst) ((p = strstr(line, name "=")) != NULL && sscanf(p + strlen(name) + 1, "%lf", &(dst)) == 1)
         if (FIELD("build_ms", e.build_ms) && FIELD("coh_isect_Mrays", e.coherent_closest) &&
             FIELD("coh_occl_Mrays", e.coherent_any) && FIELD("inc_isect_Mrays", e.incoherent_closest) &&
@@ -418,7 +421,7 @@ static void usage(void)
            "with the harness's coherent and incoherent ray sets: build ms, bytes per triangle, and\n"
            "Mrays/s for closest hit and any hit, on one thread and on all; --out also writes them as\n"
            "CSV (make bench: build/data/accel.csv, which make plots draws). --embree reads the\n"
-           "harness's output ('embree_bench embree N medium 1 R' lines) and prints ratios.\n"
+           "harness's output ('embree_bench embree N medium T R' lines) and prints ratios.\n"
            "--stadium also runs the teapot in a stadium (the grid at several C, every hierarchy)\n"
            "and writes its figures to FILE.csv.\n"
            "After each size's table, every structure is timed again with the watertight triangle test and\n"
@@ -435,11 +438,11 @@ static void usage(void)
 int main(int argc, char **argv)
 {
     long sizes[8] = {1024, 10240, 102400, 1048576};
-    int size_count = 4, reps = 3, threads = 1, max_rays = 1 << 30;
+    int size_count = 4, reps = 3, threads = 1, build_threads = 1, max_rays = 1 << 30; /* builds use every thread */
     const char *out_path = NULL, *embree_path = NULL, *only = NULL, *stadium_path = NULL, *tests_path = NULL;
     bool compare_only = false;
 #ifdef _OPENMP
-    threads = omp_get_max_threads();
+    threads = build_threads = omp_get_max_threads();
 #endif
     for (int i = 1; i < argc; i++) {
         const char *value = i + 1 < argc ? argv[i + 1] : NULL;
@@ -520,8 +523,8 @@ int main(int argc, char **argv)
     /* Embree's own figures go into the same CSV, so plots draw it beside ours. */
     for (int i = 0; i < embree_count; i++)
         if (csv != NULL)
-            fprintf(csv, "embree,%d,%.3f,,,,,1,%.4f,%.4f,%.4f,%.4f,,,,,,,\n", embree[i].triangles,
-                    embree[i].build_ms, embree[i].coherent_closest, embree[i].coherent_any,
+            fprintf(csv, "embree,%d,%.3f,,,,,%d,%.4f,%.4f,%.4f,%.4f,,,,,,,\n", embree[i].triangles,
+                    embree[i].build_ms, embree[i].threads, embree[i].coherent_closest, embree[i].coherent_any,
                     embree[i].incoherent_closest, embree[i].incoherent_any);
     printf("%-10s %9s %9s %7s | %-23s | %-23s | %-15s | %s\n", "structure", "triangles", "build ms", "B/tri",
            "coherent Mrays/s 1 thr", "incoherent Mrays/s 1 thr", "closest, all thr", "tests/ray (inc.)");
@@ -606,9 +609,10 @@ int main(int argc, char **argv)
                  * (Embree's watertight triangle test and ours differ only at
                  * edges). */
                 printf("%-10s %9s %8.2fx %7s | %10.2fx %10.2fx | %10.2fx %10.2fx | ratio to Embree "
-                       "(build: time; trace: speed) | t-sum differs by %.1e / %.1e\n",
+                       "(build: time, %d threads and Embree's %d; trace: speed, one thread each) | t-sum differs by "
+                       "%.1e / %.1e\n",
                        "", "", build_ms / e->build_ms, "", mrays_cc / e->coherent_closest, mrays_ca / e->coherent_any,
-                       mrays_ic / e->incoherent_closest, mrays_ia / e->incoherent_any,
+                       mrays_ic / e->incoherent_closest, mrays_ia / e->incoherent_any, build_threads, e->threads,
                        fabs(cc.t_sum - e->coherent_t_sum) / e->coherent_t_sum,
                        fabs(ic.t_sum - e->incoherent_t_sum) / e->incoherent_t_sum);
             if (csv != NULL)

@@ -379,13 +379,21 @@ static void test_thin_lens_focus_and_circle_of_confusion(void **state)
     exercise_checks("thin_lens");
     thin_lens lens;
     double pixel, se;
-    /* At the focus distance: sharp. */
-    double sharp = render_point_spread2(10.0f, 0.01f, 0.2f, 10.0f, &lens, &pixel, &se);
+    /* At the focus distance: sharp. The "point" is a sphere of radius
+     * SHARP_RADIUS at SHARP_DISTANCE, on the plane of focus. */
+    const double SHARP_RADIUS = 0.01, SHARP_DISTANCE = 10.0;
+    double sharp = render_point_spread2((float)SHARP_DISTANCE, (float)SHARP_RADIUS, 0.2f, (float)SHARP_DISTANCE, &lens,
+                                        &pixel, &se);
     print_message("in focus: rms spread %.3f pixels\n", sqrt(sharp));
     /* A point's image discretised at pixel centres spreads at most over the
      * 2 x 2 pixels around it: sqrt(2)/2 pixel rms (at their common corner,
-     * as here), widened by the sphere's own disk. */
-    double rho_sharp = 0.01 / 10.0 / pixel, sharp_bound = sqrt(0.5 + rho_sharp * rho_sharp / 2.0) + 0.01;
+     * as here), widened by the sphere's own disk (rho_sharp pixels in
+     * radius). SHARP_SLACK (pixels) covers the rms estimate's own noise
+     * over the samples; a lens left open at the focus spreads the point
+     * over many pixels, far beyond it. */
+    const double SHARP_SLACK = 0.01;
+    double rho_sharp = SHARP_RADIUS / SHARP_DISTANCE / pixel;
+    double sharp_bound = sqrt(0.5 + rho_sharp * rho_sharp / 2.0) + SHARP_SLACK;
     if (!(sqrt(sharp) <= sharp_bound)) {
         if (isnan(sharp))
             print_error("a point on the plane of focus is not in the image at all (it is black), expected within %.3g "

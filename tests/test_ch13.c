@@ -2428,8 +2428,11 @@ static int quantize_case(wide_bvh_node *node, int kind, pcg32 *rng)
     static const float sizes[] = {1e-30f, 1e-20f, 1e-3f, 1.0f, 1e3f, 1e20f, 1e30f, 1e-40f};
     float size = sizes[pcg32_bounded(rng, sizeof sizes / sizeof sizes[0])];
     float offset = 0.0f;
+    /* far out: at FAR_OFFSET a float's step is 1, a thousand times
+     * FAR_SIZE, so the box's planes are a float or two apart */
+    const float FAR_OFFSET = 1e7f, FAR_SIZE = 1e-3f;
     if (kind % 4 == 1)
-        offset = 1e7f, size = 1e-3f; /* far out: a float's step there is 1 */
+        offset = FAR_OFFSET, size = FAR_SIZE;
     else if (kind % 4 == 2)
         offset = size * powf(10.0f, 8.0f * pcg32_float(rng)); /* far relative to its size */
     float sign = pcg32_bounded(rng, 2) ? -1.0f : 1.0f;
@@ -2555,7 +2558,13 @@ static void test_quantized_slab_test_is_the_exact_test_of_its_boxes(void **state
         vec3 centre = vec3_scale(vec3_add(target.lo, target.hi), 0.5f), extent = aabb_extent(target);
         if (!isfinite(centre.x + centre.y + centre.z)) /* a box reaching inf (the +-3e38 cases) */
             centre = vec3_make(0.0f, 0.0f, 0.0f);
-        float reach = fmaxf(fmaxf(extent.x, extent.y), extent.z) + fmaxf(1e-30f, 1e-6f * fabsf(centre.x));
+        /* The ray starts 3 reach from the box: its size, plus a few float
+         * steps at its place (REACH_RELATIVE of the coordinate) so that a
+         * box of zero size far out is not started on, and REACH_TINY so
+         * that a zero-size box at the origin is not either. */
+        const float REACH_RELATIVE = 1e-6f, REACH_TINY = 1e-30f;
+        float reach = fmaxf(fmaxf(extent.x, extent.y), extent.z) +
+                      fmaxf(REACH_TINY, REACH_RELATIVE * fabsf(centre.x));
         reach = fminf(reach, 1e37f);
         vec3 o = vec3_add(centre, vec3_scale(accel_check_random_unit(&rng), 3.0f * reach));
         ray r = ray_make(o, vec3_sub(centre, o));
@@ -3161,6 +3170,9 @@ static void test_the_benchmark_scenes_are_what_they_say(void **state)
  * (one material per power): what the tree must choose among by place,
  * facing and power at once. */
 enum { LIGHT_TEST_EMITTERS = 48, LIGHT_TEST_POWERS = 8 };
+/* Each emitter's two edges, in a cube of side 2: small beside the gaps
+ * between them, so that the tree's bounds separate them. */
+static const float LIGHT_TEST_EDGE = 0.08f;
 
 static void build_strewn_lights(pt_scene *sc, uint64_t seed)
 {
@@ -3171,7 +3183,8 @@ static void build_strewn_lights(pt_scene *sc, uint64_t seed)
     pcg32 rng = pcg32_for_pixel(test_seed(seed), 0);
     for (int i = 0; i < LIGHT_TEST_EMITTERS; i++) {
         vec3 c = vec3_make(2.0f * pcg32_float(&rng) - 1.0f, 2.0f * pcg32_float(&rng) - 1.0f, 2.0f * pcg32_float(&rng) - 1.0f);
-        vec3 a = vec3_scale(random_direction(&rng), 0.08f), b = vec3_scale(random_direction(&rng), 0.08f);
+        vec3 a = vec3_scale(random_direction(&rng), LIGHT_TEST_EDGE);
+        vec3 b = vec3_scale(random_direction(&rng), LIGHT_TEST_EDGE);
         pt_scene_add_triangle(sc, c, vec3_add(c, a), vec3_add(c, b), material[pcg32_bounded(&rng, LIGHT_TEST_POWERS)]);
     }
     pt_scene_finish(sc);

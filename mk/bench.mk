@@ -42,7 +42,7 @@ $(BUILD)/bin/bench_equal_time: $(BUILD)/obj/tests/bench_equal_time.o $(ALL_LIBS)
 # kernels; the benchmark scenes (chapter 13, the same on Embree, chapter
 # 09's MIS rung, 1 and 2 threads, taking turns); Cycles at equal CPU time
 # where blender is installed. Quick by default (a few minutes on 2 cores),
-# FULL=1 for the full sizes (about half an hour on 2 cores). The Embree programs are built
+# FULL=1 for the full sizes (about an hour on 2 cores). The Embree programs are built
 # only where their sources (EMBREE_HARNESS) and header (EMBREE_HEADER) are;
 # as prerequisites, not by a make inside the recipe, which make -n would run.
 EMBREE_HARNESS := $(wildcard $(SHARED)/anchors/embree_bench.c)

@@ -19,7 +19,7 @@
 # quick (the default): small images, few repeats, the 1M-triangle mesh in
 # the speed table only: a few minutes on 2 cores. full (make bench
 # FULL=1): every size, larger images, more repeats, every scene in the
-# Cycles comparison: about half an hour on 2 cores. `cycles` runs part 4
+# Cycles comparison: about an hour on 2 cores. `cycles` runs part 4
 # alone (make bench-cycles); SCENES="A B" in the environment (make bench
 # SCENES=...) limits part 4 to those scenes. Everything lands in
 # BUILD/bench/ and BUILD/data/.
